@@ -1,0 +1,45 @@
+// Where rows of F come from. Solvers and writers ask a RowProvider; they never see how rows are
+// made (hemicubes on a GL context, ray casting, a file, a hand-made matrix in a test).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string>
+
+#include "ffcube/formfactor/sparse.hpp"
+
+namespace ffcube {
+
+// Receives row i. Called on the thread that called compute_rows, in the order the rows were
+// listed; the row reference is valid only during the call.
+using RowSink = std::function<void(std::uint32_t i, const SparseRow& row)>;
+
+class RowProvider {
+public:
+    virtual ~RowProvider() = default;
+    virtual std::uint32_t size() const = 0;
+    virtual std::string name() const = 0;
+    // Computes the listed rows (each < size()) and hands each to sink, in list order. Providers
+    // may compute in parallel; results never depend on the number of threads.
+    virtual void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) = 0;
+    // One row, for convenience.
+    void compute_row(std::uint32_t i, SparseRow& out);
+};
+
+// Rows of a matrix already in memory (loaded from .ffm, or made by hand in a test).
+class MatrixRowProvider final : public RowProvider {
+public:
+    explicit MatrixRowProvider(const CsrMatrix& m) : m_(m) {}
+    std::uint32_t size() const override { return m_.size(); }
+    std::string name() const override { return "matrix"; }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+
+private:
+    const CsrMatrix& m_;
+};
+
+// Computes every row 0..n-1 through the provider into a CSR matrix.
+CsrMatrix compute_all_rows(RowProvider& provider);
+
+}  // namespace ffcube

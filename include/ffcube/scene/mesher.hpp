@@ -1,0 +1,26 @@
+// Meshing: ObjModel → Scene. Every face is split into patches so that no patch edge exceeds
+// max_patch_edge; quads (convex, planar) become grids of quads, other faces are triangulated and
+// each triangle split into m² similar triangles.
+#pragma once
+
+#include <cstddef>
+
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+struct MeshOptions {
+    double max_patch_edge = 0.0;     // > 0: use it (scene units)
+    std::size_t target_patches = 0;  // > 0 (and no edge given): choose the edge that gives about this many
+    // Neither: default target_patches = kDefaultPatches.
+    static constexpr std::size_t kDefaultPatches = 2000;
+    // Refuse meshes larger than this before allocating anything (the estimate is in the message).
+    std::size_t max_patches = 50'000'000;
+};
+
+// Number of patches meshing would produce with edge bound L, without building anything.
+std::size_t count_patches(const ObjModel& model, double max_patch_edge);
+
+Scene build_scene(const ObjModel& model, const MeshOptions& options);
+
+}  // namespace ffcube

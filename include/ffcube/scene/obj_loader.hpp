@@ -1,0 +1,29 @@
+// Wavefront OBJ + MTL input. Strict about what matters (indices, numbers, face sizes, Kd/Ke
+// ranges) and lenient about the rest (CRLF, BOM, tabs, no final newline, vt/vn, unknown
+// statements). Every refusal throws InputError naming file, line and the rule broken.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+// Reads an MTL library named by 'mtllib'; returns nullopt when it cannot be found (a warning,
+// not an error: materials then get the default).
+using MtlResolver = std::function<std::optional<std::string>(const std::string& name)>;
+
+// Parses OBJ text. 'source' names it in messages.
+ObjModel parse_obj(std::string_view text, const std::string& source, const MtlResolver& mtl);
+
+// Loads an OBJ file; MTL files are looked up relative to the OBJ's directory.
+ObjModel load_obj(const std::filesystem::path& path);
+
+// Parses MTL text into materials appended to 'out' (name → Kd, Ke); 'source' names it in messages.
+void parse_mtl(std::string_view text, const std::string& source, std::vector<Material>& out);
+
+}  // namespace ffcube

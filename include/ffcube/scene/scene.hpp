@@ -1,0 +1,83 @@
+// The scene model: what an OBJ file says (ObjModel), and the frozen, meshed Scene that every
+// row provider and solver reads. Units are the file's units throughout; areas are units².
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "ffcube/geometry/polygon.hpp"
+
+namespace ffcube {
+
+// Kd: diffuse reflectance ρ per RGB channel, each in [0,1].
+// Ke: emitted radiosity (exitance, power per area) per RGB channel, each ≥ 0.
+struct Material {
+    std::string name;
+    Vec3 kd{0.5, 0.5, 0.5};  // default for a missing material: grey, documented in docs/scene-format.md
+    Vec3 ke{0.0, 0.0, 0.0};
+};
+
+// One polygon as written in the file, vertex order counter-clockwise seen from the front.
+struct ObjFace {
+    std::vector<std::uint32_t> v;  // 0-based indices into ObjModel::positions
+    std::uint32_t object = 0;      // index into ObjModel::objects
+    std::uint32_t material = 0;    // index into ObjModel::materials
+    std::uint32_t line = 0;        // 1-based line of the 'f' statement, for messages
+};
+
+// A parsed OBJ/MTL file before meshing. Validated: every index in range, every number finite.
+struct ObjModel {
+    std::string source;                 // file path (or "<built-in cornell box>") for messages
+    std::vector<Vec3> positions;
+    std::vector<ObjFace> faces;
+    std::vector<std::string> objects;   // 'o' names, else 'g' names, else "default"
+    std::vector<Material> materials;    // [0] is the default material
+    std::vector<std::string> warnings;  // also printed with log_warning when loaded from the CLI
+};
+
+// A patch: a planar triangle or convex quad, the unit of the form-factor matrix.
+struct Patch {
+    std::array<std::uint32_t, 4> v{};  // indices into Scene::positions, CCW from the front
+    std::uint32_t count = 3;           // 3 or 4
+    std::uint32_t object = 0;          // index into Scene::objects
+    std::uint32_t material = 0;        // index into Scene::materials
+    double area = 0.0;                 // scene units²
+    Vec3 normal{0.0};                  // unit, front side
+    Vec3 centroid{0.0};
+    double size = 0.0;                 // longest edge, scene units
+};
+
+struct MeshStats {
+    std::size_t input_faces = 0;
+    std::size_t triangulated_ngons = 0;  // faces with more than 4 vertices (or non-convex quads)
+    std::size_t dropped_degenerate = 0;  // zero-area faces, dropped
+    std::size_t non_planar = 0;          // faces off their plane by more than 1e-6 × their size
+    double max_patch_edge = 0.0;         // the L that was used
+    std::string how;                     // "--max-patch-edge", "--patches N" or "default (...)"
+};
+
+// Frozen after build_scene(): row providers and solvers take it by const reference.
+struct Scene {
+    std::string source;
+    std::vector<Vec3> positions;
+    std::vector<Patch> patches;
+    std::vector<std::string> objects;
+    std::vector<Material> materials;
+    MeshStats stats;
+    Vec3 bbox_min{0.0}, bbox_max{0.0};
+    // Hash of the meshed geometry (vertex positions, patch vertices and objects). Two runs that
+    // mesh the same file with the same options get the same value; materials do not enter it,
+    // so a form-factor matrix stays valid when only Kd/Ke change.
+    std::uint64_t fingerprint = 0;
+
+    std::size_t size() const { return patches.size(); }
+    // Length of the bounding-box diagonal, scene units.
+    double extent() const;
+    // Positions of patch i's vertices.
+    std::array<Vec3, 4> patch_vertices(std::size_t i) const;
+    double total_area() const;
+};
+
+}  // namespace ffcube
