@@ -1,0 +1,74 @@
+// Rows of F by hemicubes: for each patch, five faces rendered as a 32-bit item buffer on a
+// headless GL context, and the exact delta form factor of each pixel added to the row entry of
+// the patch it shows. One GL context and one thread per worker.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ffcube/formfactor/row_provider.hpp"
+#include "ffcube/gl/context.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+struct HemicubeOptions {
+    int resolution = 256;     // top-face pixels per side; even, 8..8192
+    unsigned threads = 0;     // worker threads and GL contexts; 0 = every core
+    Backend backend = Backend::Auto;
+    bool rotate = true;       // rotate each hemicube about the normal by a seeded angle
+    std::uint64_t seed = 0x5eed;
+};
+
+// What the provider did, summed over all hemicubes so far. Times are summed over workers
+// (CPU-seconds, not wall time).
+struct HemicubeStats {
+    std::uint64_t hemicubes = 0;
+    double prepare_seconds = 0;     // eye-relative transform and culling on the CPU
+    double draw_seconds = 0;        // uploads and draw calls, up to glFinish
+    double readback_seconds = 0;    // glReadPixels of the atlas
+    double accumulate_seconds = 0;  // ΔF per ID into the row
+    std::uint64_t triangles_considered = 0;              // scene triangles × hemicubes
+    std::uint64_t triangles_behind = 0;                  // wholly behind the hemicube plane
+    std::array<std::uint64_t, 5> triangles_drawn{};      // per face (top, +x, -x, +y, -y)
+    std::array<std::uint64_t, 5> triangles_culled{};     // in front of the plane but outside the face
+    double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
+    double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
+    std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
+};
+
+class HemicubeRowProvider final : public RowProvider {
+public:
+    // Starts the workers and their GL contexts; throws GlError (listing every backend tried) when
+    // no context can be created, InputError for a bad resolution. The scene must outlive this.
+    HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options);
+    ~HemicubeRowProvider() override;
+
+    std::uint32_t size() const override;
+    std::string name() const override { return "hemicube"; }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+
+    // The item buffer of patch i's hemicube: the atlas (3N × N, row 0 at the bottom; see
+    // hemicube/layout.hpp), each pixel 0 (nothing), 1 + patch index, or 0xFFFFFFFF (a back face).
+    std::vector<std::uint32_t> item_buffer(std::uint32_t i);
+
+    HemicubeStats stats() const;
+    std::string backend() const;   // e.g. "egl-surfaceless"
+    std::string renderer() const;  // GL_RENDERER
+    unsigned threads() const;
+    int resolution() const;
+
+    // Where the eye sits above the patch and where the near plane lies, as fractions of the
+    // patch's longest edge (relative, never absolute units).
+    static constexpr double kEyeOffset = 1e-5;
+    static constexpr double kNear = 1e-6;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ffcube

@@ -1,0 +1,12 @@
+// Each subcommand registers its options on the app and, when chosen, sets 'action'.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace ffcube::cli {
+
+void add_formfactors_command(CLI::App& app, std::function<int()>& action);
+
+}  // namespace ffcube::cli

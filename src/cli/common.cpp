@@ -1,0 +1,84 @@
+#include "cli/common.hpp"
+
+#include <fmt/format.h>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/scene/builtin.hpp"
+#include "ffcube/scene/obj_loader.hpp"
+
+namespace ffcube::cli {
+
+void add_scene_options(CLI::App& app, SceneOptions& o) {
+    app.add_option("scene", o.scene, "Wavefront OBJ scene (default: the built-in Cornell box)");
+    auto* edge = app.add_option("--max-patch-edge", o.max_patch_edge, "split faces so that no patch edge exceeds L (scene units)")
+                     ->check(CLI::PositiveNumber);
+    app.add_option("--patches", o.patches, "mesh to about N patches (default: 2000)")->check(CLI::PositiveNumber)->excludes(edge);
+    app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
+}
+
+void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
+    app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
+        ->default_val(256);
+    app.add_option("--backend", o.backend, "OpenGL context: auto (EGL, then OSMesa), egl or osmesa")
+        ->check(CLI::IsMember({"auto", "egl", "osmesa"}))
+        ->default_val("auto");
+    app.add_option("--threads", o.threads, "worker threads, one GL context each (default: every core)");
+    app.add_flag("--no-rotate", o.no_rotate, "do not rotate hemicubes about the normal by a seeded random angle");
+    app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed);
+}
+
+Scene load_and_mesh(const SceneOptions& o, Report& report) {
+    Stopwatch watch;
+    ObjModel model = o.scene.empty() ? load_cornell_box() : load_obj(o.scene);
+    for (const auto& w : model.warnings) log_warning(w);
+    const double load_s = watch.seconds();
+    watch.restart();
+    MeshOptions mo;
+    mo.max_patch_edge = o.max_patch_edge;
+    mo.target_patches = o.patches;
+    Scene scene = build_scene(model, mo);
+    const double mesh_s = watch.seconds();
+    info("scene {}: {} faces, {} objects -> {} patches ({})", scene.source, scene.stats.input_faces, scene.objects.size(),
+         scene.size(), scene.stats.how);
+    if (scene.stats.dropped_degenerate) info("dropped {} degenerate (zero-area) faces", scene.stats.dropped_degenerate);
+    report.set("scene", scene.source);
+    report.set("patches", scene.size());
+    report.set("objects", scene.objects.size());
+    report.set("meshing.max_patch_edge", scene.stats.max_patch_edge);
+    report.set("meshing.how", scene.stats.how);
+    report.set("meshing.input_faces", scene.stats.input_faces);
+    report.set("meshing.dropped_degenerate", scene.stats.dropped_degenerate);
+    report.set("meshing.non_planar", scene.stats.non_planar);
+    report.set("meshing.triangulated_ngons", scene.stats.triangulated_ngons);
+    report.set("fingerprint", fmt::format("{:016x}", scene.fingerprint));
+    report.set("time.loading", load_s);
+    report.set("time.meshing", mesh_s);
+    return scene;
+}
+
+HemicubeOptions hemicube_options(const FormFactorOptions& o) {
+    HemicubeOptions h;
+    h.resolution = o.resolution;
+    h.backend = parse_backend(o.backend);
+    h.threads = o.threads;
+    h.rotate = !o.no_rotate;
+    h.seed = o.seed;
+    if (h.resolution < 8 || h.resolution > 8192 || h.resolution % 2 != 0)
+        throw InputError(fmt::format("--resolution {}: must be an even number of pixels from 8 to 8192", h.resolution));
+    return h;
+}
+
+void check_output_path(const std::string& option, const std::string& path) {
+    if (path.empty()) return;
+    const std::filesystem::path p(path);
+    const std::filesystem::path dir = p.has_parent_path() ? p.parent_path() : std::filesystem::path(".");
+    std::error_code ec;
+    if (!std::filesystem::is_directory(dir, ec))
+        throw InputError(fmt::format("{} {}: the directory {} does not exist", option, path, dir.string()));
+    if (std::filesystem::is_directory(p, ec))
+        throw InputError(fmt::format("{} {}: is a directory, not a file name", option, path));
+}
+
+}  // namespace ffcube::cli

@@ -1,0 +1,44 @@
+// ffcube: radiosity form factors by hemicubes. Only main() catches; errors map to exit codes:
+//   1 generic failure, 2 bad input (file, option), 3 I/O failure, 4 no usable OpenGL context,
+//   70 internal error (a bug in ffcube).
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <functional>
+
+#include "cli/commands.hpp"
+#include "ffcube/core/error.hpp"
+
+int main(int argc, char** argv) {
+    CLI::App app{"ffcube: radiosity form factors (view factors) by hemicubes, and radiosity solvers"};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "ffcube 0.1.0");
+    std::function<int()> action;
+    ffcube::cli::add_formfactors_command(app, action);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        return app.exit(e) == 0 ? 0 : 2;
+    }
+    try {
+        return action ? action() : 0;
+    } catch (const ffcube::InputError& e) {
+        std::fprintf(stderr, "ffcube: error: %s\n", e.what());
+        return 2;
+    } catch (const ffcube::IoError& e) {
+        std::fprintf(stderr, "ffcube: error: %s\n", e.what());
+        return 3;
+    } catch (const ffcube::GlError& e) {
+        std::fprintf(stderr, "ffcube: error: %s\n", e.what());
+        return 4;
+    } catch (const ffcube::InternalError& e) {
+        std::fprintf(stderr, "ffcube: %s\n", e.what());
+        return 70;
+    } catch (const std::bad_alloc&) {
+        std::fprintf(stderr, "ffcube: error: out of memory\n");
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "ffcube: error: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,538 @@
+#include "ffcube/gl/hemicube_provider.hpp"
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <condition_variable>
+#include <cstdlib>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/hemicube/frame.hpp"
+#include "ffcube/hemicube/layout.hpp"
+#include "gl/gl_api.hpp"
+#include "gl/objects.hpp"
+
+namespace ffcube::shaders {
+extern const std::string_view item_vert;
+extern const std::string_view item_frag;
+}  // namespace ffcube::shaders
+
+namespace ffcube {
+namespace {
+
+constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
+
+// Scene triangles, made once and shared read-only by all workers.
+struct SceneTriangles {
+    std::vector<std::array<std::uint32_t, 3>> tri;  // vertex indices
+    std::vector<std::uint32_t> patch;               // patch of each triangle
+};
+
+SceneTriangles triangulate(const Scene& scene) {
+    SceneTriangles t;
+    for (std::uint32_t p = 0; p < scene.patches.size(); ++p) {
+        const Patch& pa = scene.patches[p];
+        // Quads are convex and planar (the mesher guarantees it), so a fan is exact.
+        for (std::uint32_t k = 1; k + 1 < pa.count; ++k) {
+            t.tri.push_back({pa.v[0], pa.v[k], pa.v[k + 1]});
+            t.patch.push_back(p);
+        }
+    }
+    return t;
+}
+
+// Column-major 4×4 for glUniformMatrix4fv: reversed-Z, infinite far plane, near at 'near'
+// (eye units), times the face's view rotation (rows right, up, -forward).
+std::array<float, 16> face_matrix(const FaceSpec& f, double near) {
+    const FaceFrustum& fr = f.frustum;
+    // Projection rows (acting on eye coordinates):
+    //   x' = 2/(r-l) x + (r+l)/(r-l) z,  y' = 2/(t-b) y + (t+b)/(t-b) z,  z' = near,  w' = -z
+    // so NDC depth = near / distance: with glClipControl(ZERO_TO_ONE) and GL_GREATER, float depth
+    // keeps about 7 significant digits at every distance.
+    const double P[4][4] = {{2 / (fr.right - fr.left), 0, (fr.right + fr.left) / (fr.right - fr.left), 0},
+                            {0, 2 / (fr.top - fr.bottom), (fr.top + fr.bottom) / (fr.top - fr.bottom), 0},
+                            {0, 0, 0, near},
+                            {0, 0, -1, 0}};
+    const Vec3 rows[3] = {f.right, f.up, -f.forward};
+    double V[4][4] = {};
+    for (int r = 0; r < 3; ++r) {
+        V[r][0] = rows[r].x;
+        V[r][1] = rows[r].y;
+        V[r][2] = rows[r].z;
+    }
+    V[3][3] = 1;
+    std::array<float, 16> m{};
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            double s = 0;
+            for (int k = 0; k < 4; ++k) s += P[r][k] * V[k][c];
+            m[static_cast<std::size_t>(c * 4 + r)] = static_cast<float>(s);
+        }
+    return m;
+}
+
+// One worker: a GL context current on its own thread, its item buffer and its scratch space.
+class Worker {
+public:
+    Worker(GlContext& ctx, const Scene& scene, const SceneTriangles& tris, const HemicubeLayout& layout,
+           const HemicubeOptions& opt)
+        : gl_(ctx.api()), scene_(scene), tris_(tris), layout_(layout), opt_(opt) {
+        const gl::Api& gl = gl_;
+        program_ = gl::make_program(gl, "item shader", shaders::item_vert, shaders::item_frag);
+        target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
+        vao_ = gl::make_vertex_array(gl);
+        vbo_ = gl::make_buffer(gl);
+        ebo_ = gl::make_buffer(gl);
+        id_buffer_ = gl::make_buffer(gl);
+        id_texture_ = gl::make_texture(gl);
+        gl.BindVertexArray(vao_.id());
+        gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+        gl.EnableVertexAttribArray(0);
+        gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+        gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
+        gl.UseProgram(program_.id());
+        u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
+        u_base_ = gl.GetUniformLocation(program_.id(), "u_base");
+        gl.ActiveTexture(GL_TEXTURE0);
+        // All state the item pass needs is set here and never changed: nothing leaks in or out.
+        gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
+        gl.Enable(GL_DEPTH_TEST);
+        gl.DepthFunc(GL_GREATER);
+        gl.DepthMask(GL_TRUE);
+        gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+        gl.Disable(GL_CULL_FACE);  // back faces must block (they write kBackFace)
+        gl.Disable(GL_BLEND);
+        gl.Disable(GL_DITHER);
+        gl.Disable(GL_MULTISAMPLE);
+        gl.Disable(GL_FRAMEBUFFER_SRGB);
+        gl.Disable(GL_SCISSOR_TEST);
+        gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+        gl::check_gl(gl, "hemicube worker setup");
+
+        const std::size_t nv = scene.positions.size();
+        local_.resize(nv * 3);
+        for (auto& l : lists_) l.reserve(tris.tri.size() * 3 / 4);
+        ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
+        acc_.assign(scene.patches.size(), 0.0);
+        stamp_.assign(scene.patches.size(), 0);
+        for (int f = 0; f < 5; ++f) face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
+    }
+
+    // Renders patch p's hemicube into ids_ (the atlas).
+    void render(std::uint32_t p, HemicubeStats& st) {
+        const gl::Api& gl = gl_;
+        const Patch& pa = scene_.patches[p];
+        Stopwatch watch;
+        const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
+        const HemicubeFrame fr = make_frame(pa.normal, angle);
+        const Vec3 eye = pa.centroid + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
+        // Eye-relative, local-frame coordinates, subtracted in double before becoming floats.
+        const std::size_t nv = scene_.positions.size();
+        for (std::size_t v = 0; v < nv; ++v) {
+            const Vec3 d = scene_.positions[v] - eye;
+            local_[3 * v + 0] = static_cast<float>(glm::dot(d, fr.tangent));
+            local_[3 * v + 1] = static_cast<float>(glm::dot(d, fr.bitangent));
+            local_[3 * v + 2] = static_cast<float>(glm::dot(d, fr.normal));
+        }
+        cull(st);
+        st.prepare_seconds += watch.seconds();
+        watch.restart();
+
+        // Upload: vertices, the five index lists back to back, and the patch IDs per triangle.
+        gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data(), GL_STREAM_DRAW);
+        std::size_t total = 0;
+        for (const auto& l : lists_) total += l.size();
+        all_idx_.clear();
+        all_ids_.clear();
+        for (int f = 0; f < 5; ++f) {
+            all_idx_.insert(all_idx_.end(), lists_[f].begin(), lists_[f].end());
+            all_ids_.insert(all_ids_.end(), id_lists_[f].begin(), id_lists_[f].end());
+        }
+        gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(total, 1) * 4), all_idx_.data(),
+                      GL_STREAM_DRAW);
+        gl.BindBuffer(GL_TEXTURE_BUFFER, id_buffer_.id());
+        gl.BufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_ids_.size(), 1) * 4),
+                      all_ids_.data(), GL_STREAM_DRAW);
+        gl.BindTexture(GL_TEXTURE_BUFFER, id_texture_.id());
+        gl.TexBuffer(GL_TEXTURE_BUFFER, GL_R32UI, id_buffer_.id());
+
+        const GLuint zero_id[4] = {0, 0, 0, 0};
+        const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
+        gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
+        gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
+        const double near = HemicubeRowProvider::kNear * pa.size;
+        std::size_t first_index = 0, first_tri = 0;
+        for (int f = 0; f < 5; ++f) {
+            const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
+            const std::size_t count = lists_[f].size();
+            if (count > 0) {
+                const auto m = face_matrix(fs, near);
+                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
+                gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
+                gl.Uniform1i(u_base_, static_cast<GLint>(first_tri));
+                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
+            }
+            first_index += count;
+            first_tri += count / 3;
+        }
+        gl.Finish();
+        st.draw_seconds += watch.seconds();
+        watch.restart();
+        gl.ReadPixels(0, 0, layout_.atlas_width(), layout_.atlas_height(), GL_RED_INTEGER, GL_UNSIGNED_INT, ids_.data());
+        gl::check_gl(gl, "hemicube rendering");
+        st.readback_seconds += watch.seconds();
+        st.hemicubes += 1;
+    }
+
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) {
+        render(p, st);
+        Stopwatch watch;
+        const std::vector<double>& w = layout_.delta_ff();
+        const std::uint32_t self = p + 1;
+        ++epoch_;
+        touched_.clear();
+        double back = 0.0, miss = 0.0;
+        const std::size_t npix = ids_.size();
+        for (std::size_t k = 0; k < npix; ++k) {
+            const std::uint32_t id = ids_[k];
+            if (id == 0) {
+                miss += w[k];
+            } else if (id == kBackFace) {
+                back += w[k];
+            } else if (id == self) {
+                ++st.self_hits;
+            } else {
+                const std::uint32_t j = id - 1;
+                if (stamp_[j] != epoch_) {
+                    stamp_[j] = epoch_;
+                    acc_[j] = 0.0;
+                    touched_.push_back(j);
+                }
+                acc_[j] += w[k];
+            }
+        }
+        std::sort(touched_.begin(), touched_.end());
+        out.clear();
+        out.col.reserve(touched_.size());
+        out.val.reserve(touched_.size());
+        for (std::uint32_t j : touched_) {
+            out.col.push_back(j);
+            out.val.push_back(acc_[j]);
+        }
+        st.back_face_weight += back;
+        st.miss_weight += miss;
+        st.accumulate_seconds += watch.seconds();
+    }
+
+    const std::vector<std::uint32_t>& ids() const { return ids_; }
+
+private:
+    // Sorts the scene's triangles into the five faces' index lists: a triangle goes to a face
+    // unless all three vertices lie outside one of the face's frustum planes; triangles wholly
+    // behind the hemicube plane (z ≤ 0) go nowhere.
+    void cull(HemicubeStats& st) {
+        for (int f = 0; f < 5; ++f) {
+            lists_[f].clear();
+            id_lists_[f].clear();
+        }
+        const std::size_t nt = tris_.tri.size();
+        st.triangles_considered += nt;
+        for (std::size_t t = 0; t < nt; ++t) {
+            const auto& tri = tris_.tri[t];
+            float x[3], y[3], z[3];
+            for (int k = 0; k < 3; ++k) {
+                x[k] = local_[3 * tri[k] + 0];
+                y[k] = local_[3 * tri[k] + 1];
+                z[k] = local_[3 * tri[k] + 2];
+            }
+            if (z[0] <= 0 && z[1] <= 0 && z[2] <= 0) {
+                ++st.triangles_behind;
+                continue;
+            }
+            // Outcodes against the planes x = ±z, y = ±z (top) and x = ±y, z = 0, z = ±x or ±y
+            // (sides). A bit set for all three vertices means the triangle misses that face.
+            unsigned all = ~0u;
+            for (int k = 0; k < 3; ++k) {
+                const bool out[13] = {x[k] > z[k],  -x[k] > z[k], y[k] > z[k],  -y[k] > z[k], z[k] < 0,
+                                      y[k] > x[k],  -y[k] > x[k], y[k] > -x[k], -y[k] > -x[k], z[k] > x[k],
+                                      z[k] > -x[k], z[k] > y[k],  z[k] > -y[k]};
+                unsigned c = 0;
+                for (unsigned b = 0; b < 13; ++b) c |= static_cast<unsigned>(out[b]) << b;
+                all &= c;
+            }
+            // Face masks: a face is missed when any of its planes has the bit set for all vertices.
+            constexpr unsigned kTop = 0b1111u;
+            constexpr unsigned kPosX = (1u << 4) | (1u << 5) | (1u << 6) | (1u << 9);    // |y| ≤ x, 0 ≤ z ≤ x
+            constexpr unsigned kNegX = (1u << 4) | (1u << 7) | (1u << 8) | (1u << 10);   // |y| ≤ -x, 0 ≤ z ≤ -x
+            // x > y is bit 8 (-y > -x) and -x > y is bit 6 (-y > x); likewise for -y.
+            constexpr unsigned kPosY = (1u << 4) | (1u << 6) | (1u << 8) | (1u << 11);   // |x| ≤ y, 0 ≤ z ≤ y
+            constexpr unsigned kNegY = (1u << 4) | (1u << 5) | (1u << 7) | (1u << 12);   // |x| ≤ -y, 0 ≤ z ≤ -y
+            const unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
+            for (int f = 0; f < 5; ++f) {
+                if (all & masks[f]) {
+                    ++st.triangles_culled[static_cast<std::size_t>(f)];
+                } else {
+                    ++st.triangles_drawn[static_cast<std::size_t>(f)];
+                    lists_[f].insert(lists_[f].end(), {tri[0], tri[1], tri[2]});
+                    id_lists_[f].push_back(tris_.patch[t] + 1);
+                }
+            }
+        }
+    }
+
+    const gl::Api& gl_;
+    const Scene& scene_;
+    const SceneTriangles& tris_;
+    const HemicubeLayout& layout_;
+    const HemicubeOptions& opt_;
+    std::array<FaceSpec, 5> face_m_;
+    gl::Program program_;
+    gl::ItemTarget target_;
+    gl::VertexArray vao_;
+    gl::Buffer vbo_, ebo_, id_buffer_;
+    gl::Texture id_texture_;
+    GLint u_face_ = -1, u_base_ = -1;
+    std::vector<float> local_;
+    std::vector<std::uint32_t> lists_[5], id_lists_[5], all_idx_, all_ids_;
+    std::vector<std::uint32_t> ids_;
+    std::vector<double> acc_;
+    std::vector<std::uint32_t> stamp_, touched_;
+    std::uint32_t epoch_ = 0;
+};
+
+}  // namespace
+
+// Workers live as long as the provider: each owns a thread, and on it a GL context and a Worker.
+// compute_rows hands out row positions through a counter; finished rows wait in a window of
+// slots until the calling thread passes them to the sink in list order, so the output does not
+// depend on which worker computed what, and memory stays bounded.
+struct HemicubeRowProvider::Impl {
+    const Scene& scene;
+    HemicubeOptions opt;
+    HemicubeLayout layout;
+    SceneTriangles tris;
+    std::string backend, renderer;
+    std::vector<std::unique_ptr<GlContext>> contexts;
+    std::vector<std::thread> threads;
+
+    std::mutex mutex;
+    std::condition_variable cv_work, cv_done;
+    bool stopping = false;
+    std::uint64_t generation = 0;  // bumped for each compute_rows call
+    std::span<const std::uint32_t> rows;
+    std::size_t next = 0, consumed = 0, window = 0;
+    std::vector<SparseRow> slots;
+    std::vector<char> ready;
+    std::exception_ptr error;
+    unsigned started = 0;
+    HemicubeStats stats;
+    // item_buffer() requests are served by worker 0.
+    std::uint32_t item_request = 0;
+    bool item_pending = false;
+    std::vector<std::uint32_t> item_result;
+
+    std::size_t in_flight = 0;
+
+    Impl(const Scene& s, const HemicubeOptions& o) : scene(s), opt(o), layout(o.resolution), tris(triangulate(s)) {}
+    ~Impl() {
+        {
+            std::lock_guard lock(mutex);
+            stopping = true;
+        }
+        cv_work.notify_all();
+        for (auto& t : threads) t.join();
+        // Contexts go after their threads have released them.
+    }
+
+    void worker_main(unsigned index) {
+        GlContext& ctx = *contexts[index];
+        std::unique_ptr<Worker> w;
+        try {
+            ctx.make_current();
+            w = std::make_unique<Worker>(ctx, scene, tris, layout, opt);
+        } catch (...) {
+            std::lock_guard lock(mutex);
+            if (!error) error = std::current_exception();
+            ++started;
+            cv_done.notify_all();
+            return;
+        }
+        {
+            std::lock_guard lock(mutex);
+            ++started;
+            cv_done.notify_all();
+        }
+        HemicubeStats local;
+        SparseRow row;
+        std::unique_lock lock(mutex);
+        for (;;) {
+            cv_work.wait(lock, [&] {
+                return stopping || (index == 0 && item_pending) ||
+                       (next < rows.size() && next < consumed + window && !error);
+            });
+            if (stopping) break;
+            if (index == 0 && item_pending) {
+                const std::uint32_t p = item_request;
+                lock.unlock();
+                std::vector<std::uint32_t> result;
+                try {
+                    HemicubeStats ignored;
+                    w->render(p, ignored);
+                    result = w->ids();
+                } catch (...) {
+                    lock.lock();
+                    if (!error) error = std::current_exception();
+                    item_pending = false;
+                    cv_done.notify_all();
+                    continue;
+                }
+                lock.lock();
+                item_result = std::move(result);
+                item_pending = false;
+                cv_done.notify_all();
+                continue;
+            }
+            const std::size_t k = next++;
+            const std::uint32_t i = rows[k];
+            ++in_flight;
+            lock.unlock();
+            try {
+                w->row(i, row, local);
+            } catch (...) {
+                lock.lock();
+                if (!error) error = std::current_exception();
+                --in_flight;
+                cv_done.notify_all();
+                continue;
+            }
+            lock.lock();
+            std::swap(slots[k % window], row);
+            ready[k % window] = 1;
+            merge(stats, local);
+            local = HemicubeStats{};
+            --in_flight;
+            cv_done.notify_all();
+        }
+        lock.unlock();
+        w.reset();
+        ctx.release_current();
+    }
+
+    static void merge(HemicubeStats& a, const HemicubeStats& b) {
+        a.hemicubes += b.hemicubes;
+        a.prepare_seconds += b.prepare_seconds;
+        a.draw_seconds += b.draw_seconds;
+        a.readback_seconds += b.readback_seconds;
+        a.accumulate_seconds += b.accumulate_seconds;
+        a.triangles_considered += b.triangles_considered;
+        a.triangles_behind += b.triangles_behind;
+        for (std::size_t f = 0; f < 5; ++f) {
+            a.triangles_drawn[f] += b.triangles_drawn[f];
+            a.triangles_culled[f] += b.triangles_culled[f];
+        }
+        a.back_face_weight += b.back_face_weight;
+        a.miss_weight += b.miss_weight;
+        a.self_hits += b.self_hits;
+    }
+};
+
+HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options) {
+    if (options.resolution < 8 || options.resolution > 8192 || options.resolution % 2 != 0)
+        throw InputError(fmt::format("--resolution {}: must be an even number of pixels from 8 to 8192", options.resolution));
+    if (scene.patches.size() >= kBackFace - 1) throw InputError("the scene has too many patches for 32-bit item IDs");
+    unsigned n = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
+    n = static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(1, scene.patches.size())));
+    impl_ = std::make_unique<Impl>(scene, options);
+    Impl& im = *impl_;
+    im.opt.threads = n;
+    im.contexts.push_back(create_headless_context(options.backend));
+    im.backend = im.contexts[0]->backend();
+    im.renderer = im.contexts[0]->renderer();
+    for (unsigned t = 1; t < n; ++t) im.contexts.push_back(im.contexts[0]->create_sibling());
+    for (unsigned t = 0; t < n; ++t) im.threads.emplace_back([&im, t] { im.worker_main(t); });
+    std::unique_lock lock(im.mutex);
+    im.cv_done.wait(lock, [&] { return im.started == n; });
+    if (im.error) {
+        std::exception_ptr e = im.error;
+        lock.unlock();
+        impl_.reset();  // joins the threads that did start
+        std::rethrow_exception(e);
+    }
+}
+
+HemicubeRowProvider::~HemicubeRowProvider() = default;
+
+std::uint32_t HemicubeRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene.patches.size()); }
+
+void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
+    Impl& im = *impl_;
+    for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
+    if (rows.empty()) return;
+    std::unique_lock lock(im.mutex);
+    if (im.error) std::rethrow_exception(im.error);
+    im.rows = rows;
+    im.next = 0;
+    im.consumed = 0;
+    im.window = 4 * im.threads.size();
+    im.slots.resize(im.window);
+    im.ready.assign(im.window, 0);
+    im.cv_work.notify_all();
+    // However this call ends (done, a worker failed, the sink threw), no worker may still be
+    // reading 'rows' or writing a slot when it returns.
+    auto finish = [&] {
+        im.next = im.rows.size();
+        im.cv_done.wait(lock, [&] { return im.in_flight == 0; });
+        im.rows = {};
+    };
+    SparseRow current;
+    try {
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            im.cv_done.wait(lock, [&] { return im.ready[k % im.window] || im.error; });
+            if (im.error) std::rethrow_exception(im.error);
+            std::swap(current, im.slots[k % im.window]);
+            im.ready[k % im.window] = 0;
+            ++im.consumed;
+            im.cv_work.notify_all();
+            lock.unlock();
+            sink(rows[k], current);
+            lock.lock();
+        }
+    } catch (...) {
+        if (!lock.owns_lock()) lock.lock();
+        finish();
+        throw;
+    }
+    finish();
+}
+
+std::vector<std::uint32_t> HemicubeRowProvider::item_buffer(std::uint32_t i) {
+    Impl& im = *impl_;
+    FFCUBE_CHECK_MSG(i < size(), "patch index out of range");
+    std::unique_lock lock(im.mutex);
+    if (im.error) std::rethrow_exception(im.error);
+    im.item_request = i;
+    im.item_pending = true;
+    im.cv_work.notify_all();
+    im.cv_done.wait(lock, [&] { return !im.item_pending; });
+    if (im.error) std::rethrow_exception(im.error);
+    return std::move(im.item_result);
+}
+
+HemicubeStats HemicubeRowProvider::stats() const {
+    std::lock_guard lock(impl_->mutex);
+    return impl_->stats;
+}
+std::string HemicubeRowProvider::backend() const { return impl_->backend; }
+std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
+unsigned HemicubeRowProvider::threads() const { return static_cast<unsigned>(impl_->threads.size()); }
+int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
+
+}  // namespace ffcube
