@@ -1,0 +1,24 @@
+// Writing result files so that a reader never sees half a file: the content goes to a temporary
+// file in the destination's directory, which is flushed, fsync'ed and then renamed over the
+// destination (rename is atomic within one file system). An interrupted or failed run leaves the
+// previous file untouched and no temporary behind.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+
+namespace ffcube {
+
+// Calls writer with a stream on a fresh temporary file "PATH.tmp.<pid>.<counter>" and, when it
+// returns with the stream in a good state, makes the temporary the file at path (replacing any
+// previous one). The stream is binary: bytes pass through unchanged, "\n" stays one byte.
+//
+// Throws IoError naming path and the system's reason (strerror) when the temporary cannot be
+// created (e.g. the directory does not exist), a write, fsync or close fails, or the rename fails
+// (e.g. path is a directory). If writer throws, its exception propagates unchanged. In every
+// failure case the temporary is removed and the file at path is left as it was.
+// Thread-safe: concurrent calls use distinct temporaries.
+void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer);
+
+}  // namespace ffcube

@@ -1,0 +1,362 @@
+#include "ffcube/io/ffm.hpp"
+
+#include <fmt/format.h>
+
+#include <array>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <string_view>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/atomic_file.hpp"
+#include "ffcube/io/checksum.hpp"
+
+// Layout (docs/ffm-format.md is the reference; keep the two in step):
+//   0  char[8] "FFCUBEFM"       8 u32 version      12 u32 n           16 u32 object_count
+//  20  u32 resolution          24 u64 nnz         32 u64 fingerprint 40 f64 max_patch_edge
+//  48  u32 method_len          52 u32 meshing_len 56 u32 settings_len 60 u32 names_len
+//  64  text: method, meshing, settings, names (u32 length + bytes each), zero-padded to 8
+//      f64 areas[n], u64 row_ptr[n+1], u32 objects[n] (pad), u32 col[nnz] (pad), f32 val[nnz] (pad)
+//      u64 checksum of every byte before it
+// Every section starts at a multiple of 8, so the file can be mapped and viewed in place.
+
+namespace ffcube {
+namespace {
+
+constexpr std::array<char, 8> kMagic = {'F', 'F', 'C', 'U', 'B', 'E', 'F', 'M'};
+constexpr std::size_t kHeaderSize = 64;
+// Values above 1 can only come from float rounding of row entries near 1; anything beyond this
+// slack is not a form factor.
+constexpr float kMaxValue = 1.0f + 1e-3f;
+
+constexpr std::uint64_t pad8(std::uint64_t bytes) { return (bytes + 7) / 8 * 8; }
+
+// File size implied by the header, in 128 bits: a corrupted nnz near 2^64 must not wrap around
+// to a plausible size.
+__extension__ using u128 = unsigned __int128;
+
+struct Header {
+    std::uint32_t version = 0, n = 0, object_count = 0, resolution = 0;
+    std::uint64_t nnz = 0, fingerprint = 0;
+    double max_patch_edge = 0.0;
+    std::uint32_t method_len = 0, meshing_len = 0, settings_len = 0, names_len = 0;
+
+    std::uint64_t text_bytes() const {
+        return pad8(std::uint64_t(method_len) + meshing_len + settings_len + names_len);
+    }
+    u128 file_size() const {
+        return u128(kHeaderSize) + text_bytes() + u128(8) * n + u128(8) * (u128(n) + 1) + pad8(4 * std::uint64_t(n)) +
+               2 * ((u128(4) * nnz + 7) / 8 * 8) + 8;
+    }
+};
+
+template <typename T>
+void put(unsigned char* p, T v) {
+    std::memcpy(p, &v, sizeof v);
+}
+template <typename T>
+T get(const unsigned char* p) {
+    T v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+std::array<unsigned char, kHeaderSize> encode(const Header& h) {
+    std::array<unsigned char, kHeaderSize> b{};
+    std::memcpy(b.data(), kMagic.data(), kMagic.size());
+    put(b.data() + 8, h.version);
+    put(b.data() + 12, h.n);
+    put(b.data() + 16, h.object_count);
+    put(b.data() + 20, h.resolution);
+    put(b.data() + 24, h.nnz);
+    put(b.data() + 32, h.fingerprint);
+    put(b.data() + 40, h.max_patch_edge);
+    put(b.data() + 48, h.method_len);
+    put(b.data() + 52, h.meshing_len);
+    put(b.data() + 56, h.settings_len);
+    put(b.data() + 60, h.names_len);
+    return b;
+}
+
+Header decode(const unsigned char* b) {
+    Header h;
+    h.version = get<std::uint32_t>(b + 8);
+    h.n = get<std::uint32_t>(b + 12);
+    h.object_count = get<std::uint32_t>(b + 16);
+    h.resolution = get<std::uint32_t>(b + 20);
+    h.nnz = get<std::uint64_t>(b + 24);
+    h.fingerprint = get<std::uint64_t>(b + 32);
+    h.max_patch_edge = get<double>(b + 40);
+    h.method_len = get<std::uint32_t>(b + 48);
+    h.meshing_len = get<std::uint32_t>(b + 52);
+    h.settings_len = get<std::uint32_t>(b + 56);
+    h.names_len = get<std::uint32_t>(b + 60);
+    return h;
+}
+
+std::uint32_t checked_u32(std::size_t v, const char* what) {
+    FFCUBE_CHECK_MSG(v <= std::numeric_limits<std::uint32_t>::max(), fmt::format("{} does not fit in 32 bits", what));
+    return static_cast<std::uint32_t>(v);
+}
+
+// Writes bytes to the stream and into the checksum.
+class HashingWriter {
+public:
+    explicit HashingWriter(std::ostream& out) : out_(out) {}
+    void bytes(const void* data, std::size_t size) {
+        out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
+        sum_.update(data, size);
+    }
+    template <typename T>
+    void array(const std::vector<T>& v) {
+        bytes(v.data(), v.size() * sizeof(T));
+    }
+    void pad_to_8(std::uint64_t written) {
+        static constexpr unsigned char zeros[8] = {};
+        bytes(zeros, pad8(written) - written);
+    }
+    void finish() {
+        const std::uint64_t c = sum_.value();
+        out_.write(reinterpret_cast<const char*>(&c), sizeof c);
+    }
+
+private:
+    std::ostream& out_;
+    Checksum64 sum_;
+};
+
+// Reads the file section by section into the checksum. Sizes are validated against the file
+// size before this is used, so every read is bounded by bytes that exist.
+class HashingReader {
+public:
+    HashingReader(std::ifstream& in, const std::string& name) : in_(in), name_(name) {}
+    void bytes(void* data, std::size_t size) {
+        in_.read(static_cast<char*>(data), static_cast<std::streamsize>(size));
+        if (static_cast<std::size_t>(in_.gcount()) != size)
+            throw IoError(fmt::format("{}: read failed (did the file change while it was read?): {}", name_,
+                                      std::strerror(errno)));
+        sum_.update(data, size);
+    }
+    // Bytes read before the checksum started (the header) still count.
+    void already_read(const void* data, std::size_t size) { sum_.update(data, size); }
+    template <typename T>
+    void array(std::vector<T>& v, std::size_t count) {
+        v.resize(count);
+        bytes(v.data(), count * sizeof(T));
+    }
+    void padding(std::uint64_t read) {
+        unsigned char pad[8] = {};
+        const std::size_t k = pad8(read) - read;
+        bytes(pad, k);
+        for (std::size_t i = 0; i < k; ++i) nonzero_padding_ |= pad[i] != 0;
+    }
+    std::uint64_t checksum() const { return sum_.value(); }
+    // Judged after the checksum, like the rest of the structure.
+    bool nonzero_padding() const { return nonzero_padding_; }
+
+private:
+    std::ifstream& in_;
+    const std::string& name_;
+    Checksum64 sum_;
+    bool nonzero_padding_ = false;
+};
+
+void write_string(HashingWriter& w, std::string_view s) { w.bytes(s.data(), s.size()); }
+
+}  // namespace
+
+void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta) {
+    const std::uint32_t n = F.size();
+    FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_ffm needs every row of the matrix");
+    FFCUBE_CHECK_MSG(scene.size() == n, "write_ffm: matrix and scene differ in patch count");
+
+    std::vector<double> areas(n);
+    std::vector<std::uint32_t> objects(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        areas[i] = scene.patches[i].area;
+        objects[i] = scene.patches[i].object;
+        FFCUBE_CHECK(objects[i] < scene.objects.size());
+        FFCUBE_CHECK_MSG(std::isfinite(areas[i]) && areas[i] > 0, fmt::format("patch {} has area {}", i, areas[i]));
+    }
+    // The reader's rules, enforced here too: a file that cannot be read back is never written.
+    for (float v : F.val())
+        FFCUBE_CHECK_MSG(std::isfinite(v) && v >= 0.0f && v <= kMaxValue, fmt::format("form factor {} written", v));
+    std::uint64_t names_len = 0;
+    for (const std::string& s : scene.objects) names_len += 4 + s.size();
+
+    Header h;
+    h.version = kFfmVersion;
+    h.n = n;
+    h.object_count = checked_u32(scene.objects.size(), "object count");
+    h.resolution = meta.resolution;
+    h.nnz = F.nnz();
+    h.fingerprint = scene.fingerprint;
+    h.max_patch_edge = scene.stats.max_patch_edge;
+    h.method_len = checked_u32(meta.method.size(), "method name length");
+    h.meshing_len = checked_u32(scene.stats.how.size(), "meshing description length");
+    h.settings_len = checked_u32(meta.settings.size(), "settings length");
+    h.names_len = checked_u32(names_len, "object name block size");
+
+    write_file_atomically(path, [&](std::ostream& out) {
+        HashingWriter w(out);
+        const auto header = encode(h);
+        w.bytes(header.data(), header.size());
+        write_string(w, meta.method);
+        write_string(w, scene.stats.how);
+        write_string(w, meta.settings);
+        for (const std::string& s : scene.objects) {
+            const std::uint32_t len = static_cast<std::uint32_t>(s.size());
+            w.bytes(&len, sizeof len);
+            write_string(w, s);
+        }
+        w.pad_to_8(std::uint64_t(h.method_len) + h.meshing_len + h.settings_len + h.names_len);
+        w.array(areas);
+        w.array(F.row_ptr());
+        w.array(objects);
+        w.pad_to_8(4 * std::uint64_t(n));
+        w.array(F.col());
+        w.pad_to_8(4 * F.nnz());
+        w.array(F.val());
+        w.pad_to_8(4 * F.nnz());
+        w.finish();
+    });
+}
+
+FfmFile read_ffm(const std::filesystem::path& path) {
+    FfmFile f;
+    f.source = path.string();
+    const std::string& name = f.source;
+
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec))
+        throw InputError(fmt::format("{}: is a directory, not a matrix file", name));
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(fmt::format("{}: cannot open: {}", name, std::strerror(errno)));
+    in.seekg(0, std::ios::end);
+    const std::streamoff end = in.tellg();
+    in.seekg(0, std::ios::beg);
+    if (end < 0 || !in) throw IoError(fmt::format("{}: cannot determine the file size", name));
+    const std::uint64_t size = static_cast<std::uint64_t>(end);
+
+    // Magic first: a file that is not ours gets that answer, not a message about its size.
+    std::array<unsigned char, kHeaderSize> hb{};
+    const std::size_t head = static_cast<std::size_t>(std::min<std::uint64_t>(size, kHeaderSize));
+    in.read(reinterpret_cast<char*>(hb.data()), static_cast<std::streamsize>(head));
+    if (static_cast<std::size_t>(in.gcount()) != head) throw IoError(fmt::format("{}: read failed", name));
+    const std::size_t magic_seen = std::min(head, kMagic.size());
+    if (std::memcmp(hb.data(), kMagic.data(), magic_seen) != 0)
+        throw InputError(fmt::format("{}: not an ffcube matrix (bad magic)", name));
+    if (size < kHeaderSize)
+        throw InputError(fmt::format("{}: truncated: expected at least {} bytes, found {}", name, kHeaderSize, size));
+
+    const Header h = decode(hb.data());
+    if (h.version != kFfmVersion)
+        throw InputError(fmt::format("{}: unsupported .ffm format version {} (this ffcube reads version {})", name,
+                                     h.version, kFfmVersion));
+    const u128 expected = h.file_size();
+    if (expected != size) {
+        // fmt 9 cannot format 128-bit integers portably; a header that needs more than 64 bits is
+        // reported as such.
+        const std::string e = expected > std::numeric_limits<std::uint64_t>::max()
+                                  ? std::string("more than 2^64")
+                                  : fmt::format("{}", static_cast<std::uint64_t>(expected));
+        throw InputError(fmt::format("{}: {}: expected {} bytes, found {}", name,
+                                     expected > size ? "truncated" : "unexpected trailing data", e, size));
+    }
+    // From here on every count is bounded by the size of a file that exists.
+
+    HashingReader r(in, name);
+    r.already_read(hb.data(), kHeaderSize);
+    std::string text(h.text_bytes(), '\0');
+    r.bytes(text.data(), text.size());
+    r.array(f.areas, h.n);
+    std::vector<std::uint64_t> row_ptr;
+    r.array(row_ptr, std::size_t(h.n) + 1);
+    r.array(f.objects, h.n);
+    r.padding(4 * std::uint64_t(h.n));
+    std::vector<std::uint32_t> col;
+    r.array(col, h.nnz);
+    r.padding(4 * h.nnz);
+    std::vector<float> val;
+    r.array(val, h.nnz);
+    r.padding(4 * h.nnz);
+    std::uint64_t stored = 0;
+    in.read(reinterpret_cast<char*>(&stored), sizeof stored);
+    if (in.gcount() != sizeof stored) throw IoError(fmt::format("{}: read failed", name));
+    if (stored != r.checksum()) throw InputError(fmt::format("{}: checksum mismatch: the file is corrupted", name));
+
+    // The checksum only proves the file is as written; a file made by another program (or a bug)
+    // still has to obey every rule before a solver indexes arrays with it.
+    auto bad = [&](const std::string& what) { return InputError(fmt::format("{}: invalid: {}", name, what)); };
+
+    if (r.nonzero_padding()) throw bad("nonzero padding byte between arrays");
+
+    std::size_t pos = 0;
+    auto take = [&](std::size_t len) {
+        std::string s = text.substr(pos, len);
+        pos += len;
+        return s;
+    };
+    f.meta.method = take(h.method_len);
+    f.meshing = take(h.meshing_len);
+    f.meta.settings = take(h.settings_len);
+    f.meta.resolution = h.resolution;
+    const std::size_t names_end = pos + h.names_len;
+    f.object_names.reserve(std::min<std::size_t>(h.object_count, h.names_len / 4));
+    for (std::uint32_t k = 0; k < h.object_count; ++k) {
+        if (names_end - pos < 4) throw bad(fmt::format("object name block ends before name {}", k));
+        const std::uint32_t len = get<std::uint32_t>(reinterpret_cast<const unsigned char*>(text.data() + pos));
+        pos += 4;
+        if (names_end - pos < len) throw bad(fmt::format("object name {} runs past the name block", k));
+        f.object_names.push_back(take(len));
+    }
+    if (pos != names_end) throw bad("object name block longer than its names");
+    for (std::size_t k = names_end; k < text.size(); ++k)
+        if (text[k] != '\0') throw bad("nonzero padding byte after the text block");
+
+    f.fingerprint = h.fingerprint;
+    f.max_patch_edge = h.max_patch_edge;
+    if (!std::isfinite(f.max_patch_edge) || f.max_patch_edge < 0)
+        throw bad(fmt::format("max patch edge {} is not a finite length", f.max_patch_edge));
+    for (std::uint32_t i = 0; i < h.n; ++i) {
+        if (!(std::isfinite(f.areas[i]) && f.areas[i] > 0))
+            throw bad(fmt::format("patch {} has area {} (must be finite and > 0)", i, f.areas[i]));
+        if (f.objects[i] >= h.object_count)
+            throw bad(fmt::format("patch {} has object {} of {}", i, f.objects[i], h.object_count));
+    }
+    if (row_ptr[0] != 0) throw bad(fmt::format("row_ptr[0] = {} (must be 0)", row_ptr[0]));
+    if (row_ptr[h.n] != h.nnz) throw bad(fmt::format("row_ptr[{}] = {} (must be nnz = {})", h.n, row_ptr[h.n], h.nnz));
+    for (std::uint32_t i = 0; i < h.n; ++i) {
+        const std::uint64_t b = row_ptr[i], e = row_ptr[i + 1];
+        if (e < b || e > h.nnz)
+            throw bad(fmt::format("row_ptr[{}] = {} after row_ptr[{}] = {} (must not decrease or exceed nnz = {})",
+                                  i + 1, e, i, b, h.nnz));
+        for (std::uint64_t k = b; k < e; ++k) {
+            if (col[k] >= h.n) throw bad(fmt::format("row {}: column {} out of range (n = {})", i, col[k], h.n));
+            if (k > b && col[k] <= col[k - 1])
+                throw bad(fmt::format("row {}: column {} after column {} (columns must increase strictly)", i, col[k],
+                                      col[k - 1]));
+            if (!(std::isfinite(val[k]) && val[k] >= 0.0f && val[k] <= kMaxValue))
+                throw bad(
+                    fmt::format("F[{}][{}] = {} is not a form factor (must be in [0, 1.001])", i, col[k], val[k]));
+        }
+    }
+    f.matrix = CsrMatrix::from_arrays(h.n, std::move(row_ptr), std::move(col), std::move(val));
+    return f;
+}
+
+void check_ffm_matches(const FfmFile& file, const Scene& scene) {
+    if (file.fingerprint != scene.fingerprint)
+        throw InputError(
+            fmt::format("{} was computed for a different scene or meshing (fingerprint {:016x}, scene has {:016x}); "
+                        "recompute it with `ffcube formfactors` and the same meshing options",
+                        file.source, file.fingerprint, scene.fingerprint));
+    if (file.matrix.size() != scene.size())
+        throw InputError(fmt::format("{} has {} patches but the scene has {} (same fingerprint: a hash collision)",
+                                     file.source, file.matrix.size(), scene.size()));
+}
+
+}  // namespace ffcube
