@@ -1,0 +1,107 @@
+// The hemicube's five faces, their cameras, their places in one atlas image, and the exact
+// delta form factor (ΔF) of every atlas pixel. Pure math, no GL: the GL renderer takes the
+// FaceSpecs from here, and the CPU accumulation takes delta_ff().
+//
+// Local frame of a hemicube (see frame.hpp): x = tangent, y = bitangent, z = patch normal.
+// The eye sits at the origin; the top face is the square z = 1, x,y ∈ [-1,1]; the four side
+// faces are the half squares at distance 1 (x = ±1 or y = ±1) with z ∈ [0,1].
+//
+// Atlas (width 3N, height N, pixel (col, row), row 0 = bottom row, as glReadPixels returns it):
+//
+//     row N   +-----------------+--------+--------+
+//             |                 |  -X    |  -Y    |   each side tile: N wide, N/2 tall,
+//     row N/2 |       TOP       +--------+--------+   its row 0 at the horizon (z = 0),
+//             |                 |  +X    |  +Y    |   its top row at the top face's edge (z = 1)
+//     row 0   +-----------------+--------+--------+
+//            col 0             col N    col 2N   col 3N
+//
+//   TOP  viewport (0,  0,   N, N)    forward +z, up +y, right -x
+//   +X   viewport (N,  0,   N, N/2)  forward +x, up +z, right -y
+//   -X   viewport (N,  N/2, N, N/2)  forward -x, up +z, right +y
+//   +Y   viewport (2N, 0,   N, N/2)  forward +y, up +z, right +x
+//   -Y   viewport (2N, N/2, N, N/2)  forward -y, up +z, right -x
+//
+// Every camera is an OpenGL camera: eye x = right, eye y = up, eye z = -forward, and
+// right × up = -forward (right-handed, no mirroring, so front-face culling keeps its meaning).
+// The side faces' up vector points away from the patch plane, so the horizon is each tile's
+// bottom row. Within a face, pixel column i spans eye x ∈ [l + (r-l)·i/w, l + (r-l)·(i+1)/w]
+// and row j spans eye y ∈ [b + (t-b)·j/h, ...] on the plane at distance 1 along forward; that is
+// exactly what glFrustum(l·near, r·near, b·near, t·near, near, far) with glViewport(viewport)
+// rasterises. All 3N² atlas pixels belong to a face.
+#pragma once
+
+#include "ffcube/geometry/polygon.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace ffcube {
+
+enum class HemicubeFace : int { Top = 0, PosX = 1, NegX = 2, PosY = 3, NegY = 4 };
+
+// Off-centre frustum on the plane at distance 1 along the face's forward vector, in eye
+// coordinates (x along right, y along up). Multiply by the near distance for glFrustum.
+struct FaceFrustum {
+    double left, right, bottom, top;
+};
+
+// A rectangle of the atlas in pixels, origin at the bottom-left (glViewport's convention).
+struct AtlasViewport {
+    int x, y, width, height;
+};
+
+struct FaceSpec {
+    HemicubeFace face;
+    Vec3 forward;  // unit, hemicube local frame
+    Vec3 up;       // unit, local frame
+    Vec3 right;    // unit, local frame; right × up = -forward
+    FaceFrustum frustum;
+    AtlasViewport viewport;
+};
+
+// One pixel of the atlas: column x ∈ [0, 3N), row y ∈ [0, N), row 0 at the bottom.
+struct AtlasPixel {
+    HemicubeFace face;
+    int x, y;
+};
+
+class HemicubeLayout {
+public:
+    // N: top-face resolution in pixels; even and in [2, 16384] (InputError otherwise, naming
+    // the rule). Builds the ΔF table: 3N² doubles (N = 512: 6 MiB).
+    explicit HemicubeLayout(int resolution);
+
+    int resolution() const { return n_; }
+    int atlas_width() const { return 3 * n_; }
+    int atlas_height() const { return n_; }
+
+    // Indexed by static_cast<int>(HemicubeFace).
+    const std::array<FaceSpec, 5>& faces() const { return faces_; }
+    const FaceSpec& face(HemicubeFace f) const { return faces_[static_cast<int>(f)]; }
+
+    // ΔF per atlas pixel, row-major, index = row · atlas_width() + col, row 0 at the bottom.
+    // Each value is the exact integral of cosθ·cosθ'/(π r²) over the pixel (the fraction of
+    // the patch's cosine-weighted hemisphere the pixel subtends), computed in double from
+    // closed-form antiderivatives; the table sums to 1 up to rounding (about 1e-13).
+    const std::vector<double>& delta_ff() const { return dff_; }
+
+    // The atlas pixel that a direction (hemicube local frame, need not be unit) falls in, or
+    // nullopt for a direction below the horizon (z < 0) or zero. Directions on a boundary
+    // between pixels or faces go to one of them.
+    std::optional<AtlasPixel> pixel_of_direction(const Vec3& dir) const;
+
+    // The direction (local frame, not unit) through the eye-plane point (u, v) of a face, u
+    // along right and v along up, at distance 1 along forward.
+    static Vec3 face_direction(const FaceSpec& f, double u, double v) {
+        return f.forward + u * f.right + v * f.up;
+    }
+
+private:
+    int n_;
+    std::array<FaceSpec, 5> faces_;
+    std::vector<double> dff_;
+};
+
+}  // namespace ffcube

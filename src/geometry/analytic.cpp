@@ -1,0 +1,540 @@
+#include "ffcube/geometry/analytic.hpp"
+
+#include "ffcube/core/error.hpp"
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+namespace ffcube {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+void require_positive(const char* fn, const char* name, double v) {
+    if (!(v > 0.0) || !std::isfinite(v))
+        throw InputError(fmt::format("{}: {} = {} must be positive and finite", fn, name, v));
+}
+
+// ---- polygon checks and clipping ---------------------------------------------------------
+
+void validate_polygon(const char* fn, const char* which, std::span<const Vec3> poly) {
+    if (poly.size() < 3)
+        throw InputError(fmt::format("{}: {} has {} vertices; a polygon needs at least 3", fn,
+                                     which, poly.size()));
+    for (const Vec3& v : poly)
+        if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+            throw InputError(fmt::format("{}: {} has a NaN or infinite coordinate", fn, which));
+    const double size = polygon_max_edge(poly);
+    if (!(polygon_area(poly) > 0.0) || !(size > 0.0))
+        throw InputError(fmt::format("{}: {} has zero area", fn, which));
+    // 1e-9 of the size: far above the rounding of planar input at offsets of 1e5 (1e-11
+    // relative), far below any face a mesher would call planar.
+    if (polygon_planarity_deviation(poly) > 1e-9 * size)
+        throw InputError(fmt::format("{}: {} is not planar (a vertex is {:.3g} off its plane, "
+                                     "more than 1e-9 of its size {:.3g})",
+                                     fn, which, polygon_planarity_deviation(poly), size));
+}
+
+// Sutherland–Hodgman against one plane: keeps the part of `in` where dot(v − o, m) ≥ 0.
+// Vertices on the plane are kept, so a polygon touching the plane along an edge keeps it.
+void clip_to_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out) {
+    out.clear();
+    const std::size_t k = in.size();
+    for (std::size_t i = 0; i < k; ++i) {
+        const Vec3& a = in[i];
+        const Vec3& b = in[(i + 1) % k];
+        const double da = glm::dot(a - o, m), db = glm::dot(b - o, m);
+        if (da >= 0.0) out.push_back(a);
+        if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0))
+            out.push_back(a + (da / (da - db)) * (b - a));
+    }
+}
+
+// ---- Lambert's contour formula -----------------------------------------------------------
+
+// Σ β_k n·γ̂_k with γ̂_k = unit(r_{k+1} × r_k): positive when the polygon's front faces p.
+// p must be off the polygon's plane, so no r_k is zero and no edge is collinear with p.
+double lambert_sum(const Vec3& p, const Vec3& n, std::span<const Vec3> poly) {
+    const std::size_t k = poly.size();
+    double sum = 0.0;
+    for (std::size_t i = 0; i < k; ++i) {
+        const Vec3 a = poly[i] - p, b = poly[(i + 1) % k] - p;
+        const Vec3 c = glm::cross(b, a);
+        const double sc = glm::length(c);
+        if (sc > 0.0) sum += std::atan2(sc, glm::dot(a, b)) * glm::dot(n, c) / sc;
+    }
+    return sum;
+}
+
+// ---- ln r on pairs of segments -----------------------------------------------------------
+
+// ∫ ½ ln(u² + h²) du = ½ u ln(u²+h²) − u + h atan(u/h), h ≥ 0; continuous at h = 0 and u = 0.
+double log_primitive(double u, double h) {
+    const double r2 = u * u + h * h;
+    const double log_term = r2 > 0.0 ? 0.5 * u * std::log(r2) : 0.0;
+    const double atan_term = h > 0.0 ? h * std::atan(u / h) : 0.0;
+    return log_term - u + atan_term;
+}
+
+// Φ with Φ'' = ½ ln(x² + h²): Φ(x) = ¼(x² − h²) ln(x²+h²) − ¾x² + h x atan(x/h).
+double log_second_primitive(double x, double h) {
+    const double r2 = x * x + h * h;
+    const double log_term = r2 > 0.0 ? 0.25 * (x * x - h * h) * std::log(r2) : 0.0;
+    const double atan_term = h > 0.0 ? h * x * std::atan(x / h) : 0.0;
+    return log_term - 0.75 * x * x + atan_term;
+}
+
+// QUADPACK qk15 nodes (Kronrod) and weights; the 7-point Gauss rule uses the odd nodes.
+constexpr std::array<double, 8> kXgk = {
+    0.991455371120812639206854697526329, 0.949107912342758524526189684047851,
+    0.864864423359769072789712788640926, 0.741531185599394439863864773280788,
+    0.586087235467691130294144845693013, 0.405845151377397166906606412076961,
+    0.207784955007898467600689403773245, 0.0};
+constexpr std::array<double, 8> kWgk = {
+    0.022935322010529224963732008058970, 0.063092092629978553290700663189204,
+    0.104790010322250183839876322541518, 0.140653259715525918745189590510238,
+    0.169004726639267902826583426598550, 0.190350578064785409913256402421014,
+    0.204432940075298892414161999234649, 0.209482141084727828012999174891714};
+constexpr std::array<double, 4> kWg = {
+    0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
+    0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
+
+// Adaptive Gauss–Kronrod on [a,b]: bisect until |K15 − G7| ≤ tol (halved per level). The log
+// singularities here sit at interval ends (the callers split there), where bisection converges
+// geometrically; 50 levels reach intervals of 1e-15 of the edge, below double resolution.
+template <class F>
+double integrate(const F& f, double a, double b, double tol, int depth = 50) {
+    const double c = 0.5 * (a + b), hl = 0.5 * (b - a);
+    const double fc = f(c);
+    double k = kWgk[7] * fc, g = kWg[3] * fc;
+    for (int i = 0; i < 7; ++i) {
+        const double dx = hl * kXgk[i];
+        const double s = f(c - dx) + f(c + dx);
+        k += kWgk[i] * s;
+        if (i % 2 == 1) g += kWg[i / 2] * s;
+    }
+    k *= hl;
+    g *= hl;
+    FFCUBE_CHECK_MSG(std::isfinite(k), "non-finite integrand in the contour integral");
+    if (std::abs(k - g) <= tol || depth == 0) return k;
+    return integrate(f, a, c, 0.5 * tol, depth - 1) + integrate(f, c, b, 0.5 * tol, depth - 1);
+}
+
+// Parameter t ∈ [0, lq] of the point of segment q0 + t e closest to the segment p0 + s d,
+// s ∈ [0, lp] (Ericson, Real-Time Collision Detection, 5.1.9; d, e unit, not parallel).
+double closest_on_q(const Vec3& p0, const Vec3& d, double lp, const Vec3& q0, const Vec3& e,
+                    double lq) {
+    const Vec3 r = p0 - q0;
+    const double b = glm::dot(d, e), c = glm::dot(d, r), f = glm::dot(e, r);
+    const double denom = 1.0 - b * b;
+    const double s = std::clamp((b * f - c) / denom, 0.0, lp);
+    const double t = b * s + f;
+    // Ericson then re-clamps s for a clamped t; t itself is final, and only t is needed.
+    return std::clamp(t, 0.0, lq);
+}
+
+// ∫_{edge P} ∫_{edge Q} ln|x1 − x2| dx1 · dx2 for P = p0→p1, Q = q0→q1.
+double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+    const Vec3 dp = p1 - p0, dq = q1 - q0;
+    const double lp = glm::length(dp), lq = glm::length(dq);
+    if (lp == 0.0 || lq == 0.0) return 0.0;
+    const Vec3 d = dp / lp, e = dq / lq;
+    const double cos_angle = glm::dot(d, e);
+    // Perpendicular edges: dx1·dx2 = 0. 1e-15 × the O(lp·lq) integral is below rounding.
+    if (std::abs(cos_angle) < 1e-15) return 0.0;
+    if (glm::length(glm::cross(d, e)) < 1e-12) {
+        // Parallel (collinear or not): closed form. Positions of Q's ends along d measured from
+        // p0; h = distance between the lines (taken at Q's midpoint; for edges parallel to
+        // 1e-12 that moves the ends by at most 1e-12 of the edge).
+        const double ta = glm::dot(q0 - p0, d), tb = glm::dot(q1 - p0, d);
+        const double t0 = std::min(ta, tb), t1 = std::max(ta, tb);
+        const double h = glm::length(glm::cross(0.5 * (q0 + q1) - p0, d));
+        const double integral = -((log_second_primitive(lp - t1, h) - log_second_primitive(lp - t0, h)) -
+                                  (log_second_primitive(-t1, h) - log_second_primitive(-t0, h)));
+        return cos_angle * integral;
+    }
+    // g(t) = ∫_0^lp ln|p0 + s d − q(t)| ds in closed form; then t by quadrature.
+    const auto g = [&](double t) {
+        const Vec3 w = p0 - (q0 + t * e);
+        const double b = glm::dot(w, d);
+        const double h = glm::length(glm::cross(w, d));
+        return log_primitive(b + lp, h) - log_primitive(b, h);
+    };
+    // g is smooth except where q(t) meets segment P, and steep where q(t) passes near P or near
+    // its ends: split at the closest approach to P and at the points nearest p0 and p1.
+    std::array<double, 5> cuts = {0.0, closest_on_q(p0, d, lp, q0, e, lq),
+                                  std::clamp(glm::dot(p0 - q0, e), 0.0, lq),
+                                  std::clamp(glm::dot(p1 - q0, e), 0.0, lq), lq};
+    std::sort(cuts.begin(), cuts.end());
+    // Absolute tolerance 1e-13 of the pair's scale lp·lq: the sum over all pairs of a polygon
+    // pair then carries ≲ 1e-13 × perimeter1 × perimeter2 of quadrature error.
+    const double tol = 1e-13 * lp * lq;
+    double integral = 0.0;
+    for (std::size_t i = 0; i + 1 < cuts.size(); ++i)
+        if (cuts[i + 1] > cuts[i]) integral += integrate(g, cuts[i], cuts[i + 1], tol);
+    return cos_angle * integral;
+}
+
+// Orthonormal tangents of a unit normal (Duff et al. 2017).
+void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    t1 = Vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    t2 = Vec3(b, sign + n.y * n.y * a, -n.y);
+}
+
+// Crossing-number test of a point already in the polygon's plane, in the 2D projection that
+// drops the normal's largest component.
+bool point_in_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n) {
+    int ax = 0;
+    if (std::abs(n.y) > std::abs(n[ax])) ax = 1;
+    if (std::abs(n.z) > std::abs(n[ax])) ax = 2;
+    const int i0 = (ax + 1) % 3, i1 = (ax + 2) % 3;
+    bool inside = false;
+    const std::size_t k = poly.size();
+    for (std::size_t i = 0, j = k - 1; i < k; j = i++) {
+        const Vec3& a = poly[i];
+        const Vec3& b = poly[j];
+        if ((a[i1] > x[i1]) != (b[i1] > x[i1]) &&
+            x[i0] < (b[i0] - a[i0]) * (x[i1] - a[i1]) / (b[i1] - a[i1]) + a[i0])
+            inside = !inside;
+    }
+    return inside;
+}
+
+
+// ---- far field ---------------------------------------------------------------------------
+
+// n-point Gauss–Legendre rule on [-1,1] (Newton on P_n from Tricomi's initial guesses).
+struct GaussRule {
+    std::vector<double> x, w;
+};
+GaussRule make_gauss_legendre(int n) {
+    GaussRule r{std::vector<double>(n), std::vector<double>(n)};
+    for (int i = 0; i < n; ++i) {
+        double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
+        double dp = 1.0;
+        for (int it = 0; it < 100; ++it) {
+            double p0 = 1.0, p1 = z;
+            for (int k = 2; k <= n; ++k) {
+                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            const double dz = p1 / dp;
+            z -= dz;
+            if (std::abs(dz) <= 1e-16) break;
+        }
+        r.x[i] = z;
+        r.w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
+    }
+    return r;
+}
+
+// Far-field rule: 20 points. With the nearest singularity at least 1.59 half-lengths away
+// (see far_field_integral), Gauss converges like ρ^(−2n), ρ = 1.59 + √(1 + 1.59²) = 3.47:
+// 3.47^(−40) ≈ 1e-21, below rounding.
+const GaussRule& gauss20() {
+    static const GaussRule rule = make_gauss_legendre(20);
+    return rule;
+}
+
+double bounding_radius(std::span<const Vec3> poly, const Vec3& c) {
+    double r = 0.0;
+    for (const Vec3& v : poly) r = std::max(r, glm::length(v - c));
+    return r;
+}
+
+// ∫_P F(x → Q) dA for a polygon P (unit normal n, CCW) and a polygon Q wholly in front of P's
+// plane, with Lambert's formula as the integrand. Green's theorem in P's plane,
+//   ∫_P f dA = ∮_∂P (∫_{x0}^{x} f(s, y) ds) dy,
+// needs no triangulation (non-convex P is fine); x0 is P's leftmost x, so every point used
+// lies in P's bounding square, within √2·R of its centroid (R: P's bounding radius). The
+// caller guarantees Q is at least 2R beyond P's bounding sphere: every singularity of f is then
+// ≥ 2R + R − √2 R ≥ 1.59 R from the points used, and the spans integrated are ≤ 2R long.
+// Used where the contour integral would cancel: Lambert's terms are O(L/D) and their sum
+// O((L/D)²), so it loses only log10(D/L) digits instead of the contour form's 2·log10(D/L).
+double far_field_integral(std::span<const Vec3> poly, const Vec3& n, std::span<const Vec3> q) {
+    Vec3 t1, t2;
+    tangents(n, t1, t2);
+    const Vec3 c = polygon_centroid(poly);
+    const GaussRule& g = gauss20();
+    const std::size_t k = poly.size();
+    double x0 = 0.0;
+    for (const Vec3& v : poly) x0 = std::min(x0, glm::dot(v - c, t1));
+    double total = 0.0;
+    for (std::size_t e = 0; e < k; ++e) {
+        const Vec3 a = poly[e] - c, b = poly[(e + 1) % k] - c;
+        const double xa = glm::dot(a, t1), ya = glm::dot(a, t2);
+        const double xb = glm::dot(b, t1), yb = glm::dot(b, t2);
+        if (yb == ya) continue;
+        double edge = 0.0;
+        for (std::size_t i = 0; i < g.x.size(); ++i) {
+            const double tau = 0.5 * (1.0 + g.x[i]);
+            const double x = xa + tau * (xb - xa), y = ya + tau * (yb - ya);
+            const double half = 0.5 * (x - x0), mid = 0.5 * (x + x0);
+            double inner = 0.0;
+            for (std::size_t j = 0; j < g.x.size(); ++j)
+                inner += g.w[j] * lambert_sum(c + (mid + half * g.x[j]) * t1 + y * t2, n, q);
+            edge += g.w[i] * half * inner;
+        }
+        total += 0.5 * (yb - ya) * edge;
+    }
+    return total / (2.0 * kPi);
+}
+
+// ---- closed forms ------------------------------------------------------------------------
+
+// φ(X, Y) = s·atan(X/s) − atan X with s = √(1+Y²): positive, and O(X³Y²) for small X, Y,
+// where the two terms agree to many digits. Small X: its alternating Taylor series,
+//   φ = Σ_{k≥1} (−1)^(k+1) X^(2k+1) (1 − q^k)/(2k+1),  q = 1/s², 1 − q^k = m(1 + q + … + q^(k−1)),
+// m = 1 − q = Y²/(1+Y²); at X ≤ ½ term k is below 4^−k of the first, so 26 terms reach 1e-16.
+// Otherwise φ = (s−1)·atan(X/s) − (atan X − atan(X/s)) with s − 1 = Y²/(s+1) and the atan
+// difference as one atan: both parts are then exact to rounding and their difference loses at
+// most a factor ~5 (X ≥ ½).
+double opposed_phi(double x, double y) {
+    const double s = std::sqrt(1.0 + y * y);
+    if (x <= 0.5) {
+        const double q = 1.0 / (s * s), m = y * y / (1.0 + y * y), x2 = x * x;
+        double sum = 0.0, xpow = x, qsum = 0.0, qpow = 1.0, sign = 1.0;
+        for (int k = 1; k <= 26; ++k) {
+            xpow *= x2;
+            qsum += qpow;
+            qpow *= q;
+            sum += sign * xpow * m * qsum / (2.0 * k + 1.0);
+            sign = -sign;
+        }
+        return sum;
+    }
+    const double sm1 = y * y / (s + 1.0);
+    return sm1 * std::atan(x / s) - std::atan(x * sm1 / (s + x * x));
+}
+
+}  // namespace
+
+double ff_parallel_rectangles(double a, double b, double c) {
+    const char* fn = "ff_parallel_rectangles";
+    require_positive(fn, "a", a);
+    require_positive(fn, "b", b);
+    require_positive(fn, "c", c);
+    const double x = a / c, y = b / c;
+    // Howell's bracket regrouped into three positive parts (no cancellation, so far-apart and
+    // thin rectangles keep full precision): ½ ln(1 + X²Y²/(1+X²+Y²)) + X φ(X,Y) + Y φ(Y,X).
+    const double brace = 0.5 * std::log1p(x * x * y * y / (1.0 + x * x + y * y)) +
+                         x * opposed_phi(x, y) + y * opposed_phi(y, x);
+    return 2.0 / (kPi * x * y) * brace;
+}
+
+double ff_parallel_rectangles_offset(double x1, double x2, double y1, double y2, double xi1,
+                                     double xi2, double eta1, double eta2, double c) {
+    const char* fn = "ff_parallel_rectangles_offset";
+    require_positive(fn, "c", c);
+    require_positive(fn, "x2 - x1", x2 - x1);
+    require_positive(fn, "y2 - y1", y2 - y1);
+    require_positive(fn, "xi2 - xi1", xi2 - xi1);
+    require_positive(fn, "eta2 - eta1", eta2 - eta1);
+    const double c2 = c * c;
+    const auto g = [c2](double u, double v) {
+        const double su = std::sqrt(u * u + c2), sv = std::sqrt(v * v + c2);
+        return v * su * std::atan(v / su) + u * sv * std::atan(u / sv) -
+               0.5 * c2 * std::log(u * u + v * v + c2);
+    };
+    const std::array<double, 2> x = {x1, x2}, y = {y1, y2}, xi = {xi1, xi2}, eta = {eta1, eta2};
+    double sum = 0.0;
+    for (int i = 0; i < 2; ++i)
+        for (int j = 0; j < 2; ++j)
+            for (int k = 0; k < 2; ++k)
+                for (int l = 0; l < 2; ++l) {
+                    const double sign = ((i + j + k + l) % 2 == 0) ? 1.0 : -1.0;
+                    sum += sign * g(x[i] - xi[k], y[j] - eta[l]);
+                }
+    return sum / (2.0 * kPi * (x2 - x1) * (y2 - y1));
+}
+
+double ff_perpendicular_rectangles_common_edge(double l, double w, double h) {
+    const char* fn = "ff_perpendicular_rectangles_common_edge";
+    require_positive(fn, "l", l);
+    require_positive(fn, "w", w);
+    require_positive(fn, "h", h);
+    const double H = h / l, W = w / l;
+    const double H2 = H * H, W2 = W * W, s = std::sqrt(H2 + W2);
+    // The log of the product, taken as a sum of logs so that the large powers cannot overflow.
+    const double log_term = std::log((1.0 + W2) * (1.0 + H2) / (1.0 + W2 + H2)) +
+                            W2 * std::log(W2 * (1.0 + W2 + H2) / ((1.0 + W2) * (W2 + H2))) +
+                            H2 * std::log(H2 * (1.0 + H2 + W2) / ((1.0 + H2) * (H2 + W2)));
+    return (W * std::atan(1.0 / W) + H * std::atan(1.0 / H) - s * std::atan(1.0 / s) +
+            0.25 * log_term) /
+           (kPi * W);
+}
+
+double ff_coaxial_disks(double r1, double r2, double h) {
+    const char* fn = "ff_coaxial_disks";
+    require_positive(fn, "r1", r1);
+    require_positive(fn, "r2", r2);
+    require_positive(fn, "h", h);
+    const double R1 = r1 / h, R2 = r2 / h;
+    const double X = 1.0 + (1.0 + R2 * R2) / (R1 * R1);
+    const double q = R2 / R1;
+    // X − √(X² − 4q²) cancels when X is large (small disks far apart): use the conjugate form
+    // 4q² / (X + √(X² − 4q²)), equal in exact arithmetic.
+    return 0.5 * (4.0 * q * q) / (X + std::sqrt(X * X - 4.0 * q * q));
+}
+
+double ff_diff_parallel_rect(double a, double b, double c) {
+    const char* fn = "ff_diff_parallel_rect";
+    require_positive(fn, "a", a);
+    require_positive(fn, "b", b);
+    require_positive(fn, "c", c);
+    const double A = a / c, B = b / c;
+    const double sa = std::sqrt(1.0 + A * A), sb = std::sqrt(1.0 + B * B);
+    return (A / sa * std::atan(B / sa) + B / sb * std::atan(A / sb)) / (2.0 * kPi);
+}
+
+double ff_diff_perpendicular_rect(double width, double height, double c) {
+    const char* fn = "ff_diff_perpendicular_rect";
+    require_positive(fn, "width", width);
+    require_positive(fn, "height", height);
+    require_positive(fn, "c", c);
+    const double W = width / c, H = height / c;
+    const double s = std::sqrt(1.0 + H * H), sm1 = H * H / (s + 1.0);
+    // atan W − atan(W/s)/s = atan(W(s−1)/(s+W²)) + atan(W/s)(s−1)/s: two positive parts, so a
+    // far or low rectangle (small H, where s → 1) keeps full precision.
+    return (std::atan(W * sm1 / (s + W * W)) + std::atan(W / s) * sm1 / s) / (2.0 * kPi);
+}
+
+SphereFactors ff_concentric_spheres(double r1, double r2) {
+    const char* fn = "ff_concentric_spheres";
+    require_positive(fn, "r1", r1);
+    require_positive(fn, "r2", r2);
+    if (r2 < r1)
+        throw InputError(fmt::format("{}: outer radius r2 = {} is smaller than inner r1 = {}", fn,
+                                     r2, r1));
+    const double q = (r1 / r2) * (r1 / r2);
+    return {1.0, q, 1.0 - q};
+}
+
+// ---- polygons ----------------------------------------------------------------------------
+
+double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly) {
+    const char* fn = "ff_point_polygon";
+    validate_polygon(fn, "the polygon", poly);
+    const double len = glm::length(n);
+    if (!(len > 0.0) || !std::isfinite(len))
+        throw InputError(fmt::format("{}: the normal must be non-zero and finite", fn));
+    const Vec3 un = n / len;
+    // A point in the polygon's plane sees it edge-on: F = 0. Within 1e-12 of the size of that
+    // plane the directions to the vertices are rounding noise, so the same answer is given.
+    const double size = polygon_max_edge(poly);
+    if (std::abs(glm::dot(p - polygon_centroid(poly), polygon_normal(poly))) <= 1e-12 * size)
+        return 0.0;
+    std::vector<Vec3> front;
+    clip_to_front(poly, p, un, front);
+    if (front.size() < 3) return 0.0;
+    return std::abs(lambert_sum(p, un, front)) / (2.0 * kPi);
+}
+
+double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
+    const char* fn = "ff_polygon_polygon";
+    validate_polygon(fn, "polygon 1", p1);
+    validate_polygon(fn, "polygon 2", p2);
+    // Work relative to polygon 1's centroid and in units of the pair's size: offsets of 1e5
+    // keep their digits, and ln r stays O(1). F is invariant under both.
+    const Vec3 origin = polygon_centroid(p1);
+    const double scale = std::max(polygon_max_edge(p1), polygon_max_edge(p2));
+    std::vector<Vec3> a(p1.size()), b(p2.size());
+    for (std::size_t i = 0; i < p1.size(); ++i) a[i] = (p1[i] - origin) / scale;
+    for (std::size_t i = 0; i < p2.size(); ++i) b[i] = (p2[i] - origin) / scale;
+    const Vec3 n1 = polygon_normal(a), n2 = polygon_normal(b);
+    const Vec3 c1 = polygon_centroid(a), c2 = polygon_centroid(b);
+    const double area1 = polygon_area(a);
+
+    // cosθ1 > 0 only in front of plane 1 and cosθ2 > 0 only in front of plane 2, and the two
+    // conditions are independent, so clipping each polygon by the other's plane keeps exactly
+    // the pairs of points that exchange energy front to front.
+    std::vector<Vec3> a_front, b_front;
+    clip_to_front(a, c2, n2, a_front);
+    clip_to_front(b, c1, n1, b_front);
+    if (a_front.size() < 3 || b_front.size() < 3) return 0.0;
+    // A polygon lying in the other's plane (to 1e-12 of the size, the planarity rounding)
+    // sees it at cosθ = 0.
+    double height1 = 0.0, height2 = 0.0;
+    for (const Vec3& v : a_front) height1 = std::max(height1, glm::dot(v - c2, n2));
+    for (const Vec3& v : b_front) height2 = std::max(height2, glm::dot(v - c1, n1));
+    if (height1 <= 1e-12 || height2 <= 1e-12) return 0.0;
+
+    // Far apart (the bounding spheres at least 2 radii of the smaller one apart): integrate
+    // Lambert's formula over the smaller polygon (reciprocity: A1 F12 = A2 F21) instead of the
+    // contour integral, whose O(L² ln D) terms cancel to O(L⁴/D²).
+    const Vec3 ca = polygon_centroid(a_front), cb = polygon_centroid(b_front);
+    const double ra = bounding_radius(a_front, ca), rb = bounding_radius(b_front, cb);
+    if (glm::length(ca - cb) - ra - rb >= 2.0 * std::min(ra, rb)) {
+        const double a1f12 = ra <= rb ? far_field_integral(a_front, n1, b_front)
+                                      : far_field_integral(b_front, n2, a_front);
+        return std::max(0.0, a1f12 / area1);
+    }
+
+    double sum = 0.0;
+    const std::size_t ka = a_front.size(), kb = b_front.size();
+    for (std::size_t i = 0; i < ka; ++i)
+        for (std::size_t j = 0; j < kb; ++j)
+            sum += edge_pair(a_front[i], a_front[(i + 1) % ka], b_front[j], b_front[(j + 1) % kb]);
+    // Both contours counter-clockwise seen from their fronts, facing each other: the double
+    // contour integral is then +2π A1 F12. Rounding can leave −1e-17 for F = 0 exactly.
+    return std::max(0.0, sum / (2.0 * kPi * area1));
+}
+
+double ff_polygon_polygon_mc(std::span<const Vec3> p1, std::span<const Vec3> p2,
+                             std::uint64_t samples, std::uint64_t seed) {
+    const char* fn = "ff_polygon_polygon_mc";
+    validate_polygon(fn, "polygon 1", p1);
+    validate_polygon(fn, "polygon 2", p2);
+    if (samples == 0) throw InputError(fmt::format("{}: samples must be at least 1", fn));
+    const Vec3 n1 = polygon_normal(p1), n2 = polygon_normal(p2);
+    Vec3 t1, t2;
+    tangents(n1, t1, t2);
+    // Fan triangles of polygon 1 with their cumulative areas, for area-uniform sampling.
+    const std::size_t tris = p1.size() - 2;
+    std::vector<double> cdf(tris);
+    double total = 0.0;
+    for (std::size_t i = 0; i < tris; ++i) {
+        total += 0.5 * glm::length(glm::cross(p1[i + 1] - p1[0], p1[i + 2] - p1[0]));
+        cdf[i] = total;
+    }
+    std::mt19937_64 rng(seed);
+    const auto uniform = [&rng] { return static_cast<double>(rng() >> 11) * 0x1.0p-53; };
+    std::uint64_t hits = 0;
+    for (std::uint64_t s = 0; s < samples; ++s) {
+        const double pick = uniform() * total;
+        const std::size_t tri = std::min<std::size_t>(
+            static_cast<std::size_t>(std::upper_bound(cdf.begin(), cdf.end(), pick) - cdf.begin()),
+            tris - 1);
+        double u = uniform(), v = uniform();
+        if (u + v > 1.0) {
+            u = 1.0 - u;
+            v = 1.0 - v;
+        }
+        const Vec3 x = p1[0] + u * (p1[tri + 1] - p1[0]) + v * (p1[tri + 2] - p1[0]);
+        // Cosine-distributed direction (Malley): uniform on the disk, lifted to the hemisphere.
+        const double phi = 2.0 * kPi * uniform(), r2 = uniform();
+        const double sin_t = std::sqrt(r2), cos_t = std::sqrt(1.0 - r2);
+        const Vec3 dir = sin_t * std::cos(phi) * t1 + sin_t * std::sin(phi) * t2 + cos_t * n1;
+        const double dn = glm::dot(dir, n2);
+        if (!(dn < 0.0)) continue;  // parallel to polygon 2 or reaching its back
+        const double t = glm::dot(p2[0] - x, n2) / dn;
+        if (!(t > 0.0)) continue;
+        if (point_in_polygon(x + t * dir, p2, n2)) ++hits;
+    }
+    return static_cast<double>(hits) / static_cast<double>(samples);
+}
+
+}  // namespace ffcube

@@ -1,0 +1,50 @@
+#include "ffcube/hemicube/frame.hpp"
+
+#include "ffcube/core/error.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace ffcube {
+
+Vec3 HemicubeFrame::to_local(const Vec3& w) const {
+    return {glm::dot(w, tangent), glm::dot(w, bitangent), glm::dot(w, normal)};
+}
+
+HemicubeFrame make_frame(const Vec3& normal, double angle) {
+    // Divide by the largest component first: tiny (1e-300) or huge normals then neither
+    // underflow nor overflow in the length.
+    const double big = std::max({std::abs(normal.x), std::abs(normal.y), std::abs(normal.z)});
+    FFCUBE_CHECK_MSG(std::isfinite(big) && big > 0.0, "hemicube normal must be non-zero and finite");
+    const Vec3 m = normal / big;
+    const Vec3 n = m / glm::length(m);
+    // Duff et al. 2017, listing 3.
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double b = n.x * n.y * a;
+    const Vec3 b1(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    const Vec3 b2(b, sign + n.y * n.y * a, -n.y);
+    const double c = std::cos(angle), s = std::sin(angle);
+    // Rotating both tangents by the same angle in their plane keeps b1 × b2 = n.
+    return {c * b1 + s * b2, c * b2 - s * b1, n};
+}
+
+std::uint64_t splitmix64(std::uint64_t x) {
+    x += 0x9e3779b97f4a7c15ULL;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
+    return x ^ (x >> 31);
+}
+
+double hemicube_angle(std::uint64_t seed, std::uint32_t patch) {
+    // Two rounds so that neighbouring seeds and neighbouring patches decorrelate.
+    const std::uint64_t h = splitmix64(splitmix64(seed) ^ patch);
+    // Top 53 bits → [0,1) exactly; 2π·(1 − 2⁻⁵³) rounds below 2π, so the range is [0, 2π).
+    const double unit = static_cast<double>(h >> 11) * 0x1.0p-53;
+    return 2.0 * std::numbers::pi * unit;
+}
+
+}  // namespace ffcube
