@@ -1,8 +1,52 @@
 #version 450 core
 // Writes the ID of the visible patch: 1 + patch index for a front face, 0xFFFFFFFF for a back
 // face (it blocks but receives nothing); the clear value 0 means nothing was hit.
-// The patch of triangle k of this draw is u_ids[u_base + k] (gl_PrimitiveID restarts per draw).
-layout(binding = 0) uniform usamplerBuffer u_ids;
-uniform int u_base;
+// The patch comes from the fragment's position in its piece's plane (perspective-correct, so
+// exact up to float rounding): inverse bilinear for a quad grid, barycentric for a triangle.
+struct Grid {
+    vec2 q1, q2, q3;  // corners 1..3 in the piece's plane coordinates (corner 0 at the origin)
+    uint count;       // 4: quad grid of nu × nv cells; 3: triangle of nu² similar cells
+    uint nu, nv;
+    uint first;       // index of the first patch of the piece
+};
+layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
+in vec2 v_param;
+flat in uint v_grid;
 layout(location = 0) out uint o_id;
-void main() { o_id = gl_FrontFacing ? texelFetch(u_ids, u_base + gl_PrimitiveID).r : 0xFFFFFFFFu; }
+
+float cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
+
+void main() {
+    if (!gl_FrontFacing) {
+        o_id = 0xFFFFFFFFu;
+        return;
+    }
+    Grid g = grids[v_grid];
+    vec2 p = v_param;
+    uint cell;
+    if (g.count == 3u) {
+        float det = cross2(g.q1, g.q2);
+        float b1 = cross2(p, g.q2) / det, b2 = cross2(g.q1, p) / det;
+        float k = float(g.nu);
+        float s = clamp(b1 * k, 0.0, k), t = clamp(b2 * k, 0.0, k);
+        int i = min(int(s), int(g.nu) - 1), j = min(int(t), int(g.nu) - 1);
+        if (i + j > int(g.nu) - 1) i = int(g.nu) - 1 - j;  // rounding past the hypotenuse
+        bool inverted = (s - float(i)) + (t - float(j)) > 1.0 && i + j + 1 < int(g.nu);
+        cell = uint(j * (2 * int(g.nu) - j) + 2 * i + (inverted ? 1 : 0));
+    } else {
+        // p = u(1-v) q1 + uv q2 + (1-u)v q3: solve k2 v² + k1 v + k0 = 0 (Quilez's inverse
+        // bilinear), with the cancellation-free root for near-parallelograms (k2 → 0).
+        vec2 e = g.q1, f = g.q3, h = p, gg = g.q2 - g.q1 - g.q3;
+        float k2 = cross2(gg, f), k1 = cross2(e, f) + cross2(h, gg), k0 = cross2(h, e);
+        float disc = sqrt(max(k1 * k1 - 4.0 * k0 * k2, 0.0));
+        float q = -0.5 * (k1 + (k1 >= 0.0 ? disc : -disc));
+        float v = q != 0.0 ? k0 / q : 0.0;
+        if ((v < -0.01 || v > 1.01) && k2 != 0.0) v = q / k2;
+        vec2 den = e + gg * v;
+        float u = abs(den.x) > abs(den.y) ? (h.x - f.x * v) / den.x : (h.y - f.y * v) / den.y;
+        int i = clamp(int(floor(u * float(g.nu))), 0, int(g.nu) - 1);
+        int j = clamp(int(floor(v * float(g.nv))), 0, int(g.nv) - 1);
+        cell = uint(j) * g.nu + uint(i);
+    }
+    o_id = g.first + cell + 1u;
+}

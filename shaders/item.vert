@@ -1,7 +1,16 @@
 #version 450 core
-// Item-buffer vertex shader. Positions arrive already relative to the hemicube eye and in the
-// hemicube's local frame (subtracted in double on the CPU), so only the fixed face projection
-// is applied here.
-layout(location = 0) in vec3 a_position;
+// Item-buffer vertex shader. A whole mesher piece (a quad split into a grid of patches, or a
+// triangle split into similar triangles) is drawn at once; the fragment shader finds the patch.
+// Positions arrive already relative to the hemicube eye and in the hemicube's local frame
+// (subtracted in double on the CPU), so only the fixed face projection is applied here.
+layout(location = 0) in vec3 a_position;  // per hemicube
+layout(location = 1) in vec2 a_param;     // corner in the piece's own plane coordinates (static)
+layout(location = 2) in uint a_grid;      // index of the piece (static)
 uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, infinite far plane)
-void main() { gl_Position = u_face * vec4(a_position, 1.0); }
+out vec2 v_param;
+flat out uint v_grid;
+void main() {
+    v_param = a_param;
+    v_grid = a_grid;
+    gl_Position = u_face * vec4(a_position, 1.0);
+}

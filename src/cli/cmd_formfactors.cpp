@@ -38,12 +38,13 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("time.drawing", st.draw_seconds);
     r.set("time.readback", st.readback_seconds);
     r.set("time.accumulation", st.accumulate_seconds);
-    r.set("left_out.triangles_considered", st.triangles_considered);
-    r.set("left_out.triangles_behind_plane", st.triangles_behind);
+    // Culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
+    r.set("left_out.pieces_considered", st.pieces_considered);
+    r.set("left_out.pieces_behind_plane", st.pieces_behind);
     const char* names[5] = {"top", "pos_x", "neg_x", "pos_y", "neg_y"};
     for (std::size_t f = 0; f < 5; ++f) {
-        r.set(fmt::format("left_out.triangles_culled_per_face.{}", names[f]), st.triangles_culled[f]);
-        r.set(fmt::format("drawn.triangles_per_face.{}", names[f]), st.triangles_drawn[f]);
+        r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);
+        r.set(fmt::format("drawn.pieces_per_face.{}", names[f]), st.pieces_drawn[f]);
     }
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);

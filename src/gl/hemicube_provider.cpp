@@ -28,23 +28,44 @@ namespace {
 
 constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
 
-// Scene triangles, made once and shared read-only by all workers.
-struct SceneTriangles {
-    std::vector<std::array<std::uint32_t, 3>> tri;  // vertex indices
-    std::vector<std::uint32_t> patch;               // patch of each triangle
+// What the fragment shader reads per piece (std430 layout of 'struct Grid' in item.frag).
+struct GpuGrid {
+    float q1[2], q2[2], q3[2];
+    std::uint32_t count, nu, nv, first;
+};
+static_assert(sizeof(GpuGrid) == 40);
+
+// The scene's mesher pieces, made once and shared read-only by all workers: four vertex slots
+// per piece (a triangle repeats its last corner), static plane coordinates and piece indices.
+struct ScenePieces {
+    std::vector<GpuGrid> gpu;
+    std::vector<float> param;          // 2 per vertex slot
+    std::vector<std::uint32_t> grid;   // 1 per vertex slot
 };
 
-SceneTriangles triangulate(const Scene& scene) {
-    SceneTriangles t;
-    for (std::uint32_t p = 0; p < scene.patches.size(); ++p) {
-        const Patch& pa = scene.patches[p];
-        // Quads are convex and planar (the mesher guarantees it), so a fan is exact.
-        for (std::uint32_t k = 1; k + 1 < pa.count; ++k) {
-            t.tri.push_back({pa.v[0], pa.v[k], pa.v[k + 1]});
-            t.patch.push_back(p);
+ScenePieces prepare_pieces(const Scene& scene) {
+    ScenePieces sp;
+    sp.gpu.reserve(scene.grids.size());
+    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
+        const PatchGrid& pg = scene.grids[g];
+        // An orthonormal basis of the piece's plane; coordinates relative to corner 0 in double,
+        // so far-off scenes lose nothing before the conversion to float.
+        const Vec3 n = polygon_normal(std::span<const Vec3>(pg.corners.data(), pg.count));
+        const Vec3 e1 = glm::normalize(pg.corners[1] - pg.corners[0]);
+        const Vec3 e2 = glm::cross(n, e1);
+        float q[4][2];
+        for (int k = 0; k < 4; ++k) {
+            const Vec3 d = pg.corners[static_cast<std::size_t>(k)] - pg.corners[0];
+            q[k][0] = static_cast<float>(glm::dot(d, e1));
+            q[k][1] = static_cast<float>(glm::dot(d, e2));
+            sp.param.push_back(q[k][0]);
+            sp.param.push_back(q[k][1]);
+            sp.grid.push_back(g);
         }
+        sp.gpu.push_back(GpuGrid{{q[1][0], q[1][1]}, {q[2][0], q[2][1]}, {q[3][0], q[3][1]}, pg.count, pg.nu, pg.nv,
+                                 pg.first_patch});
     }
-    return t;
+    return sp;
 }
 
 // Column-major 4×4 for glUniformMatrix4fv: reversed-Z, infinite far plane, near at 'near'
@@ -80,26 +101,42 @@ std::array<float, 16> face_matrix(const FaceSpec& f, double near) {
 // One worker: a GL context current on its own thread, its item buffer and its scratch space.
 class Worker {
 public:
-    Worker(GlContext& ctx, const Scene& scene, const SceneTriangles& tris, const HemicubeLayout& layout,
+    Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
            const HemicubeOptions& opt)
-        : gl_(ctx.api()), scene_(scene), tris_(tris), layout_(layout), opt_(opt) {
+        : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {
         const gl::Api& gl = gl_;
         program_ = gl::make_program(gl, "item shader", shaders::item_vert, shaders::item_frag);
         target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
         vao_ = gl::make_vertex_array(gl);
         vbo_ = gl::make_buffer(gl);
+        static_vbo_ = gl::make_buffer(gl);
+        grid_vbo_ = gl::make_buffer(gl);
         ebo_ = gl::make_buffer(gl);
-        id_buffer_ = gl::make_buffer(gl);
-        id_texture_ = gl::make_texture(gl);
+        ssbo_ = gl::make_buffer(gl);
+        const std::size_t slots = scene.grids.size() * 4;
         gl.BindVertexArray(vao_.id());
         gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * 3 * sizeof(float)), nullptr,
+                      GL_STREAM_DRAW);
         gl.EnableVertexAttribArray(0);
         gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+        gl.BindBuffer(GL_ARRAY_BUFFER, static_vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.param.size() * sizeof(float)), pieces.param.data(),
+                      GL_STATIC_DRAW);
+        gl.EnableVertexAttribArray(1);
+        gl.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+        gl.BindBuffer(GL_ARRAY_BUFFER, grid_vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.grid.size() * sizeof(std::uint32_t)),
+                      pieces.grid.data(), GL_STATIC_DRAW);
+        gl.EnableVertexAttribArray(2);
+        gl.VertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(std::uint32_t), nullptr);
         gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
+        gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo_.id());
+        gl.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(pieces.gpu.size() * sizeof(GpuGrid)),
+                      pieces.gpu.data(), GL_STATIC_DRAW);
+        gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo_.id());
         gl.UseProgram(program_.id());
         u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
-        u_base_ = gl.GetUniformLocation(program_.id(), "u_base");
-        gl.ActiveTexture(GL_TEXTURE0);
         // All state the item pass needs is set here and never changed: nothing leaks in or out.
         gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
         gl.Enable(GL_DEPTH_TEST);
@@ -115,13 +152,15 @@ public:
         gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
         gl::check_gl(gl, "hemicube worker setup");
 
-        const std::size_t nv = scene.positions.size();
-        local_.resize(nv * 3);
-        for (auto& l : lists_) l.reserve(tris.tri.size() * 3 / 4);
+        local_.resize(slots * 3);
+        for (int f = 0; f < 5; ++f) {
+            face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
+            lists_[f].reserve(slots);
+        }
+        all_idx_.reserve(slots * 2);
         ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
         acc_.assign(scene.patches.size(), 0.0);
         stamp_.assign(scene.patches.size(), 0);
-        for (int f = 0; f < 5; ++f) face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
     }
 
     // Renders patch p's hemicube into ids_ (the atlas).
@@ -132,43 +171,37 @@ public:
         const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
         const HemicubeFrame fr = make_frame(pa.normal, angle);
         const Vec3 eye = pa.centroid + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
-        // Eye-relative, local-frame coordinates, subtracted in double before becoming floats.
-        const std::size_t nv = scene_.positions.size();
-        for (std::size_t v = 0; v < nv; ++v) {
-            const Vec3 d = scene_.positions[v] - eye;
-            local_[3 * v + 0] = static_cast<float>(glm::dot(d, fr.tangent));
-            local_[3 * v + 1] = static_cast<float>(glm::dot(d, fr.bitangent));
-            local_[3 * v + 2] = static_cast<float>(glm::dot(d, fr.normal));
+        // Piece corners relative to the eye in the local frame, subtracted in double before they
+        // become floats: far-off coordinates (1e5) keep full float precision near the eye.
+        const std::size_t ng = scene_.grids.size();
+        for (std::size_t g = 0; g < ng; ++g) {
+            const PatchGrid& pg = scene_.grids[g];
+            for (std::size_t k = 0; k < 4; ++k) {
+                const Vec3 d = pg.corners[k] - eye;
+                float* out = &local_[(4 * g + k) * 3];
+                out[0] = static_cast<float>(glm::dot(d, fr.tangent));
+                out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
+                out[2] = static_cast<float>(glm::dot(d, fr.normal));
+            }
         }
         cull(st);
         st.prepare_seconds += watch.seconds();
         watch.restart();
 
-        // Upload: vertices, the five index lists back to back, and the patch IDs per triangle.
+        // Upload the corners and the five index lists back to back.
         gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
-        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data(), GL_STREAM_DRAW);
-        std::size_t total = 0;
-        for (const auto& l : lists_) total += l.size();
+        gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
         all_idx_.clear();
-        all_ids_.clear();
-        for (int f = 0; f < 5; ++f) {
-            all_idx_.insert(all_idx_.end(), lists_[f].begin(), lists_[f].end());
-            all_ids_.insert(all_ids_.end(), id_lists_[f].begin(), id_lists_[f].end());
-        }
-        gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(total, 1) * 4), all_idx_.data(),
-                      GL_STREAM_DRAW);
-        gl.BindBuffer(GL_TEXTURE_BUFFER, id_buffer_.id());
-        gl.BufferData(GL_TEXTURE_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_ids_.size(), 1) * 4),
-                      all_ids_.data(), GL_STREAM_DRAW);
-        gl.BindTexture(GL_TEXTURE_BUFFER, id_texture_.id());
-        gl.TexBuffer(GL_TEXTURE_BUFFER, GL_R32UI, id_buffer_.id());
+        for (int f = 0; f < 5; ++f) all_idx_.insert(all_idx_.end(), lists_[f].begin(), lists_[f].end());
+        gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
+                      all_idx_.data(), GL_STREAM_DRAW);
 
         const GLuint zero_id[4] = {0, 0, 0, 0};
         const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
         gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
         gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
         const double near = HemicubeRowProvider::kNear * pa.size;
-        std::size_t first_index = 0, first_tri = 0;
+        std::size_t first_index = 0;
         for (int f = 0; f < 5; ++f) {
             const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
             const std::size_t count = lists_[f].size();
@@ -176,12 +209,10 @@ public:
                 const auto m = face_matrix(fs, near);
                 gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
                 gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
-                gl.Uniform1i(u_base_, static_cast<GLint>(first_tri));
                 gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
                                 reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
             }
             first_index += count;
-            first_tri += count / 3;
         }
         gl.Finish();
         st.draw_seconds += watch.seconds();
@@ -235,54 +266,50 @@ public:
     const std::vector<std::uint32_t>& ids() const { return ids_; }
 
 private:
-    // Sorts the scene's triangles into the five faces' index lists: a triangle goes to a face
-    // unless all three vertices lie outside one of the face's frustum planes; triangles wholly
-    // behind the hemicube plane (z ≤ 0) go nowhere.
+    // Sorts the pieces into the five faces' index lists: a piece goes to a face unless all its
+    // corners lie outside one of the face's frustum planes; pieces wholly behind the hemicube
+    // plane (z ≤ 0: this includes the patch's own piece and every piece coplanar with it) go
+    // nowhere.
     void cull(HemicubeStats& st) {
-        for (int f = 0; f < 5; ++f) {
-            lists_[f].clear();
-            id_lists_[f].clear();
-        }
-        const std::size_t nt = tris_.tri.size();
-        st.triangles_considered += nt;
-        for (std::size_t t = 0; t < nt; ++t) {
-            const auto& tri = tris_.tri[t];
-            float x[3], y[3], z[3];
-            for (int k = 0; k < 3; ++k) {
-                x[k] = local_[3 * tri[k] + 0];
-                y[k] = local_[3 * tri[k] + 1];
-                z[k] = local_[3 * tri[k] + 2];
+        for (auto& l : lists_) l.clear();
+        const std::size_t ng = scene_.grids.size();
+        st.pieces_considered += ng;
+        for (std::size_t g = 0; g < ng; ++g) {
+            const std::uint32_t count = scene_.grids[g].count;
+            unsigned all = ~0u;
+            bool behind = true;
+            for (std::uint32_t k = 0; k < count; ++k) {
+                const float* c = &local_[(4 * g + k) * 3];
+                const float x = c[0], y = c[1], z = c[2];
+                behind = behind && z <= 0;
+                // Outcodes against the planes x = ±z, y = ±z (top face) and y = ±x, x = ±y,
+                // z = 0, z = ±x, z = ±y (side faces): a bit set for every corner means the
+                // piece misses each face that has that plane.
+                const bool out[13] = {x > z,  -x > z, y > z,  -y > z, z < 0,  y > x,  -y > x,
+                                      y > -x, -y > -x, z > x, z > -x, z > y, z > -y};
+                unsigned code = 0;
+                for (unsigned b = 0; b < 13; ++b) code |= static_cast<unsigned>(out[b]) << b;
+                all &= code;
             }
-            if (z[0] <= 0 && z[1] <= 0 && z[2] <= 0) {
-                ++st.triangles_behind;
+            if (behind) {
+                ++st.pieces_behind;
                 continue;
             }
-            // Outcodes against the planes x = ±z, y = ±z (top) and x = ±y, z = 0, z = ±x or ±y
-            // (sides). A bit set for all three vertices means the triangle misses that face.
-            unsigned all = ~0u;
-            for (int k = 0; k < 3; ++k) {
-                const bool out[13] = {x[k] > z[k],  -x[k] > z[k], y[k] > z[k],  -y[k] > z[k], z[k] < 0,
-                                      y[k] > x[k],  -y[k] > x[k], y[k] > -x[k], -y[k] > -x[k], z[k] > x[k],
-                                      z[k] > -x[k], z[k] > y[k],  z[k] > -y[k]};
-                unsigned c = 0;
-                for (unsigned b = 0; b < 13; ++b) c |= static_cast<unsigned>(out[b]) << b;
-                all &= c;
-            }
-            // Face masks: a face is missed when any of its planes has the bit set for all vertices.
-            constexpr unsigned kTop = 0b1111u;
+            // x > y is bit 8 (-y > -x) and -x > y is bit 6 (-y > x); likewise for -y.
+            constexpr unsigned kTop = 0b1111u;                                             // |x|,|y| ≤ z
             constexpr unsigned kPosX = (1u << 4) | (1u << 5) | (1u << 6) | (1u << 9);    // |y| ≤ x, 0 ≤ z ≤ x
             constexpr unsigned kNegX = (1u << 4) | (1u << 7) | (1u << 8) | (1u << 10);   // |y| ≤ -x, 0 ≤ z ≤ -x
-            // x > y is bit 8 (-y > -x) and -x > y is bit 6 (-y > x); likewise for -y.
             constexpr unsigned kPosY = (1u << 4) | (1u << 6) | (1u << 8) | (1u << 11);   // |x| ≤ y, 0 ≤ z ≤ y
             constexpr unsigned kNegY = (1u << 4) | (1u << 5) | (1u << 7) | (1u << 12);   // |x| ≤ -y, 0 ≤ z ≤ -y
-            const unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
-            for (int f = 0; f < 5; ++f) {
+            constexpr unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
+            const auto base = static_cast<std::uint32_t>(4 * g);
+            for (std::size_t f = 0; f < 5; ++f) {
                 if (all & masks[f]) {
-                    ++st.triangles_culled[static_cast<std::size_t>(f)];
+                    ++st.pieces_culled[f];
                 } else {
-                    ++st.triangles_drawn[static_cast<std::size_t>(f)];
-                    lists_[f].insert(lists_[f].end(), {tri[0], tri[1], tri[2]});
-                    id_lists_[f].push_back(tris_.patch[t] + 1);
+                    ++st.pieces_drawn[f];
+                    lists_[f].insert(lists_[f].end(), {base, base + 1, base + 2});
+                    if (count == 4) lists_[f].insert(lists_[f].end(), {base, base + 2, base + 3});
                 }
             }
         }
@@ -290,18 +317,17 @@ private:
 
     const gl::Api& gl_;
     const Scene& scene_;
-    const SceneTriangles& tris_;
+    const ScenePieces& pieces_;
     const HemicubeLayout& layout_;
     const HemicubeOptions& opt_;
     std::array<FaceSpec, 5> face_m_;
     gl::Program program_;
     gl::ItemTarget target_;
     gl::VertexArray vao_;
-    gl::Buffer vbo_, ebo_, id_buffer_;
-    gl::Texture id_texture_;
-    GLint u_face_ = -1, u_base_ = -1;
+    gl::Buffer vbo_, static_vbo_, grid_vbo_, ebo_, ssbo_;
+    GLint u_face_ = -1;
     std::vector<float> local_;
-    std::vector<std::uint32_t> lists_[5], id_lists_[5], all_idx_, all_ids_;
+    std::vector<std::uint32_t> lists_[5], all_idx_;
     std::vector<std::uint32_t> ids_;
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;
@@ -318,7 +344,7 @@ struct HemicubeRowProvider::Impl {
     const Scene& scene;
     HemicubeOptions opt;
     HemicubeLayout layout;
-    SceneTriangles tris;
+    ScenePieces pieces;
     std::string backend, renderer;
     std::vector<std::unique_ptr<GlContext>> contexts;
     std::vector<std::thread> threads;
@@ -341,7 +367,7 @@ struct HemicubeRowProvider::Impl {
 
     std::size_t in_flight = 0;
 
-    Impl(const Scene& s, const HemicubeOptions& o) : scene(s), opt(o), layout(o.resolution), tris(triangulate(s)) {}
+    Impl(const Scene& s, const HemicubeOptions& o) : scene(s), opt(o), layout(o.resolution), pieces(prepare_pieces(s)) {}
     ~Impl() {
         {
             std::lock_guard lock(mutex);
@@ -357,7 +383,7 @@ struct HemicubeRowProvider::Impl {
         std::unique_ptr<Worker> w;
         try {
             ctx.make_current();
-            w = std::make_unique<Worker>(ctx, scene, tris, layout, opt);
+            w = std::make_unique<Worker>(ctx, scene, pieces, layout, opt);
         } catch (...) {
             std::lock_guard lock(mutex);
             if (!error) error = std::current_exception();
@@ -432,11 +458,11 @@ struct HemicubeRowProvider::Impl {
         a.draw_seconds += b.draw_seconds;
         a.readback_seconds += b.readback_seconds;
         a.accumulate_seconds += b.accumulate_seconds;
-        a.triangles_considered += b.triangles_considered;
-        a.triangles_behind += b.triangles_behind;
+        a.pieces_considered += b.pieces_considered;
+        a.pieces_behind += b.pieces_behind;
         for (std::size_t f = 0; f < 5; ++f) {
-            a.triangles_drawn[f] += b.triangles_drawn[f];
-            a.triangles_culled[f] += b.triangles_culled[f];
+            a.pieces_drawn[f] += b.pieces_drawn[f];
+            a.pieces_culled[f] += b.pieces_culled[f];
         }
         a.back_face_weight += b.back_face_weight;
         a.miss_weight += b.miss_weight;

@@ -1,6 +1,11 @@
 // Rows of F by hemicubes: for each patch, five faces rendered as a 32-bit item buffer on a
 // headless GL context, and the exact delta form factor of each pixel added to the row entry of
 // the patch it shows. One GL context and one thread per worker.
+//
+// What is drawn is the mesher's pieces (Scene::grids), not the patches: a wall split into
+// 20×20 patches is two triangles, and the fragment shader finds the patch from the fragment's
+// position in the piece. The cost of a hemicube then hardly depends on how finely the scene is
+// meshed (llvmpipe's cost is per triangle set up, then per pixel).
 #pragma once
 
 #include <array>
@@ -31,10 +36,12 @@ struct HemicubeStats {
     double draw_seconds = 0;        // uploads and draw calls, up to glFinish
     double readback_seconds = 0;    // glReadPixels of the atlas
     double accumulate_seconds = 0;  // ΔF per ID into the row
-    std::uint64_t triangles_considered = 0;              // scene triangles × hemicubes
-    std::uint64_t triangles_behind = 0;                  // wholly behind the hemicube plane
-    std::array<std::uint64_t, 5> triangles_drawn{};      // per face (top, +x, -x, +y, -y)
-    std::array<std::uint64_t, 5> triangles_culled{};     // in front of the plane but outside the face
+    // Culling counts mesher pieces (Scene::grids: a face's quad or triangle, drawn whole; the
+    // fragment shader finds the patch), summed over hemicubes.
+    std::uint64_t pieces_considered = 0;              // pieces × hemicubes
+    std::uint64_t pieces_behind = 0;                  // wholly behind the hemicube plane
+    std::array<std::uint64_t, 5> pieces_drawn{};      // per face (top, +x, -x, +y, -y)
+    std::array<std::uint64_t, 5> pieces_culled{};     // in front of the plane but outside the face
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)

@@ -40,6 +40,7 @@ struct ObjModel {
 // A patch: a planar triangle or convex quad, the unit of the form-factor matrix.
 struct Patch {
     std::array<std::uint32_t, 4> v{};  // indices into Scene::positions, CCW from the front
+                                       // (a triangle's v[3] repeats v[2])
     std::uint32_t count = 3;           // 3 or 4
     std::uint32_t object = 0;          // index into Scene::objects
     std::uint32_t material = 0;        // index into Scene::materials
@@ -56,6 +57,22 @@ struct MeshStats {
     std::size_t non_planar = 0;          // faces off their plane by more than 1e-6 × their size
     double max_patch_edge = 0.0;         // the L that was used
     std::string how;                     // "--max-patch-edge", "--patches N" or "default (...)"
+    std::vector<std::string> warnings;   // non-planar faces (file:line), for the caller to print
+};
+
+// How the mesher split one piece of a face (a convex planar quad, or a triangle of a
+// triangulated face) into patches. A renderer can draw the piece whole and find the patch of a
+// point from its position in the piece:
+//   quad (count 4): bilinear grid of nu × nv cells, P(u,v) = (1−u)(1−v)c0 + u(1−v)c1 + uv c2 + (1−u)v c3;
+//     cell (i, j) = [i/nu, (i+1)/nu] × [j/nv, (j+1)/nv] is patch first_patch + j·nu + i.
+//   triangle (count 3, k = nu = nv): P = c0 + s/k (c1 − c0) + t/k (c2 − c0); the upright cell
+//     (i, j) (s ∈ [i, i+1], t ∈ [j, j+1], (s−i)+(t−j) ≤ 1) is patch first_patch + j(2k − j) + 2i,
+//     the inverted cell beside it (sum > 1) the next one.
+struct PatchGrid {
+    std::array<Vec3, 4> corners{};  // CCW from the front; a triangle's [3] repeats [2]
+    std::uint32_t count = 4;        // 4 (quad grid) or 3 (triangle grid)
+    std::uint32_t nu = 1, nv = 1;   // cells along c0→c1 and c0→c3; a triangle: nu = nv = k
+    std::uint32_t first_patch = 0;  // its patches are first_patch .. first_patch + cells − 1
 };
 
 // Frozen after build_scene(): row providers and solvers take it by const reference.
@@ -63,6 +80,7 @@ struct Scene {
     std::string source;
     std::vector<Vec3> positions;
     std::vector<Patch> patches;
+    std::vector<PatchGrid> grids;  // every patch belongs to exactly one grid, in patch order
     std::vector<std::string> objects;
     std::vector<Material> materials;
     MeshStats stats;
@@ -75,7 +93,7 @@ struct Scene {
     std::size_t size() const { return patches.size(); }
     // Length of the bounding-box diagonal, scene units.
     double extent() const;
-    // Positions of patch i's vertices.
+    // Positions of patch i's vertices (a triangle's [3] repeats its [2]).
     std::array<Vec3, 4> patch_vertices(std::size_t i) const;
     double total_area() const;
 };

@@ -1,0 +1,69 @@
+// Small scenes built in code for tests: polygons with object names, meshed by the real mesher.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube::test {
+
+struct NamedPolygon {
+    std::string object;
+    std::vector<Vec3> vertices;  // CCW seen from the front
+};
+
+// One OBJ face per polygon, each polygon's object created on first use, default material.
+inline ObjModel make_model(const std::vector<NamedPolygon>& polys) {
+    ObjModel m;
+    m.source = "<test scene>";
+    m.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
+    std::uint32_t line = 1;
+    for (const NamedPolygon& p : polys) {
+        std::uint32_t obj = 0;
+        while (obj < m.objects.size() && m.objects[obj] != p.object) ++obj;
+        if (obj == m.objects.size()) m.objects.push_back(p.object);
+        ObjFace f;
+        f.object = obj;
+        f.line = line++;
+        for (const Vec3& v : p.vertices) {
+            f.v.push_back(static_cast<std::uint32_t>(m.positions.size()));
+            m.positions.push_back(v);
+        }
+        m.faces.push_back(std::move(f));
+    }
+    return m;
+}
+
+inline Scene make_scene(const std::vector<NamedPolygon>& polys, double max_patch_edge) {
+    MeshOptions o;
+    o.max_patch_edge = max_patch_edge;
+    return build_scene(make_model(polys), o);
+}
+
+// Unit square [0,1]² at height z, facing down (-z) or up (+z).
+inline NamedPolygon square_z(const std::string& name, double z, bool facing_up, double size = 1.0, Vec3 offset = Vec3(0.0)) {
+    NamedPolygon p{name, {}};
+    const Vec3 a = offset + Vec3(0, 0, z), b = offset + Vec3(size, 0, z), c = offset + Vec3(size, size, z),
+               d = offset + Vec3(0, size, z);
+    p.vertices = facing_up ? std::vector<Vec3>{a, b, c, d} : std::vector<Vec3>{a, d, c, b};
+    return p;
+}
+
+// The six inward-facing walls of the axis-aligned box [0,sx]×[0,sy]×[0,sz], objects named
+// x0, x1, y0, y1, z0, z1 (the wall at x = 0 is "x0").
+inline std::vector<NamedPolygon> inward_box(double sx, double sy, double sz) {
+    const Vec3 p000(0, 0, 0), p100(sx, 0, 0), p010(0, sy, 0), p110(sx, sy, 0), p001(0, 0, sz), p101(sx, 0, sz),
+        p011(0, sy, sz), p111(sx, sy, sz);
+    return {
+        {"z0", {p000, p100, p110, p010}},  // floor, normal +z
+        {"z1", {p001, p011, p111, p101}},  // ceiling, normal -z
+        {"x0", {p000, p010, p011, p001}},  // normal +x
+        {"x1", {p100, p101, p111, p110}},  // normal -x
+        {"y0", {p000, p001, p101, p100}},  // normal +y
+        {"y1", {p010, p110, p111, p011}},  // normal -y
+    };
+}
+
+}  // namespace ffcube::test
