@@ -479,6 +479,12 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
     impl_ = std::make_unique<Impl>(scene, options);
     Impl& im = *impl_;
     im.opt.threads = n;
+    // llvmpipe starts rasterizer threads (one per core) for every context unless told otherwise;
+    // K workers would then run K × cores threads that fight over the cores. With one rasterizing
+    // thread per context, --threads K uses K cores, and scaling is the workers' (measured in
+    // docs/benchmarks.md). A user's own LP_NUM_THREADS is respected. Must precede the first
+    // context: llvmpipe reads it when its screen is created.
+    setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
     im.contexts.push_back(create_headless_context(options.backend));
     im.backend = im.contexts[0]->backend();
     im.renderer = im.contexts[0]->renderer();

@@ -1,0 +1,135 @@
+// The `ffcube formfactors` command end to end: outputs agree with each other, runs are
+// reproducible, bad input is refused with a message, a non-zero exit and no output file.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "cli/cli_util.hpp"
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/io/ffm.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::run_ffcube;
+using test::TempDir;
+
+std::map<std::pair<std::string, std::string>, double> read_groups(const std::string& path) {
+    std::map<std::pair<std::string, std::string>, double> g;
+    std::istringstream in(test::read_text(path));
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line, "from,to,F");
+    while (std::getline(in, line)) {
+        const auto c1 = line.find(','), c2 = line.rfind(',');
+        g[{line.substr(0, c1), line.substr(c1 + 1, c2 - c1 - 1)}] = std::stod(line.substr(c2 + 1));
+    }
+    return g;
+}
+
+TEST(FormfactorsCli, OutputsAgreeAndReportIsComplete) {
+    TempDir dir;
+    const auto r = run_ffcube("formfactors " + test::example("cube.obj") + " --max-patch-edge 0.25 --resolution 64 -q" +
+                              " -o " + (dir / "F.ffm") + " --groups " + (dir / "g.csv") + " --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const FfmFile f = read_ffm(dir / "F.ffm");
+    EXPECT_EQ(f.matrix.size(), 96u);  // 6 faces × 4 × 4
+    // The groups CSV is the object-level reduction of the matrix (printed with 9 digits).
+    const auto groups = read_groups(dir / "g.csv");
+    std::vector<double> area(f.object_names.size(), 0.0);
+    std::vector<std::vector<double>> G(area.size(), std::vector<double>(area.size(), 0.0));
+    for (std::uint32_t i = 0; i < f.matrix.size(); ++i) {
+        area[f.objects[i]] += f.areas[i];
+        const RowView row = f.matrix.row(i);
+        for (std::size_t k = 0; k < row.col.size(); ++k) G[f.objects[i]][f.objects[row.col[k]]] += f.areas[i] * row.val[k];
+    }
+    EXPECT_EQ(groups.size(), 30u);  // closed cube: every ordered pair of walls sees each other
+    for (const auto& [key, value] : groups) {
+        std::size_t a = 0, b = 0;
+        while (f.object_names[a] != key.first) ++a;
+        while (f.object_names[b] != key.second) ++b;
+        EXPECT_NEAR(value, G[a][b] / area[a], 1e-8) << key.first << "->" << key.second;
+    }
+    const auto report = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    for (const char* key : {"patches", "hemicubes", "seconds", "backend", "renderer", "resolution", "row_sums", "reciprocity",
+                            "time", "left_out"})
+        EXPECT_TRUE(report.contains(key)) << key;
+    EXPECT_EQ(report["patches"], 96);
+    EXPECT_EQ(report["hemicubes"], 96);
+    EXPECT_EQ(report["resolution"], 64);
+    // Closed cube: rows sum to 1 up to float storage (2^-24 per entry).
+    EXPECT_NEAR(report["row_sums"]["min"].get<double>(), 1.0, 1e-6);
+    for (const char* key : {"meshing", "drawing", "readback", "accumulation", "writing"})
+        EXPECT_TRUE(report["time"].contains(key)) << key;
+}
+
+TEST(FormfactorsCli, MatrixMarketReadableByScipy) {
+    if (std::system("/usr/bin/python3 -c 'import scipy.io' 2>/dev/null") != 0) GTEST_SKIP() << "no python3-scipy";
+    TempDir dir;
+    ASSERT_EQ(run_ffcube("formfactors " + test::example("parallel_squares.obj") +
+                         " --max-patch-edge 0.5 --resolution 32 -q -o " + (dir / "F.mtx") + " --report " + (dir / "r.json"))
+                  .code,
+              0);
+    const auto report = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    // scipy's row sums must reproduce the report's row sums (same matrix, 9 printed digits).
+    const std::string py = "import scipy.io,numpy; m=scipy.io.mmread('" + (dir / "F.mtx") +
+                           "').tocsr(); s=numpy.asarray(m.sum(axis=1)).ravel(); print(m.shape[0], m.nnz, s.min(), s.max())";
+    FILE* p = popen(("/usr/bin/python3 -c \"" + py + "\"").c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    int n = 0;
+    long nnz = 0;
+    double mn = 0, mx = 0;
+    ASSERT_EQ(std::fscanf(p, "%d %ld %lf %lf", &n, &nnz, &mn, &mx), 4);
+    pclose(p);
+    EXPECT_EQ(n, report["patches"].get<int>());
+    EXPECT_EQ(nnz, report["nnz"].get<long>());
+    EXPECT_NEAR(mn, report["row_sums"]["min"].get<double>(), 1e-7);
+    EXPECT_NEAR(mx, report["row_sums"]["max"].get<double>(), 1e-7);
+}
+
+TEST(FormfactorsCli, ByteIdenticalAcrossRunsAndThreadCounts) {
+    TempDir dir;
+    const std::string base = "formfactors " + test::example("cube.obj") + " --max-patch-edge 0.2 --resolution 32 -q -o ";
+    ASSERT_EQ(run_ffcube(base + (dir / "a.ffm") + " --threads 1").code, 0);
+    ASSERT_EQ(run_ffcube(base + (dir / "b.ffm") + " --threads 2").code, 0);
+    ASSERT_EQ(run_ffcube(base + (dir / "c.ffm") + " --threads 2").code, 0);
+    const std::string a = test::read_text(dir / "a.ffm");
+    EXPECT_FALSE(a.empty());
+    EXPECT_EQ(a, test::read_text(dir / "b.ffm"));
+    EXPECT_EQ(a, test::read_text(dir / "c.ffm"));
+}
+
+struct BadCase {
+    std::string args;
+    int code;
+    std::string message;
+};
+
+TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
+    TempDir dir;
+    const std::string out = dir / "F.ffm";
+    const std::string missing = dir / "no such.obj";
+    const std::vector<BadCase> cases = {
+        {"formfactors \"" + missing + "\" -o " + out, 2, "no such.obj"},
+        {"formfactors " + dir.path().string() + " -o " + out, 2, "directory"},
+        {"formfactors -o " + (dir / "F.txt"), 2, "must end in .ffm"},
+        {"formfactors -o " + (dir / "nodir/F.ffm"), 2, "does not exist"},
+        {"formfactors --resolution 7 -o " + out, 2, "even number"},
+        {"formfactors --backend vulkan -o " + out, 2, "vulkan"},
+        {"formfactors --patches 10 --max-patch-edge 1 -o " + out, 2, "excludes"},
+        {"formfactors --max-patch-edge 1e-9 -o " + out, 2, "patches"},
+    };
+    for (const auto& c : cases) {
+        const auto r = run_ffcube(c.args);
+        EXPECT_EQ(r.code, c.code) << c.args << "\n" << r.output;
+        EXPECT_NE(r.output.find(c.message), std::string::npos) << c.args << "\n" << r.output;
+        EXPECT_FALSE(std::filesystem::exists(out)) << c.args;
+    }
+    // Nothing but the (absent) outputs was left behind: no temporaries either.
+    EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+}  // namespace
+}  // namespace ffcube
