@@ -32,6 +32,7 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("renderer", provider.renderer());
     r.set("resolution", provider.resolution());
     r.set("threads", provider.threads());
+    r.set("workers", provider.workers());
     r.set("hemicubes", st.hemicubes);
     // CPU-seconds summed over worker threads.
     r.set("time.prepare", st.prepare_seconds);

@@ -40,6 +40,7 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     mo.target_patches = o.patches;
     Scene scene = build_scene(model, mo);
     const double mesh_s = watch.seconds();
+    for (const auto& w : scene.stats.warnings) log_warning(w);
     info("scene {}: {} faces, {} objects -> {} patches ({})", scene.source, scene.stats.input_faces, scene.objects.size(),
          scene.size(), scene.stats.how);
     if (scene.stats.dropped_degenerate) info("dropped {} degenerate (zero-area) faces", scene.stats.dropped_degenerate);

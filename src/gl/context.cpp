@@ -8,6 +8,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <atomic>
 #include <mutex>
 #include <vector>
 
@@ -360,12 +361,21 @@ std::unique_ptr<GlContext> create_osmesa(std::vector<std::string>& tried) {
 
 }  // namespace
 
+namespace {
+std::atomic<bool> g_context_created{false};
+}
+
+bool gl::context_created_in_process() { return g_context_created; }
+
 std::unique_ptr<GlContext> create_headless_context(Backend backend) {
     std::vector<std::string> tried;
     std::unique_ptr<GlContext> ctx;
     if (backend == Backend::Auto || backend == Backend::Egl) ctx = create_egl(tried);
     if (!ctx && (backend == Backend::Auto || backend == Backend::OsMesa)) ctx = create_osmesa(tried);
-    if (ctx) return ctx;
+    if (ctx) {
+        g_context_created = true;
+        return ctx;
+    }
     std::string msg = fmt::format("no OpenGL 4.5 core context could be created (--backend {}); tried:", backend_name(backend));
     for (const auto& t : tried) msg += "\n  - " + t;
     throw GlError(msg);

@@ -38,6 +38,9 @@ struct Api {
     void load(const std::function<void*(const char*)>& get_proc);
 };
 
+// Whether create_headless_context has ever succeeded in this process (fork-safety check).
+bool context_created_in_process();
+
 // Throws GlError with 'what' and the GL error code when glGetError reports one.
 void check_gl(const Api& gl, const char* what);
 

@@ -10,6 +10,14 @@
 #include <exception>
 #include <mutex>
 #include <thread>
+#include <tuple>
+#include <fstream>
+#include <cstring>
+#include <cstdio>
+
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
@@ -336,6 +344,269 @@ private:
 
 }  // namespace
 
+void add_stats(HemicubeStats& a, const HemicubeStats& b);
+
+namespace {
+
+// ---------------------------------------------------------------------------------- engines
+// A worker thread computes through an Engine: either in this process on a GL context of its
+// own (LocalEngine), or in a child process that owns the context (RemoteEngine).
+//
+// Why child processes: Mesa's llvmpipe rasterizes every context of a process through one
+// screen, under one lock, so two contexts on two threads run at about 1.1× one (measured,
+// docs/benchmarks.md); two processes run at 2×. Children are forked before this process has
+// made any GL context and while it runs a single thread, so they inherit the scene (copy-on-
+// write) and no locks or GL state; otherwise the provider falls back to threads.
+class Engine {
+public:
+    virtual ~Engine() = default;
+    virtual void start() = 0;  // on the worker thread, before the first request
+    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) = 0;
+    virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
+    virtual void stop() = 0;  // on the worker thread, after the last request
+};
+
+class LocalEngine final : public Engine {
+public:
+    LocalEngine(std::unique_ptr<GlContext> ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+                const HemicubeOptions& opt)
+        : ctx_(std::move(ctx)), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {}
+    ~LocalEngine() override { ctx_.reset(); }
+    void start() override {
+        ctx_->make_current();
+        worker_ = std::make_unique<Worker>(*ctx_, scene_, pieces_, layout_, opt_);
+    }
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) override { worker_->row(p, out, st); }
+    void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override {
+        HemicubeStats ignored;
+        worker_->render(p, ignored);
+        out = worker_->ids();
+    }
+    void stop() override {
+        worker_.reset();
+        ctx_->release_current();
+    }
+
+private:
+    std::unique_ptr<GlContext> ctx_;
+    const Scene& scene_;
+    const ScenePieces& pieces_;
+    const HemicubeLayout& layout_;
+    const HemicubeOptions& opt_;
+    std::unique_ptr<Worker> worker_;
+};
+
+// The wire protocol between a RemoteEngine and its child: fixed-size headers and raw arrays
+// over a Unix socket pair (both ends are the same binary).
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1 };
+struct RequestMsg {
+    Request kind;
+    std::uint32_t patch;
+};
+struct ReplyMsg {
+    std::uint32_t ok;      // 1: payload follows; 0: 'count' bytes of error message follow
+    std::uint64_t count;   // entries (row), pixels (item buffer), bytes (hello strings, error)
+    HemicubeStats stats;   // work done for this reply
+};
+
+void send_all(int fd, const void* data, std::size_t size) {
+    const char* p = static_cast<const char*>(data);
+    while (size > 0) {
+        const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) throw GlError(fmt::format("hemicube worker pipe: send failed: {}", std::strerror(errno)));
+        p += n;
+        size -= static_cast<std::size_t>(n);
+    }
+}
+
+// Returns false on a clean end of stream before any byte.
+bool recv_all(int fd, void* data, std::size_t size) {
+    char* p = static_cast<char*>(data);
+    std::size_t got = 0;
+    while (got < size) {
+        const ssize_t n = ::recv(fd, p + got, size - got, 0);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw GlError(fmt::format("hemicube worker pipe: receive failed: {}", std::strerror(errno)));
+        if (n == 0) {
+            if (got == 0) return false;
+            throw GlError("hemicube worker pipe: truncated message");
+        }
+        got += static_cast<std::size_t>(n);
+    }
+    return true;
+}
+
+template <typename T>
+void send_vector(int fd, const std::vector<T>& v) {
+    if (!v.empty()) send_all(fd, v.data(), v.size() * sizeof(T));
+}
+
+void send_error(int fd, const std::string& what) {
+    ReplyMsg r{0, what.size(), {}};
+    send_all(fd, &r, sizeof r);
+    send_all(fd, what.data(), what.size());
+}
+
+[[noreturn]] void child_main(int fd, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+                             const HemicubeOptions& opt) {
+    int code = 0;
+    try {
+        std::unique_ptr<GlContext> ctx = create_headless_context(opt.backend);
+        ctx->make_current();
+        Worker worker(*ctx, scene, pieces, layout, opt);
+        const std::string hello = ctx->backend() + '\n' + ctx->renderer();
+        ReplyMsg h{1, hello.size(), {}};
+        send_all(fd, &h, sizeof h);
+        send_all(fd, hello.data(), hello.size());
+        SparseRow row;
+        RequestMsg req{};
+        while (recv_all(fd, &req, sizeof req)) {
+            try {
+                ReplyMsg r{1, 0, {}};
+                if (req.kind == Request::Row) {
+                    worker.row(req.patch, row, r.stats);
+                    r.count = row.nnz();
+                    send_all(fd, &r, sizeof r);
+                    send_vector(fd, row.col);
+                    send_vector(fd, row.val);
+                } else {
+                    worker.render(req.patch, r.stats);
+                    r.stats = HemicubeStats{};
+                    r.count = worker.ids().size();
+                    send_all(fd, &r, sizeof r);
+                    send_vector(fd, worker.ids());
+                }
+            } catch (const std::exception& e) {
+                send_error(fd, e.what());
+            }
+        }
+        ctx->release_current();
+    } catch (const std::exception& e) {
+        try {
+            send_error(fd, e.what());
+        } catch (...) {
+        }
+        code = 1;
+    }
+    // No destructors of the parent's objects, no atexit handlers, no flush of inherited stdio.
+    std::_Exit(code);
+}
+
+class RemoteEngine final : public Engine {
+public:
+    // Forks the child; call only while this process has one thread and no GL context.
+    RemoteEngine(const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout, const HemicubeOptions& opt) {
+        int sv[2];
+        if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+            throw GlError(fmt::format("socketpair for a hemicube worker failed: {}", std::strerror(errno)));
+        std::fflush(nullptr);
+        pid_ = ::fork();
+        if (pid_ < 0) {
+            ::close(sv[0]);
+            ::close(sv[1]);
+            throw GlError(fmt::format("fork of a hemicube worker failed: {}", std::strerror(errno)));
+        }
+        if (pid_ == 0) {
+            // Keep only stdio and this child's socket (as fd 3): the parent's ends of earlier
+            // siblings' sockets must not stay open here, or those siblings never see the end of
+            // their requests.
+            int fd = sv[1];
+            if (fd != 3) {
+                ::dup2(fd, 3);
+                fd = 3;
+            }
+            ::close_range(4, ~0u, 0);
+            setenv("LP_NUM_THREADS", "0", 0);
+            child_main(fd, scene, pieces, layout, opt);
+        }
+        ::close(sv[1]);
+        fd_ = sv[0];
+    }
+    ~RemoteEngine() override {
+        if (fd_ >= 0) ::close(fd_);  // the child sees the end of its requests and exits
+        if (pid_ > 0) {
+            int status = 0;
+            while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+            }
+        }
+    }
+    // Reads the child's hello: its backend and GL_RENDERER, or why it could not start.
+    std::pair<std::string, std::string> hello() {
+        const std::string text = read_reply_text();
+        const auto nl = text.find('\n');
+        return {text.substr(0, nl), nl == std::string::npos ? std::string() : text.substr(nl + 1)};
+    }
+    void start() override {}
+    void stop() override {}
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) override {
+        const ReplyMsg r = request(Request::Row, p);
+        out.col.resize(r.count);
+        out.val.resize(r.count);
+        if (r.count) {
+            recv_or_throw(out.col.data(), r.count * sizeof(std::uint32_t));
+            recv_or_throw(out.val.data(), r.count * sizeof(double));
+        }
+        add_stats(st, r.stats);
+    }
+    void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override {
+        const ReplyMsg r = request(Request::ItemBuffer, p);
+        out.resize(r.count);
+        if (r.count) recv_or_throw(out.data(), r.count * sizeof(std::uint32_t));
+    }
+
+private:
+    ReplyMsg request(Request kind, std::uint32_t p) {
+        const RequestMsg req{kind, p};
+        send_all(fd_, &req, sizeof req);
+        ReplyMsg r{};
+        recv_or_throw(&r, sizeof r);
+        if (!r.ok) throw GlError(read_text(r.count));
+        return r;
+    }
+    std::string read_reply_text() {
+        ReplyMsg r{};
+        recv_or_throw(&r, sizeof r);
+        std::string text = read_text(r.count);
+        if (!r.ok) throw GlError(text);
+        return text;
+    }
+    std::string read_text(std::uint64_t n) {
+        std::string text(n, '\0');
+        if (n) recv_or_throw(text.data(), n);
+        return text;
+    }
+    void recv_or_throw(void* data, std::size_t size) {
+        if (!recv_all(fd_, data, size)) {
+            int status = 0;
+            std::string how = "exited";
+            if (::waitpid(pid_, &status, 0) == pid_) {
+                how = WIFSIGNALED(status) ? fmt::format("was killed by signal {}", WTERMSIG(status))
+                                          : fmt::format("exited with status {}", WEXITSTATUS(status));
+                pid_ = -1;
+            }
+            throw GlError("a hemicube worker process " + how + " unexpectedly");
+        }
+    }
+    static void add_stats(HemicubeStats& a, const HemicubeStats& b) { ::ffcube::add_stats(a, b); }
+
+    int fd_ = -1;
+    pid_t pid_ = -1;
+};
+
+// True when fork() is safe here: this process runs a single thread (no lock can be held by a
+// thread the child would not have) and has never made a GL context (no driver state to share).
+bool can_fork_workers() {
+    if (gl::context_created_in_process()) return false;
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("Threads:", 0) == 0) return std::stoi(line.substr(8)) == 1;
+    return false;
+}
+
+}  // namespace
+
 // Workers live as long as the provider: each owns a thread, and on it a GL context and a Worker.
 // compute_rows hands out row positions through a counter; finished rows wait in a window of
 // slots until the calling thread passes them to the sink in list order, so the output does not
@@ -346,8 +617,9 @@ struct HemicubeRowProvider::Impl {
     HemicubeLayout layout;
     ScenePieces pieces;
     std::string backend, renderer;
-    std::vector<std::unique_ptr<GlContext>> contexts;
+    std::vector<std::unique_ptr<Engine>> engines;
     std::vector<std::thread> threads;
+    bool processes = false;
 
     std::mutex mutex;
     std::condition_variable cv_work, cv_done;
@@ -375,15 +647,13 @@ struct HemicubeRowProvider::Impl {
         }
         cv_work.notify_all();
         for (auto& t : threads) t.join();
-        // Contexts go after their threads have released them.
+        // Engines (contexts, child processes) go after their threads have stopped.
     }
 
     void worker_main(unsigned index) {
-        GlContext& ctx = *contexts[index];
-        std::unique_ptr<Worker> w;
+        Engine& w = *engines[index];
         try {
-            ctx.make_current();
-            w = std::make_unique<Worker>(ctx, scene, pieces, layout, opt);
+            w.start();
         } catch (...) {
             std::lock_guard lock(mutex);
             if (!error) error = std::current_exception();
@@ -410,9 +680,7 @@ struct HemicubeRowProvider::Impl {
                 lock.unlock();
                 std::vector<std::uint32_t> result;
                 try {
-                    HemicubeStats ignored;
-                    w->render(p, ignored);
-                    result = w->ids();
+                    w.item_buffer(p, result);
                 } catch (...) {
                     lock.lock();
                     if (!error) error = std::current_exception();
@@ -431,7 +699,7 @@ struct HemicubeRowProvider::Impl {
             ++in_flight;
             lock.unlock();
             try {
-                w->row(i, row, local);
+                w.row(i, row, local);
             } catch (...) {
                 lock.lock();
                 if (!error) error = std::current_exception();
@@ -448,27 +716,29 @@ struct HemicubeRowProvider::Impl {
             cv_done.notify_all();
         }
         lock.unlock();
-        w.reset();
-        ctx.release_current();
+        w.stop();
     }
 
-    static void merge(HemicubeStats& a, const HemicubeStats& b) {
-        a.hemicubes += b.hemicubes;
-        a.prepare_seconds += b.prepare_seconds;
-        a.draw_seconds += b.draw_seconds;
-        a.readback_seconds += b.readback_seconds;
-        a.accumulate_seconds += b.accumulate_seconds;
-        a.pieces_considered += b.pieces_considered;
-        a.pieces_behind += b.pieces_behind;
-        for (std::size_t f = 0; f < 5; ++f) {
-            a.pieces_drawn[f] += b.pieces_drawn[f];
-            a.pieces_culled[f] += b.pieces_culled[f];
-        }
-        a.back_face_weight += b.back_face_weight;
-        a.miss_weight += b.miss_weight;
-        a.self_hits += b.self_hits;
-    }
+    static void merge(HemicubeStats& a, const HemicubeStats& b) { add_stats(a, b); }
 };
+
+void add_stats(HemicubeStats& a, const HemicubeStats& b) {
+    a.hemicubes += b.hemicubes;
+    a.prepare_seconds += b.prepare_seconds;
+    a.draw_seconds += b.draw_seconds;
+    a.readback_seconds += b.readback_seconds;
+    a.accumulate_seconds += b.accumulate_seconds;
+    a.pieces_considered += b.pieces_considered;
+    a.pieces_behind += b.pieces_behind;
+    for (std::size_t f = 0; f < 5; ++f) {
+        a.pieces_drawn[f] += b.pieces_drawn[f];
+        a.pieces_culled[f] += b.pieces_culled[f];
+    }
+    a.back_face_weight += b.back_face_weight;
+    a.miss_weight += b.miss_weight;
+    a.self_hits += b.self_hits;
+}
+
 
 HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options) {
     if (options.resolution < 8 || options.resolution > 8192 || options.resolution % 2 != 0)
@@ -485,10 +755,24 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
     // docs/benchmarks.md). A user's own LP_NUM_THREADS is respected. Must precede the first
     // context: llvmpipe reads it when its screen is created.
     setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
-    im.contexts.push_back(create_headless_context(options.backend));
-    im.backend = im.contexts[0]->backend();
-    im.renderer = im.contexts[0]->renderer();
-    for (unsigned t = 1; t < n; ++t) im.contexts.push_back(im.contexts[0]->create_sibling());
+    if (can_fork_workers()) {
+        im.processes = true;
+        for (unsigned t = 0; t < n; ++t) {
+            auto remote = std::make_unique<RemoteEngine>(im.scene, im.pieces, im.layout, im.opt);
+            RemoteEngine& r = *remote;
+            im.engines.push_back(std::move(remote));
+            std::tie(im.backend, im.renderer) = r.hello();  // throws why the child could not start
+        }
+    } else {
+        std::unique_ptr<GlContext> first = create_headless_context(options.backend);
+        im.backend = first->backend();
+        im.renderer = first->renderer();
+        std::vector<std::unique_ptr<GlContext>> contexts;
+        for (unsigned t = 1; t < n; ++t) contexts.push_back(first->create_sibling());
+        im.engines.push_back(std::make_unique<LocalEngine>(std::move(first), im.scene, im.pieces, im.layout, im.opt));
+        for (auto& c : contexts)
+            im.engines.push_back(std::make_unique<LocalEngine>(std::move(c), im.scene, im.pieces, im.layout, im.opt));
+    }
     for (unsigned t = 0; t < n; ++t) im.threads.emplace_back([&im, t] { im.worker_main(t); });
     std::unique_lock lock(im.mutex);
     im.cv_done.wait(lock, [&] { return im.started == n; });
@@ -565,6 +849,7 @@ HemicubeStats HemicubeRowProvider::stats() const {
 std::string HemicubeRowProvider::backend() const { return impl_->backend; }
 std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
 unsigned HemicubeRowProvider::threads() const { return static_cast<unsigned>(impl_->threads.size()); }
+std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
 
 }  // namespace ffcube

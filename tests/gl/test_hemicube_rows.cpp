@@ -20,6 +20,7 @@
 #include <map>
 #include <numbers>
 
+#include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
@@ -295,6 +296,44 @@ TEST(HemicubeRows, RotationIsDeterministicAndChangesAliasing) {
     fixed.rotate = false;
     const Result r3 = run(polys, 0.5, fixed, false);
     EXPECT_NE(r1.F.val(), r3.F.val());
+}
+
+}  // namespace
+}  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Worker processes (the default while this process has no GL context and one thread) and
+// worker threads (the fallback) run the same code on the same rasterizer: identical rows.
+TEST(HemicubeWorkers, ProcessesAndThreadsGiveIdenticalRows) {
+    const Scene scene = test::make_scene(test::inward_box(1, 2, 1), 0.25);
+    HemicubeOptions o;
+    o.resolution = 64;
+    o.threads = 2;
+    CsrMatrix by_processes, by_threads;
+    {
+        HemicubeRowProvider provider(scene, o);
+        EXPECT_EQ(provider.workers(), "processes");
+        by_processes = compute_all_rows(provider);
+    }
+    // A GL context made in this process makes forking unsafe from now on.
+    const auto ctx = create_headless_context(Backend::Auto);
+    {
+        HemicubeRowProvider provider(scene, o);
+        EXPECT_EQ(provider.workers(), "threads");
+        by_threads = compute_all_rows(provider);
+    }
+    EXPECT_EQ(by_processes.col(), by_threads.col());
+    EXPECT_EQ(by_processes.val(), by_threads.val());
+}
+
+// A worker that cannot start reports why, through the provider's constructor.
+TEST(HemicubeWorkers, BadResolutionIsAnInputError) {
+    const Scene scene = test::make_scene(test::inward_box(1, 1, 1), 0.5);
+    HemicubeOptions o;
+    o.resolution = 7;
+    EXPECT_THROW(HemicubeRowProvider(scene, o), InputError);
 }
 
 }  // namespace

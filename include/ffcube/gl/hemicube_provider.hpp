@@ -66,6 +66,10 @@ public:
     std::string backend() const;   // e.g. "egl-surfaceless"
     std::string renderer() const;  // GL_RENDERER
     unsigned threads() const;
+    // "processes" (one forked child per worker, each with its own GL context: llvmpipe scales
+    // across processes, not across contexts of one process) or "threads" (used for one worker,
+    // or when forking is unsafe: this process already made a GL context or runs other threads).
+    std::string workers() const;
     int resolution() const;
 
     // Where the eye sits above the patch and where the near plane lies, as fractions of the
