@@ -17,8 +17,9 @@ struct RunResult {
     std::string output;  // stdout and stderr
 };
 
-inline RunResult run_ffcube(const std::string& args) {
-    const std::string cmd = std::string(FFCUBE_BINARY) + " " + args + " 2>&1";
+// 'env' is prepended to the command line, e.g. "VAR=value ".
+inline RunResult run_ffcube_env(const std::string& env, const std::string& args) {
+    const std::string cmd = env + std::string(FFCUBE_BINARY) + " " + args + " 2>&1";
     RunResult r;
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
@@ -29,6 +30,8 @@ inline RunResult run_ffcube(const std::string& args) {
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
     return r;
 }
+
+inline RunResult run_ffcube(const std::string& args) { return run_ffcube_env("", args); }
 
 inline std::string read_text(const std::filesystem::path& p) {
     std::ifstream in(p, std::ios::binary);

@@ -131,5 +131,22 @@ TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
     EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
 }
 
+// With EGL's vendor list pointing nowhere, --backend egl has no context to offer: exit 4 and a
+// message listing every EGL platform tried and why it failed; auto still falls back to OSMesa.
+TEST(FormfactorsCli, NoBackendListsEveryAttempt) {
+    TempDir dir;
+    const std::string env = "__EGL_VENDOR_LIBRARY_FILENAMES=/nonexistent.json ";
+    const std::string cmd = "formfactors " + test::example("parallel_squares.obj") + " --resolution 16 -q -o " + (dir / "F.ffm");
+    const auto egl = test::run_ffcube_env(env, cmd + " --backend egl");
+    EXPECT_EQ(egl.code, 4) << egl.output;
+    EXPECT_NE(egl.output.find("no OpenGL 4.5 core context"), std::string::npos) << egl.output;
+    EXPECT_NE(egl.output.find("egl device platform"), std::string::npos) << egl.output;
+    EXPECT_NE(egl.output.find("egl surfaceless"), std::string::npos) << egl.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm"));
+    const auto fallback = test::run_ffcube_env(env, cmd + " --report " + (dir / "r.json"));
+    ASSERT_EQ(fallback.code, 0) << fallback.output;
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "r.json"))["backend"], "osmesa");
+}
+
 }  // namespace
 }  // namespace ffcube
