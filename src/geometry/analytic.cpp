@@ -1,5 +1,7 @@
 #include "ffcube/geometry/analytic.hpp"
 
+#include "ffcube/geometry/quadrature.hpp"
+
 #include "ffcube/core/error.hpp"
 
 #include <fmt/format.h>
@@ -214,38 +216,12 @@ bool point_in_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n) 
 
 // ---- far field ---------------------------------------------------------------------------
 
-// n-point Gauss–Legendre rule on [-1,1] (Newton on P_n from Tricomi's initial guesses).
-struct GaussRule {
-    std::vector<double> x, w;
-};
-GaussRule make_gauss_legendre(int n) {
-    GaussRule r{std::vector<double>(n), std::vector<double>(n)};
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
-        double dp = 1.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1.0);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) <= 1e-16) break;
-        }
-        r.x[i] = z;
-        r.w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    return r;
-}
 
 // Far-field rule: 20 points. With the nearest singularity at least 1.59 half-lengths away
 // (see far_field_integral), Gauss converges like ρ^(−2n), ρ = 1.59 + √(1 + 1.59²) = 3.47:
 // 3.47^(−40) ≈ 1e-21, below rounding.
 const GaussRule& gauss20() {
-    static const GaussRule rule = make_gauss_legendre(20);
+    static const GaussRule rule = gauss_legendre(20);
     return rule;
 }
 

@@ -1,6 +1,7 @@
 // Analytic form factors checked against independent methods: textbook values, direct
 // high-order quadrature of the defining area integral, Lambert's contour formula against the
 // closed forms, superposition identities that hold exactly, reciprocity, and Monte Carlo.
+#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
@@ -19,32 +20,6 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 
-// n-point Gauss–Legendre rule on [-1,1] by Newton's method on P_n (converged to rounding).
-struct GaussRule {
-    std::vector<double> x, w;
-};
-GaussRule gauss_legendre(int n) {
-    GaussRule r{std::vector<double>(n), std::vector<double>(n)};
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
-        double dp = 0.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1.0);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
-        r.x[i] = z;
-        r.w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    return r;
-}
 
 // The defining integral 1/A1 ∫∫ c² / (π r⁴) for parallel rectangles [x0,x1]×[y0,y1] (z = 0)
 // and [u0,u1]×[v0,v1] (z = c), by a 4D Gauss product rule. The integrand is analytic with

@@ -1,6 +1,7 @@
 // Hemicube layout and ΔF table: the faces tile the atlas, cameras are right-handed GL cameras,
 // and the table is the exact integral (against independent quadrature and against the
 // geometry layer's closed forms), sums to 1, is symmetric and positive.
+#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/hemicube/layout.hpp"
@@ -22,32 +23,6 @@ double at(const HemicubeLayout& h, int x, int y) {
     return h.delta_ff()[static_cast<std::size_t>(y) * h.atlas_width() + x];
 }
 
-// n-point Gauss–Legendre rule on [-1,1] by Newton's method on P_n (converged to rounding).
-struct GaussRule {
-    std::vector<double> x, w;
-};
-GaussRule gauss_legendre(int n) {
-    GaussRule r{std::vector<double>(n), std::vector<double>(n)};
-    for (int i = 0; i < n; ++i) {
-        double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
-        double dp = 1.0;
-        for (int it = 0; it < 100; ++it) {
-            double p0 = 1.0, p1 = z;
-            for (int k = 2; k <= n; ++k) {
-                const double p2 = ((2.0 * k - 1.0) * z * p1 - (k - 1.0) * p0) / k;
-                p0 = p1;
-                p1 = p2;
-            }
-            dp = n * (z * p1 - p0) / (z * z - 1.0);
-            const double dz = p1 / dp;
-            z -= dz;
-            if (std::abs(dz) < 1e-16) break;
-        }
-        r.x[i] = z;
-        r.w[i] = 2.0 / ((1.0 - z * z) * dp * dp);
-    }
-    return r;
-}
 
 // Eye-plane extents of pixel (i, j) of a face, relative to its viewport.
 struct PixelRect {
