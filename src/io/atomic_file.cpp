@@ -103,7 +103,42 @@ std::atomic<unsigned long long> g_counter{0};
 
 }  // namespace
 
-void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer) {
+namespace {
+// Writes straight into an existing file that rename cannot replace (a terminal, a pipe,
+// /dev/stdout): there is no previous content to protect, and replacing the device node (or the
+// /dev/stdout link) by a regular file would be wrong.
+void write_in_place(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) fail(path, "cannot open for writing", errno);
+    FdStreambuf buf(fd);
+    std::ostream out(&buf);
+    try {
+        writer(out);
+        out.flush();
+    } catch (...) {
+        ::close(fd);
+        throw;
+    }
+    const int err = buf.error();
+    const bool good = static_cast<bool>(out);
+    if (::close(fd) != 0 && err == 0) fail(path, "close failed", errno);
+    if (err != 0) fail(path, "write failed", err);
+    if (!good) throw IoError(fmt::format("{}: write failed: the output stream reported an error", path.string()));
+}
+}  // namespace
+
+void write_file_atomically(const std::filesystem::path& requested, const std::function<void(std::ostream&)>& writer) {
+    std::error_code ec;
+    const auto st = std::filesystem::status(requested, ec);  // follows links
+    if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
+        !std::filesystem::is_directory(st))
+        return write_in_place(requested, writer);
+    // A link is followed, so the link stays and the file it names is replaced.
+    std::filesystem::path path = requested;
+    if (std::filesystem::is_symlink(std::filesystem::symlink_status(requested, ec))) {
+        const auto target = std::filesystem::canonical(requested, ec);
+        if (!ec) path = target;
+    }
     // Same directory as the destination, so that rename never crosses file systems.
     Temporary tmp(fmt::format("{}.tmp.{}.{}", path.string(), static_cast<long>(::getpid()), g_counter++));
     tmp.fd = ::open(tmp.name().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);

@@ -1,6 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <stdexcept>
+#include <thread>
 #include <string>
 
 #include "ffcube/core/error.hpp"
@@ -18,6 +21,30 @@ TEST_F(AtomicFile, WritesTheContentAndLeavesNoTemporary) {
     EXPECT_EQ(read_all(p), "hello\nworld\n");
     ASSERT_EQ(entries().size(), 1u);
     EXPECT_EQ(entries()[0], "out.txt");
+}
+
+// A link is followed: the link stays, the file it names gets the new content.
+TEST_F(AtomicFile, FollowsASymbolicLink) {
+    const auto target = path("target.txt"), link = path("link.txt");
+    write_all(target, "old");
+    std::filesystem::create_symlink(target, link);
+    write_file_atomically(link, [](std::ostream& out) { out << "new"; });
+    EXPECT_TRUE(std::filesystem::is_symlink(link));
+    EXPECT_EQ(read_all(target), "new");
+    EXPECT_EQ(entries().size(), 2u);
+}
+
+// A pipe cannot be replaced by rename: it is written in place and stays a pipe (as /dev/stdout,
+// a link to a terminal or pipe, must).
+TEST_F(AtomicFile, WritesIntoAPipeInPlace) {
+    const auto fifo = path("fifo");
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    std::string received;
+    std::thread reader([&] { received = read_all(fifo); });
+    write_file_atomically(fifo, [](std::ostream& out) { out << "through the pipe"; });
+    reader.join();
+    EXPECT_EQ(received, "through the pipe");
+    EXPECT_EQ(std::filesystem::status(fifo).type(), std::filesystem::file_type::fifo);
 }
 
 TEST_F(AtomicFile, ReplacesAnExistingFile) {

@@ -19,6 +19,10 @@ namespace ffcube {
 // (e.g. path is a directory). If writer throws, its exception propagates unchanged. In every
 // failure case the temporary is removed and the file at path is left as it was.
 // Thread-safe: concurrent calls use distinct temporaries.
+//
+// A symbolic link at path is followed (the link stays; the file it names is replaced). An existing
+// file that is neither regular nor a directory (a terminal, a pipe, /dev/stdout) is written in
+// place: rename cannot replace it, and there is no previous content to protect.
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer);
 
 }  // namespace ffcube
