@@ -1,6 +1,9 @@
 #include "cli/common.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
+
+#include <algorithm>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -29,6 +32,22 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
     app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed);
 }
 
+namespace {
+
+// The mesher refuses a mesh above MeshOptions::max_patches before allocating it. Lower that
+// limit to what this machine's physical memory can hold at the mesher's own estimate of bytes per
+// patch (a Patch and about one vertex), so that a too-small --max-patch-edge is refused with the
+// estimate instead of ending in the out-of-memory killer. The form-factor rows need more (see
+// docs/robustness.md), but that depends on the resolution and is not known before meshing.
+std::size_t patch_limit_for_this_machine(std::size_t limit) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page <= 0) return limit;
+    const double bytes = static_cast<double>(pages) * static_cast<double>(page);
+    return std::min(limit, static_cast<std::size_t>(bytes / static_cast<double>(sizeof(Patch) + sizeof(Vec3))));
+}
+
+}  // namespace
+
 Scene load_and_mesh(const SceneOptions& o, Report& report) {
     Stopwatch watch;
     ObjModel model = o.scene.empty() ? load_cornell_box() : load_obj(o.scene);
@@ -38,6 +57,7 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     MeshOptions mo;
     mo.max_patch_edge = o.max_patch_edge;
     mo.target_patches = o.patches;
+    mo.max_patches = patch_limit_for_this_machine(mo.max_patches);
     Scene scene = build_scene(model, mo);
     const double mesh_s = watch.seconds();
     for (const auto& w : scene.stats.warnings) log_warning(w);

@@ -15,6 +15,9 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "ffcube 0.1.0");
     std::function<int()> action;
     ffcube::cli::add_formfactors_command(app, action);
+    ffcube::cli::add_view_command(app, action);
+    ffcube::cli::add_solve_command(app, action);
+    ffcube::cli::add_bench_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

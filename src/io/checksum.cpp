@@ -22,6 +22,9 @@ std::uint64_t load_word(const unsigned char* p) {
 void Checksum64::word(std::uint64_t w) { h_ = std::rotl((h_ ^ w) * kMul, 27); }
 
 void Checksum64::update(const void* data, std::size_t size) {
+    // An empty array's data() may be null, and memcpy from null is undefined even for 0 bytes
+    // (found by tests/fuzz/fuzz_ffm.cpp on a matrix with no nonzeros).
+    if (size == 0) return;
     const auto* p = static_cast<const unsigned char*>(data);
     length_ += size;
     if (npending_ > 0) {

@@ -1,0 +1,97 @@
+// The benchmark against analytic form factors (`ffcube bench`): scenes built in code whose
+// object-to-object form factors are known exactly, run through the hemicube at several
+// resolutions and the ray caster at several ray counts, each timed and measured.
+//
+// Exact values come from geometry/analytic.hpp: closed forms where one exists (Howell C-11,
+// C-14), the polygon-to-polygon contour integral otherwise, and symmetry for the occluded cases
+// (see each case's description). Meshing: each case fixes its own max patch edge (documented
+// per case in docs/benchmarks.md: about 64–256 patches per object by default, fewer with quick).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/gl/context.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+// One polygon of a case: one OBJ face of the named object, CCW from its front.
+struct BenchPolygon {
+    std::string object;
+    std::vector<Vec3> vertices;
+};
+
+struct BenchCase {
+    std::string name;   // unique, e.g. "parallel_d1"
+    std::string group;  // basic, enclosure, proximity, extreme, occlusion
+    std::string description;
+    std::vector<BenchPolygon> polygons;
+    double max_patch_edge = 0;  // meshing (scene units)
+    // exact[a][b]: object-to-object F in the order objects are first named in `polygons`;
+    // NaN where no exact value is known (such entries are not measured).
+    std::vector<std::vector<double>> exact;
+};
+
+// The suite: every case of every group. quick: fewer cases (one or two per group) meshed more
+// coarsely. Exact values are computed here (milliseconds).
+std::vector<BenchCase> bench_cases(bool quick);
+// Group names in plot order.
+const std::vector<std::string>& bench_groups();
+
+// The meshed scene of a case (through the real mesher).
+Scene build_bench_scene(const BenchCase& c);
+
+// Errors of a computed matrix F against a case's exact values, at object level
+// (G = object_form_factors(F, scene)), over the entries with a known exact value:
+struct BenchErrors {
+    double max_abs_error = 0;   // max |G_ab − exact_ab|
+    double mean_abs_error = 0;  // mean |G_ab − exact_ab|
+    double max_rel_error = 0;   // max |G_ab − exact_ab| / exact_ab over exact_ab > 0
+    double row_sum_dev = 0;     // max over objects with a wholly known row: |Σ_b G_ab − Σ_b exact_ab|
+    double reciprocity_dev = 0; // max over object pairs: |A_a G_ab − A_b G_ba| / max(A_a G_ab, A_b G_ba)
+};
+BenchErrors measure_errors(const CsrMatrix& F, const Scene& scene, const BenchCase& c);
+
+struct BenchOptions {
+    std::string suite = "all";            // "all" or one group name
+    std::vector<int> resolutions;         // hemicube settings (even, 8..8192); none: no hemicube runs
+    std::vector<std::uint64_t> rays;      // raycast settings (rays per row ≥ 1); none: no raycast runs
+    bool quick = false;
+    unsigned threads = 0;                 // 0: every core (both methods)
+    Backend backend = Backend::Auto;
+    std::uint64_t seed = 0x5eed;
+};
+
+// One line of results.csv.
+struct BenchResult {
+    std::string case_name, group, method, setting;  // method "hemicube" (setting "N=256") or "raycast" (setting "rays=1000")
+    double value = 0;                                // the resolution or ray count, for plotting
+    std::size_t patches = 0;
+    double seconds = 0;  // wall seconds of the row computation (provider start-up excluded)
+    BenchErrors errors;
+};
+
+// Runs every selected case with every setting. All hemicube runs come first: the hemicube's
+// worker processes are forked only while this process runs a single thread, and Embree leaves
+// its thread pool alive. progress(done, total, line) is called after each run.
+// Throws InputError for an unknown suite or a bad setting, before running anything.
+std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const BenchOptions& options,
+                                   const std::function<void(std::size_t, std::size_t, const BenchResult&)>& progress = {});
+
+// Outputs, each written atomically.
+void write_bench_csv(const std::filesystem::path& path, const std::vector<BenchResult>& results);
+void write_bench_json(const std::filesystem::path& path, const std::vector<BenchResult>& results,
+                      const BenchOptions& options);
+// The log–log plot of error (y: max over the group's cases of max_abs_error) against time
+// (x: seconds summed over the group's cases), one curve per (method, group), points ordered by
+// setting. The SVG is hand-written; the PNG is the same plot drawn by a small rasteriser.
+std::string bench_plot_svg(const std::vector<BenchResult>& results);
+void write_bench_plot_svg(const std::filesystem::path& path, const std::vector<BenchResult>& results);
+void write_bench_plot_png(const std::filesystem::path& path, const std::vector<BenchResult>& results);
+
+}  // namespace ffcube

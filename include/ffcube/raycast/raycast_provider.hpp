@@ -1,0 +1,64 @@
+// Rows of F by Monte Carlo ray casting through Embree 3: no GL at all, so it works where no
+// context can be had, and it checks the hemicube on occluded scenes where no formula exists.
+//
+// Row i is estimated from `rays` rays leaving patch i. Ray k starts at a point jittered inside
+// stratum k mod m² of an m × m grid over the patch (m = ⌊√rays⌋: samples per patch × rays per
+// sample = rays per row, with the strata reused in turn when rays is not a square) and goes in a
+// cosine-weighted direction about the patch's front normal. Hitting the front of patch j adds
+// the ray's weight to F_ij; hitting a back face absorbs the ray (it blocks, and counts for
+// nothing); a ray leaving the scene adds nothing. Weights: 1 on triangles and parallelograms,
+// the bilinear map's Jacobian on other quads (area-uniform sampling), normalised so the weights
+// of a row sum to 1. In a closed enclosure every ray hits a front face, so rows sum to 1 (to
+// rounding).
+//
+// Statistics: each F_ij is a binomial fraction, standard error √(F(1−F)/rays) or less
+// (stratification only lowers it).
+// Determinism: row i's random numbers come from (seed, i) alone, so rows do not depend on the
+// number of threads or on which rows are asked for together.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "ffcube/formfactor/row_provider.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+struct RaycastOptions {
+    std::uint64_t rays = 4096;  // rays per row (per patch), ≥ 1
+    unsigned threads = 0;       // 0 = every core
+    std::uint64_t seed = 0x5eed;
+};
+
+class RaycastRowProvider final : public RowProvider {
+public:
+    // Builds the Embree scene (one triangle mesh; quads as two triangles). Throws InputError for
+    // rays = 0, InternalError when Embree cannot start. The scene must outlive this.
+    RaycastRowProvider(const Scene& scene, const RaycastOptions& options);
+    ~RaycastRowProvider() override;
+
+    std::uint32_t size() const override;
+    std::string name() const override { return "raycast"; }
+    // Parallel over rows with std::thread; results in list order on the calling thread.
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+
+    std::uint64_t rays() const;
+    unsigned threads() const;
+    // Rays traced so far (including re-traces past a ray's own patch, see the .cpp).
+    std::uint64_t rays_traced() const;
+
+    // Ray origins sit this far in front of the patch, as a fraction of the patch's longest edge
+    // (relative, never absolute units), but at least kMinOffset of the scene's extent: Embree
+    // works in float, and an offset below a few float ulps of the (centred, unit-scaled)
+    // coordinates would be rounded away.
+    static constexpr double kOriginOffset = 1e-6;
+    static constexpr double kMinOffset = 4e-7;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ffcube

@@ -1,0 +1,49 @@
+// ffcube view: a window in which progressive refinement runs live. Each frame shoots for a time
+// budget, then draws the current radiosity; the camera, display settings and patch inspection
+// work at any moment (radiosity does not depend on the view). Controls: docs/viewer.md.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/scene/scene.hpp"
+#include "ffcube/solver/solver.hpp"
+
+namespace ffcube {
+
+struct ViewerOptions {
+    int width = 1280, height = 800;    // window size, screen coordinates
+    double budget_ms = 20.0;           // solver time per frame (at least one batch of shots)
+    std::uint64_t shots_per_frame = 0; // at most this many shots per frame; 0 = as the budget allows
+    std::optional<double> exposure;    // stops; unset: chosen from the scene (see run_viewer)
+    std::string tone_map = "reinhard"; // "clamp", "reinhard" or "aces"
+    bool ambient = true;               // add Cohen's ambient term ρ_i × ambient to the display
+    bool flat = false;                 // flat patch shading instead of smooth (vertex-interpolated)
+    bool wireframe = false;            // patch outlines
+    bool hide_ui = false;              // start with the Dear ImGui panel hidden
+    bool paused = false;               // start with the solver paused
+
+    // Automation: frames > 0 runs that many frames, then picks (pick: window pixel x, y from the
+    // top left), then writes the screenshot and/or EXR of the final frame, and returns.
+    int frames = 0;
+    std::optional<std::pair<int, int>> pick;
+    std::string screenshot;  // PNG of the window (with the panel unless hidden)
+    std::string exr;         // linear radiosity of the current view (no exposure, tone map or panel)
+};
+
+// InputError naming the option when a value is out of range (before any window opens).
+void validate(const ViewerOptions& options);
+
+// Opens the window (an OpenGL 4.5 core context through GLFW) and runs until it is closed, or for
+// options.frames frames. The provider should have been created before (so that its workers could
+// be forked while this process had no GL context); the solver steps on it from this thread.
+// Exposure by default: 2^exposure × ρ̄ × ambient₀ = 0.5, ambient₀ being Cohen's ambient radiosity
+// before any shot (the emitted power spread over the scene and all its bounces: the average
+// radiosity to expect). Throws GlError when no window can be opened, InputError for bad options,
+// IoError when a file cannot be written.
+void run_viewer(const Scene& scene, HemicubeRowProvider& provider, const SolverOptions& solver_options,
+                const ViewerOptions& options);
+
+}  // namespace ffcube

@@ -1,0 +1,107 @@
+// ffcube view: the interactive viewer of converging radiosity (docs/viewer.md). Thin: the
+// options go to run_viewer in the viewer layer.
+#include <fmt/format.h>
+
+#include <charconv>
+#include <cmath>
+#include <tuple>
+
+#include "cli/commands.hpp"
+#include "cli/common.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/viewer/viewer.hpp"
+
+namespace ffcube::cli {
+namespace {
+
+struct Options {
+    SceneOptions scene;
+    FormFactorOptions ff;
+    SolverOptions solver;
+    ViewerOptions viewer;
+    std::string size = "1280x800", pick;
+    double exposure = NAN;
+    std::uint32_t batch = 0;  // 0: one shooter per worker
+    bool no_ambient = false;
+};
+
+// "A<sep>B" with two non-negative integers, else InputError naming the option.
+std::pair<int, int> parse_pair(const std::string& option, const std::string& text, char sep) {
+    const auto at = text.find(sep);
+    std::pair<int, int> v{-1, -1};
+    const char* end = text.data() + text.size();
+    const bool ok = at != std::string::npos &&
+                    std::from_chars(text.data(), text.data() + at, v.first).ptr == text.data() + at &&
+                    std::from_chars(text.data() + at + 1, end, v.second).ptr == end && v.first >= 0 && v.second >= 0;
+    if (!ok) throw InputError(fmt::format("{} {}: expected two whole numbers as A{}B", option, text, sep));
+    return v;
+}
+
+int run(Options& o) {
+    std::tie(o.viewer.width, o.viewer.height) = parse_pair("--size", o.size, 'x');
+    if (!o.pick.empty()) o.viewer.pick = parse_pair("--pick", o.pick, ',');
+    if (!std::isnan(o.exposure)) o.viewer.exposure = o.exposure;
+    o.viewer.ambient = !o.no_ambient;
+    o.solver.method = SolverMethod::Shoot;
+    if (o.batch) o.solver.batch = o.batch;
+    validate(o.solver);
+    validate(o.viewer);
+    check_output_path("--screenshot", o.viewer.screenshot);
+    check_output_path("--exr", o.viewer.exr);
+    const HemicubeOptions hopt = hemicube_options(o.ff);
+
+    Report report;
+    const Scene scene = load_and_mesh(o.scene, report);
+    // Before the window: with no GL context in this process yet, the provider can fork its
+    // workers (each with its own headless context) instead of sharing one process's llvmpipe.
+    HemicubeRowProvider provider(scene, hopt);
+    info("{} on {} ({}), {} {}, resolution {}", provider.name(), provider.backend(), provider.renderer(),
+         provider.threads(), provider.workers(), provider.resolution());
+    if (!o.batch) o.solver.batch = provider.threads();
+    run_viewer(scene, provider, o.solver, o.viewer);
+    return 0;
+}
+
+}  // namespace
+
+void add_view_command(CLI::App& app, std::function<int()>& action) {
+    auto opts = std::make_shared<Options>();
+    CLI::App* sub = app.add_subcommand("view", "watch progressive radiosity converge in a window (docs/viewer.md)");
+    add_scene_options(*sub, opts->scene);
+    add_formfactor_options(*sub, opts->ff);
+    auto& s = opts->solver;
+    sub->add_option("--tolerance", s.tolerance, "stop shooting when unshot power <= tolerance x emitted power")
+        ->default_val(s.tolerance);
+    sub->add_option("--max-shots", s.max_iterations, "stop after this many shots (0: 1000 per patch, at least 100000)");
+    sub->add_option("--overshoot", s.overshoot, "over-relaxation factor w in [1, 2) (1: classic shooting)")
+        ->default_val(s.overshoot);
+    sub->add_option("--row-cache-mb", s.row_cache_mb, "bound of the cache of shooters' rows, MiB")->default_val(s.row_cache_mb);
+    sub->add_option("--batch", opts->batch, "shooters whose rows are computed together (default: one per worker)");
+    auto& v = opts->viewer;
+    sub->add_option("--size", opts->size, "window size WxH")->default_val(opts->size);
+    sub->add_option("--budget-ms", v.budget_ms, "solver time per frame, milliseconds (adjustable in the window)")
+        ->default_val(v.budget_ms);
+    sub->add_option("--shots-per-frame", v.shots_per_frame, "at most this many shots per frame (0: as the budget allows)");
+    sub->add_option("--exposure", opts->exposure, "exposure in stops (default: from the scene's emitted power)");
+    sub->add_option("--tone-map", v.tone_map, "clamp, reinhard or aces")
+        ->check(CLI::IsMember({"clamp", "reinhard", "aces"}))
+        ->default_val(v.tone_map);
+    sub->add_flag("--no-ambient", opts->no_ambient, "do not add the ambient term to the display");
+    sub->add_flag("--flat", v.flat, "flat patch shading (default: smooth, vertex-interpolated)");
+    sub->add_flag("--wireframe", v.wireframe, "draw patch outlines");
+    sub->add_flag("--hide-ui", v.hide_ui, "start with the panel hidden (H toggles it)");
+    sub->add_flag("--paused", v.paused, "start with the solver paused (Space resumes)");
+    sub->add_option("--frames", v.frames, "run this many frames, then save --screenshot/--exr and exit");
+    sub->add_option("--pick", opts->pick, "after the frames, inspect the patch at window pixel X,Y (from the top left)");
+    sub->add_option("--screenshot", v.screenshot, "after the frames, save the window as PNG");
+    sub->add_option("--exr", v.exr, "after the frames, save the linear radiosity of the view as OpenEXR");
+    sub->callback([opts, &action] {
+        action = [opts] {
+            if (opts->scene.quiet) set_log_level(LogLevel::Quiet);
+            return run(*opts);
+        };
+    });
+}
+
+}  // namespace ffcube::cli

@@ -1,0 +1,325 @@
+#include "ffcube/io/checkpoint.hpp"
+
+#include <fcntl.h>
+#include <fmt/format.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/atomic_file.hpp"
+#include "ffcube/io/checksum.hpp"
+
+namespace ffcube {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::uint32_t kMagic = 0x52434646;  // "FFCR" little-endian
+constexpr std::size_t kHeader = 16, kTrailer = 8;
+constexpr float kMaxValue = 1.001f;  // as the .ffm reader: F entries are fractions, with rounding room
+constexpr const char* kManifestName = "manifest.txt";
+constexpr const char* kLogName = "rows.log";
+constexpr const char* kFormatLine = "ffcube-checkpoint 1";
+
+double now_seconds() {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+std::uint64_t record_size(std::uint32_t nnz) { return kHeader + 8 * std::uint64_t(nnz) + kTrailer; }
+
+std::uint32_t get_u32(const unsigned char* p) {
+    std::uint32_t v;
+    std::memcpy(&v, p, 4);
+    return v;
+}
+
+// The manifest as ordered key/value lines; a value never holds a newline.
+std::vector<std::pair<std::string, std::string>> manifest_fields(const CheckpointManifest& m) {
+    return {{"fingerprint", fmt::format("{:016x}", m.fingerprint)},
+            {"patches", std::to_string(m.patches)},
+            {"meshing", m.meshing},
+            {"max_patch_edge", fmt::format("{:.17g}", m.max_patch_edge)},
+            {"method", m.meta.method},
+            {"resolution", std::to_string(m.meta.resolution)},
+            {"settings", m.meta.settings}};
+}
+
+void fsync_dir(const fs::path& dir) {
+    const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (fd < 0) return;  // best effort: the files themselves are synced
+    ::fsync(fd);
+    ::close(fd);
+}
+
+int open_log(const fs::path& path, int flags) {
+    const int fd = ::open(path.c_str(), flags | O_CLOEXEC, 0644);
+    if (fd < 0) throw IoError(fmt::format("{}: cannot open the checkpoint log: {}", path.string(), std::strerror(errno)));
+    return fd;
+}
+
+void pread_all(int fd, void* data, std::size_t size, std::uint64_t offset, const fs::path& path) {
+    auto* p = static_cast<unsigned char*>(data);
+    while (size > 0) {
+        const ssize_t r = ::pread(fd, p, size, static_cast<off_t>(offset));
+        if (r < 0 && errno == EINTR) continue;
+        if (r <= 0)
+            throw IoError(fmt::format("{}: cannot read the checkpoint log: {}", path.string(),
+                                      r == 0 ? "unexpected end of file" : std::strerror(errno)));
+        p += r;
+        size -= static_cast<std::size_t>(r);
+        offset += static_cast<std::uint64_t>(r);
+    }
+}
+
+// Checks a whole record in buf (record_size(nnz) bytes): checksum, then content. Returns what is
+// wrong, or an empty string.
+std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint32_t n) {
+    const std::size_t body = kHeader + 8 * std::size_t(nnz);
+    std::uint64_t stored;
+    std::memcpy(&stored, buf + body, 8);
+    if (checksum64(buf, body) != stored) return "checksum mismatch";
+    const unsigned char* cols = buf + kHeader;
+    const unsigned char* vals = cols + 4 * std::size_t(nnz);
+    for (std::uint32_t k = 0; k < nnz; ++k) {
+        const std::uint32_t c = get_u32(cols + 4 * k);
+        if (c >= n || (k > 0 && c <= get_u32(cols + 4 * (k - 1)))) return fmt::format("column {} out of order or range", c);
+        float v;
+        std::memcpy(&v, vals + 4 * k, 4);
+        if (!std::isfinite(v) || v < 0.0f || v > kMaxValue) return fmt::format("value {} out of range", v);
+    }
+    return {};
+}
+
+}  // namespace
+
+RowCheckpoint::RowCheckpoint(fs::path dir, std::uint32_t n) : dir_(std::move(dir)), offsets_(n, kMissing) {}
+
+RowCheckpoint::RowCheckpoint(RowCheckpoint&& o) noexcept
+    : dir_(std::move(o.dir_)), fd_(o.fd_), end_(o.end_), offsets_(std::move(o.offsets_)), stored_(o.stored_),
+      warnings_(std::move(o.warnings_)), last_sync_(o.last_sync_), buffer_(std::move(o.buffer_)) {
+    o.fd_ = -1;
+}
+
+RowCheckpoint& RowCheckpoint::operator=(RowCheckpoint&& o) noexcept {
+    if (this != &o) {
+        if (fd_ >= 0) ::close(fd_);
+        dir_ = std::move(o.dir_);
+        fd_ = o.fd_;
+        o.fd_ = -1;
+        end_ = o.end_;
+        offsets_ = std::move(o.offsets_);
+        stored_ = o.stored_;
+        warnings_ = std::move(o.warnings_);
+        last_sync_ = o.last_sync_;
+        buffer_ = std::move(o.buffer_);
+    }
+    return *this;
+}
+
+RowCheckpoint::~RowCheckpoint() {
+    if (fd_ >= 0) {
+        ::fsync(fd_);
+        ::close(fd_);
+    }
+}
+
+std::string RowCheckpoint::log_path() const { return (dir_ / kLogName).string(); }
+
+RowCheckpoint RowCheckpoint::create(const fs::path& dir, const CheckpointManifest& manifest) {
+    std::error_code ec;
+    if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+        throw InputError(fmt::format("--checkpoint {}: exists and is not a directory", dir.string()));
+    if (fs::exists(dir / kManifestName, ec))
+        throw InputError(fmt::format("--checkpoint {}: already holds a checkpoint; add --resume to continue it, or "
+                                     "remove it to start again",
+                                     dir.string()));
+    if (!fs::create_directory(dir, ec) && ec)
+        throw InputError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
+
+    RowCheckpoint c(dir, manifest.patches);
+    // An empty log first, the manifest last: rows are appended only once the manifest exists, so
+    // a log without a manifest (a kill between the two) holds no rows and is emptied here.
+    c.fd_ = open_log(dir / kLogName, O_RDWR | O_CREAT | O_TRUNC);
+    write_file_atomically(dir / kManifestName, [&](std::ostream& out) {
+        out << kFormatLine << '\n';
+        for (const auto& [key, value] : manifest_fields(manifest)) {
+            FFCUBE_CHECK_MSG(value.find('\n') == std::string::npos, "manifest values are single lines");
+            out << key << ' ' << value << '\n';
+        }
+    });
+    ::fsync(c.fd_);
+    fsync_dir(dir);
+    c.last_sync_ = now_seconds();
+    return c;
+}
+
+RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifest& manifest) {
+    const fs::path mpath = dir / kManifestName;
+    std::error_code ec;
+    if (!fs::is_regular_file(mpath, ec))
+        throw InputError(fmt::format("--resume: {} holds no checkpoint (no {}); run without --resume to start one",
+                                     dir.string(), kManifestName));
+    std::ifstream in(mpath, std::ios::binary);
+    std::string line;
+    if (!std::getline(in, line) || line != kFormatLine)
+        throw InputError(fmt::format("{}: not an ffcube checkpoint manifest (expected '{}' on line 1)", mpath.string(),
+                                     kFormatLine));
+    std::map<std::string, std::string> found;
+    while (std::getline(in, line)) {
+        const auto space = line.find(' ');
+        found[line.substr(0, space)] = space == std::string::npos ? "" : line.substr(space + 1);
+    }
+    std::string differences;
+    for (const auto& [key, value] : manifest_fields(manifest)) {
+        const auto it = found.find(key);
+        const std::string old = it == found.end() ? "(missing)" : it->second;
+        if (old != value) differences += fmt::format("\n  {}: checkpoint '{}', this run '{}'", key, old, value);
+    }
+    if (!differences.empty())
+        throw InputError(fmt::format("--resume: the checkpoint in {} was made for different rows; its rows cannot be "
+                                     "reused (remove it, or run the command that made it):{}",
+                                     dir.string(), differences));
+
+    RowCheckpoint c(dir, manifest.patches);
+    const fs::path lpath = dir / kLogName;
+    c.fd_ = open_log(lpath, O_RDWR | O_CREAT);
+    const off_t size = ::lseek(c.fd_, 0, SEEK_END);
+    if (size < 0) throw IoError(fmt::format("{}: cannot seek: {}", lpath.string(), std::strerror(errno)));
+    const auto file_size = static_cast<std::uint64_t>(size);
+    const std::uint32_t n = manifest.patches;
+    std::uint64_t pos = 0;
+    unsigned char header[kHeader];
+    while (pos < file_size) {
+        if (file_size - pos < kHeader) {
+            c.warnings_.push_back(fmt::format("{}: the last record is torn ({} bytes at offset {}); it is ignored",
+                                              lpath.string(), file_size - pos, pos));
+            break;
+        }
+        pread_all(c.fd_, header, kHeader, pos, lpath);
+        const std::uint32_t magic = get_u32(header), row = get_u32(header + 4), nnz = get_u32(header + 8);
+        if (magic != kMagic || row >= n || nnz > n || get_u32(header + 12) != 0) {
+            c.warnings_.push_back(fmt::format("{}: corrupted record at offset {} (bad header); it and the {} bytes after "
+                                              "it are dropped and their rows computed again",
+                                              lpath.string(), pos, file_size - pos));
+            break;
+        }
+        const std::uint64_t rsize = record_size(nnz);
+        if (file_size - pos < rsize) {
+            c.warnings_.push_back(fmt::format("{}: the last record (row {}) is torn ({} of {} bytes); it is ignored",
+                                              lpath.string(), row, file_size - pos, rsize));
+            break;
+        }
+        c.buffer_.resize(rsize);
+        pread_all(c.fd_, c.buffer_.data(), rsize, pos, lpath);
+        const std::string wrong = check_record(c.buffer_.data(), nnz, n);
+        if (!wrong.empty()) {
+            c.warnings_.push_back(fmt::format("{}: corrupted record at offset {} (row {}: {}); it and the {} bytes after "
+                                              "it are dropped and their rows computed again",
+                                              lpath.string(), pos, row, wrong, file_size - pos));
+            break;
+        }
+        if (c.offsets_[row] == kMissing) {
+            c.offsets_[row] = pos;
+            ++c.stored_;
+        }
+        pos += rsize;
+    }
+    if (pos < file_size) {
+        if (::ftruncate(c.fd_, static_cast<off_t>(pos)) != 0 || ::fsync(c.fd_) != 0)
+            throw IoError(fmt::format("{}: cannot cut off the damaged tail: {}", lpath.string(), std::strerror(errno)));
+    }
+    c.end_ = pos;
+    // Appends go to the end; O_APPEND is not needed with one writer and an explicit seek.
+    if (::lseek(c.fd_, static_cast<off_t>(pos), SEEK_SET) < 0)
+        throw IoError(fmt::format("{}: cannot seek: {}", lpath.string(), std::strerror(errno)));
+    c.last_sync_ = now_seconds();
+    return c;
+}
+
+std::vector<std::uint32_t> RowCheckpoint::missing() const {
+    std::vector<std::uint32_t> rows;
+    for (std::uint32_t i = 0; i < size(); ++i)
+        if (!has(i)) rows.push_back(i);
+    return rows;
+}
+
+void RowCheckpoint::append(std::uint32_t i, const SparseRow& row) {
+    FFCUBE_CHECK(i < size() && !has(i) && row.col.size() == row.val.size());
+    const auto nnz = static_cast<std::uint32_t>(row.col.size());
+    const std::uint64_t rsize = record_size(nnz);
+    buffer_.resize(rsize);
+    unsigned char* p = buffer_.data();
+    const std::uint32_t header[4] = {kMagic, i, nnz, 0};
+    std::memcpy(p, header, kHeader);
+    std::memcpy(p + kHeader, row.col.data(), 4 * std::size_t(nnz));
+    for (std::uint32_t k = 0; k < nnz; ++k) {
+        const float v = static_cast<float>(row.val[k]);  // exactly what CsrMatrix::append_row stores
+        std::memcpy(p + kHeader + 4 * std::size_t(nnz) + 4 * k, &v, 4);
+    }
+    const std::uint64_t sum = checksum64(p, rsize - kTrailer);
+    std::memcpy(p + rsize - kTrailer, &sum, 8);
+    std::size_t done = 0;
+    while (done < rsize) {
+        const ssize_t w = ::write(fd_, p + done, rsize - done);
+        if (w < 0 && errno == EINTR) continue;
+        if (w < 0) throw IoError(fmt::format("{}: cannot append row {}: {}", log_path(), i, std::strerror(errno)));
+        done += static_cast<std::size_t>(w);
+    }
+    offsets_[i] = end_;
+    end_ += rsize;
+    ++stored_;
+    maybe_sync();
+}
+
+void RowCheckpoint::maybe_sync() {
+    const double t = now_seconds();
+    if (t - last_sync_ >= 1.0) sync();
+}
+
+void RowCheckpoint::sync() {
+    if (::fsync(fd_) != 0) throw IoError(fmt::format("{}: fsync failed: {}", log_path(), std::strerror(errno)));
+    last_sync_ = now_seconds();
+}
+
+CsrMatrix RowCheckpoint::assemble() const {
+    FFCUBE_CHECK_MSG(stored_ == size(), "assemble() needs every row");
+    const fs::path lpath = log_path();
+    const std::uint32_t n = size();
+    // Two passes: the headers give every row's length, so the arrays are allocated once at their
+    // exact size (a growing vector would need up to 1.5 times as much at its last reallocation).
+    std::vector<std::uint64_t> row_ptr(std::size_t(n) + 1, 0);
+    unsigned char header[kHeader];
+    auto changed = [&](std::uint32_t i, const std::string& what) {
+        return InputError(fmt::format("{}: the record of row {} at offset {} changed on disk while in use ({})",
+                                      lpath.string(), i, offsets_[i], what));
+    };
+    for (std::uint32_t i = 0; i < n; ++i) {
+        pread_all(fd_, header, kHeader, offsets_[i], lpath);
+        const std::uint32_t nnz = get_u32(header + 8);
+        if (get_u32(header) != kMagic || get_u32(header + 4) != i || nnz > n) throw changed(i, "bad header");
+        row_ptr[i + 1] = row_ptr[i] + nnz;
+    }
+    std::vector<std::uint32_t> col(row_ptr[n]);
+    std::vector<float> val(row_ptr[n]);
+    std::vector<unsigned char> buf;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const auto nnz = static_cast<std::uint32_t>(row_ptr[i + 1] - row_ptr[i]);
+        buf.resize(record_size(nnz));
+        pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
+        if (get_u32(buf.data() + 8) != nnz) throw changed(i, "length");
+        const std::string wrong = check_record(buf.data(), nnz, n);
+        if (!wrong.empty()) throw changed(i, wrong);
+        std::memcpy(col.data() + row_ptr[i], buf.data() + kHeader, 4 * std::size_t(nnz));
+        std::memcpy(val.data() + row_ptr[i], buf.data() + kHeader + 4 * std::size_t(nnz), 4 * std::size_t(nnz));
+    }
+    return CsrMatrix::from_arrays(n, std::move(row_ptr), std::move(col), std::move(val));
+}
+
+}  // namespace ffcube

@@ -1,0 +1,260 @@
+#include "ffcube/raycast/raycast_provider.hpp"
+
+#include <embree3/rtcore.h>
+#include <glm/geometric.hpp>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <thread>
+#include <vector>
+
+#include "ffcube/core/error.hpp"
+
+namespace ffcube {
+namespace {
+
+// splitmix64: a full-period 64-bit generator that passes BigCrush; seeded per row, so a row's
+// numbers depend on (seed, row) only.
+struct Rng {
+    std::uint64_t s;
+    std::uint64_t next() {
+        std::uint64_t z = (s += 0x9e3779b97f4a7c15ull);
+        z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+        z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+        return z ^ (z >> 31);
+    }
+    // Uniform in [0, 1) with 53 random bits.
+    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
+};
+
+Rng row_rng(std::uint64_t seed, std::uint32_t row) {
+    Rng r{seed ^ 0x6a09e667f3bcc909ull};
+    r.s ^= r.next() + 0x9e3779b97f4a7c15ull * (static_cast<std::uint64_t>(row) + 1);
+    r.next();
+    return r;
+}
+
+// Orthonormal basis with n as third axis (Duff et al. 2017, branchless).
+void basis(const Vec3& n, Vec3& t, Vec3& b) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double c = n.x * n.y * a;
+    t = Vec3(1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = Vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+struct EmbreeHandles {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    ~EmbreeHandles() {
+        if (scene) rtcReleaseScene(scene);
+        if (device) rtcReleaseDevice(device);
+    }
+};
+
+}  // namespace
+
+struct RaycastRowProvider::Impl {
+    const Scene& scene;
+    RaycastOptions opt;
+    unsigned threads = 1;
+    EmbreeHandles embree;
+    std::vector<std::uint32_t> tri_patch;  // Embree primID → patch index
+    Vec3 center{0.0};                      // scene → Embree coordinates: (p − center) · scale
+    double scale = 1.0;
+    std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
+    std::atomic<std::uint64_t> traced{0};
+
+    Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
+        if (opt.rays == 0) throw InputError("raycast: the number of rays per row must be at least 1");
+        threads = opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency());
+        if (scene.size() == 0) return;
+        // Centre and scale the scene to unit size before converting to float: a scene offset by
+        // 1e5 or scaled by 1e-4 then keeps float's full relative precision.
+        center = 0.5 * (scene.bbox_min + scene.bbox_max);
+        const double ext = scene.extent();
+        scale = ext > 0 ? 1.0 / ext : 1.0;
+
+        embree.device = rtcNewDevice(nullptr);
+        if (!embree.device)
+            throw InternalError(fmt::format("raycast: Embree device could not be created (error {})",
+                                            static_cast<int>(rtcGetDeviceError(nullptr))));
+        embree.scene = rtcNewScene(embree.device);
+        rtcSetSceneFlags(embree.scene, RTC_SCENE_FLAG_ROBUST);
+        rtcSetSceneBuildQuality(embree.scene, RTC_BUILD_QUALITY_HIGH);
+        RTCGeometry geom = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                               3 * sizeof(float), scene.positions.size()));
+        for (std::size_t k = 0; k < scene.positions.size(); ++k) {
+            const Vec3 p = (scene.positions[k] - center) * scale;
+            vb[3 * k + 0] = static_cast<float>(p.x);
+            vb[3 * k + 1] = static_cast<float>(p.y);
+            vb[3 * k + 2] = static_cast<float>(p.z);
+        }
+        std::size_t ntri = 0;
+        for (const Patch& p : scene.patches) ntri += p.count == 4 ? 2 : 1;
+        auto* ib = static_cast<unsigned*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), ntri));
+        tri_patch.reserve(ntri);
+        parallelogram.resize(scene.size());
+        std::size_t t = 0;
+        for (std::uint32_t i = 0; i < scene.size(); ++i) {
+            const Patch& p = scene.patches[i];
+            ib[3 * t + 0] = p.v[0], ib[3 * t + 1] = p.v[1], ib[3 * t + 2] = p.v[2], ++t;
+            tri_patch.push_back(i);
+            if (p.count == 4) {
+                ib[3 * t + 0] = p.v[0], ib[3 * t + 1] = p.v[2], ib[3 * t + 2] = p.v[3], ++t;
+                tri_patch.push_back(i);
+                const auto c = scene.patch_vertices(i);
+                parallelogram[i] = glm::length(c[0] + c[2] - c[1] - c[3]) <= 1e-12 * p.size;
+            }
+        }
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(embree.scene, geom);
+        rtcReleaseGeometry(geom);
+        rtcCommitScene(embree.scene);
+        const RTCError err = rtcGetDeviceError(embree.device);
+        if (err != RTC_ERROR_NONE)
+            throw InternalError(fmt::format("raycast: Embree scene build failed (error {})", static_cast<int>(err)));
+    }
+
+    // Whether a hit on patch j, for a ray leaving patch i, is a float artefact to pass through:
+    // a ray leaving i's front can hit neither i nor a patch in i's plane.
+    bool pass_through(std::uint32_t i, std::uint32_t j) const {
+        if (i == j) return true;
+        const Patch& a = scene.patches[i];
+        const Patch& b = scene.patches[j];
+        return glm::dot(a.normal, b.normal) > 1.0 - 1e-12 &&
+               std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
+    }
+
+    // Row i into out; acc (size n, all zero) and touched (empty) are the caller's scratch and are
+    // left as they were found.
+    void row(std::uint32_t i, SparseRow& out, std::vector<double>& acc, std::vector<std::uint32_t>& touched) {
+        out.clear();
+        const Patch& p = scene.patches[i];
+        const auto c = scene.patch_vertices(i);
+        Rng rng = row_rng(opt.seed, i);
+        const std::uint64_t N = opt.rays;
+        const std::uint64_t m = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::sqrt(static_cast<double>(N))));
+        const std::uint64_t strata = m * m;
+        Vec3 tu, tv;
+        basis(p.normal, tu, tv);
+        const double offset = std::max(kOriginOffset * p.size * scale, kMinOffset);
+        const Vec3 nrm = p.normal;
+        double wsum = 0.0;
+        std::uint64_t traced_here = 0;
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        for (std::uint64_t k = 0; k < N; ++k) {
+            const std::uint64_t s = k % strata;
+            const double u = (static_cast<double>(s % m) + rng.uniform()) / static_cast<double>(m);
+            const double v = (static_cast<double>(s / m) + rng.uniform()) / static_cast<double>(m);
+            Vec3 x;
+            double w = 1.0;
+            if (p.count == 3) {
+                const double su = std::sqrt(u);  // area-uniform map of the unit square onto a triangle
+                x = (1.0 - su) * c[0] + su * (1.0 - v) * c[1] + su * v * c[2];
+            } else {
+                x = (1 - u) * (1 - v) * c[0] + u * (1 - v) * c[1] + u * v * c[2] + (1 - u) * v * c[3];
+                if (!parallelogram[i]) {
+                    const Vec3 du = (1 - v) * (c[1] - c[0]) + v * (c[2] - c[3]);
+                    const Vec3 dv = (1 - u) * (c[3] - c[0]) + u * (c[2] - c[1]);
+                    w = glm::length(glm::cross(du, dv));
+                }
+            }
+            wsum += w;
+            const double r1 = rng.uniform(), r2 = rng.uniform();
+            const double rad = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
+            const Vec3 d = rad * std::cos(phi) * tu + rad * std::sin(phi) * tv + std::sqrt(std::max(0.0, 1.0 - r1)) * nrm;
+            const Vec3 o = (x - center) * scale + offset * nrm;
+
+            RTCRayHit rh;
+            rh.ray.org_x = static_cast<float>(o.x);
+            rh.ray.org_y = static_cast<float>(o.y);
+            rh.ray.org_z = static_cast<float>(o.z);
+            rh.ray.dir_x = static_cast<float>(d.x);
+            rh.ray.dir_y = static_cast<float>(d.y);
+            rh.ray.dir_z = static_cast<float>(d.z);
+            rh.ray.tnear = 0.0f;
+            rh.ray.time = 0.0f;
+            rh.ray.mask = 0xFFFFFFFFu;
+            rh.ray.id = 0;
+            rh.ray.flags = 0;
+            // A hit on the ray's own patch (or its plane) can only be float rounding: trace on past
+            // it, a few times at most (then the ray is dropped, as if absorbed).
+            for (int attempt = 0; attempt < 4; ++attempt) {
+                rh.ray.tfar = std::numeric_limits<float>::infinity();
+                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+                rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+                rtcIntersect1(embree.scene, &ctx, &rh);
+                ++traced_here;
+                if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;  // left the scene
+                const std::uint32_t j = tri_patch[rh.hit.primID];
+                if (pass_through(i, j)) {
+                    rh.ray.tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
+                    continue;
+                }
+                if (glm::dot(d, scene.patches[j].normal) < 0.0) {  // front face: received
+                    if (acc[j] == 0.0) touched.push_back(j);
+                    acc[j] += w;
+                }
+                break;  // front or back, the ray ends here
+            }
+        }
+        traced.fetch_add(traced_here, std::memory_order_relaxed);
+        std::sort(touched.begin(), touched.end());
+        for (std::uint32_t j : touched) {
+            out.col.push_back(j);
+            out.val.push_back(acc[j] / wsum);
+            acc[j] = 0.0;
+        }
+        touched.clear();
+    }
+};
+
+RaycastRowProvider::RaycastRowProvider(const Scene& scene, const RaycastOptions& options)
+    : impl_(std::make_unique<Impl>(scene, options)) {}
+
+RaycastRowProvider::~RaycastRowProvider() = default;
+
+std::uint32_t RaycastRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene.size()); }
+std::uint64_t RaycastRowProvider::rays() const { return impl_->opt.rays; }
+unsigned RaycastRowProvider::threads() const { return impl_->threads; }
+std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.load(); }
+
+void RaycastRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
+    for (std::uint32_t r : rows)
+        if (r >= size()) throw InternalError(fmt::format("raycast: row {} out of range (n = {})", r, size()));
+    Impl& im = *impl_;
+    const std::size_t n = im.scene.size();
+    const unsigned T = im.threads;
+    // Rows are computed in blocks so that memory stays bounded; each block's rows go to the sink
+    // in list order once the block is done.
+    const std::size_t block = std::max<std::size_t>(256, 32 * static_cast<std::size_t>(T));
+    std::vector<SparseRow> out(std::min(block, rows.size()));
+    std::vector<std::vector<double>> acc(T, std::vector<double>(n, 0.0));
+    std::vector<std::vector<std::uint32_t>> touched(T);
+    for (std::size_t start = 0; start < rows.size(); start += block) {
+        const std::size_t count = std::min(block, rows.size() - start);
+        std::atomic<std::size_t> next{0};
+        auto work = [&](unsigned t) {
+            for (std::size_t k = next.fetch_add(1); k < count; k = next.fetch_add(1))
+                im.row(rows[start + k], out[k], acc[t], touched[t]);
+        };
+        const unsigned used = static_cast<unsigned>(std::min<std::size_t>(T, count));
+        if (used <= 1) {
+            work(0);
+        } else {
+            std::vector<std::jthread> pool;
+            for (unsigned t = 0; t < used; ++t) pool.emplace_back(work, t);
+        }
+        for (std::size_t k = 0; k < count; ++k) sink(rows[start + k], out[k]);
+    }
+}
+
+}  // namespace ffcube

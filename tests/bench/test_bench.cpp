@@ -1,0 +1,284 @@
+// The benchmark: its exact values against independent references, a tiny run through the
+// library end to end, and the ray caster against the hemicube on an occluded scene.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+#include <unistd.h>
+
+#include "ffcube/bench/bench.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/geometry/analytic.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/hemicube/layout.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+
+namespace ffcube {
+namespace {
+
+const BenchCase& find_case(const std::vector<BenchCase>& cs, const std::string& name) {
+    for (const BenchCase& c : cs)
+        if (c.name == name) return c;
+    throw std::runtime_error("no bench case " + name);
+}
+
+std::vector<double> object_areas(const BenchCase& c) {
+    std::vector<double> a(c.exact.size(), 0.0);
+    std::vector<std::string> names;
+    for (const BenchPolygon& p : c.polygons) {
+        auto it = std::find(names.begin(), names.end(), p.object);
+        if (it == names.end()) {
+            names.push_back(p.object);
+            it = names.end() - 1;
+        }
+        a[static_cast<std::size_t>(it - names.begin())] += polygon_area(p.vertices);
+    }
+    return a;
+}
+
+// Closed forms (C-11, C-12, C-14) used by the cases agree with the contour integral, which is
+// computed independently of them (Stokes, with its own singularity handling): to 1e-9
+// relative, far below any error the bench measures (1e-5 and up).
+TEST(BenchCases, ClosedFormsAgreeWithTheContourIntegral) {
+    for (const BenchCase& c : bench_cases(false)) {
+        if (c.group == "occlusion") continue;  // objects do not all see each other: see below
+        for (std::size_t a = 0; a < c.exact.size(); ++a)
+            for (std::size_t b = 0; b < c.exact.size(); ++b) {
+                if (a == b) continue;
+                const double ref = ff_polygon_polygon(c.polygons[a].vertices, c.polygons[b].vertices);
+                EXPECT_NEAR(c.exact[a][b], ref, 1e-9 * std::max(ref, 1e-12)) << c.name << " " << a << "→" << b;
+            }
+    }
+}
+
+// Every case's exact matrix obeys reciprocity, and enclosure rows sum to 1 (summation rule).
+TEST(BenchCases, ExactValuesAreReciprocalAndEnclosuresSumToOne) {
+    for (const BenchCase& c : bench_cases(false)) {
+        const auto area = object_areas(c);
+        for (std::size_t a = 0; a < c.exact.size(); ++a) {
+            double row = 0;
+            for (std::size_t b = 0; b < c.exact.size(); ++b) {
+                row += c.exact[a][b];
+                EXPECT_NEAR(area[a] * c.exact[a][b], area[b] * c.exact[b][a],
+                            1e-9 * std::max(area[a] * c.exact[a][b], 1e-300))
+                    << c.name;
+            }
+            if (c.group == "enclosure") {
+                EXPECT_NEAR(row, 1.0, 1e-9) << c.name << " row " << a;
+            }
+        }
+    }
+}
+
+// The 48-gons stand in for disks: inscribed polygons of area ratio (n/2π) sin(2π/n) = 0.99715;
+// their factor differs from the disks' (C-41) by about that relative amount, allowed 1%.
+TEST(BenchCases, PolygonDisksAreCloseToCoaxialDisks) {
+    const auto cs = bench_cases(false);
+    const BenchCase& d = find_case(cs, "disks");
+    EXPECT_NEAR(d.exact[0][1], ff_coaxial_disks(1, 1, 1), 0.01 * ff_coaxial_disks(1, 1, 1));
+    // The 90° wedge is the C-14 configuration.
+    EXPECT_NEAR(find_case(cs, "edge_90").exact[0][1], ff_perpendicular_rectangles_common_edge(1, 1, 1), 1e-9);
+}
+
+// Occluded cases' exact values (from symmetry arguments) against the ray caster, an independent
+// method that knows nothing of the argument: 5σ with the binomial bound σ² ≤ max_i w_i G(1−G)/N
+// (tests/raycast explains it).
+TEST(BenchCases, OccludedExactValuesAgreeWithRayCasting) {
+    const std::uint64_t rays = 20000;
+    for (BenchCase c : bench_cases(false)) {
+        if (c.group != "occlusion") continue;
+        c.max_patch_edge *= 2;  // about 36 patches per large object: enough for a check, and fast
+        const Scene scene = build_bench_scene(c);
+        RaycastOptions o;
+        o.rays = rays;
+        o.threads = 2;
+        RaycastRowProvider provider(scene, o);
+        const auto G = object_form_factors(compute_all_rows(provider), scene);
+        std::vector<double> area(scene.objects.size(), 0), wmax(scene.objects.size(), 0);
+        for (const Patch& p : scene.patches) area[p.object] += p.area;
+        for (const Patch& p : scene.patches) wmax[p.object] = std::max(wmax[p.object], p.area / area[p.object]);
+        for (std::size_t a = 0; a < c.exact.size(); ++a)
+            for (std::size_t b = 0; b < c.exact.size(); ++b) {
+                const double x = c.exact[a][b];
+                const double tol = 5 * std::sqrt(wmax[a] * x * (1 - x) / static_cast<double>(rays));
+                EXPECT_NEAR(G[a][b], x, std::max(tol, 1e-12)) << c.name << " " << a << "→" << b;
+            }
+    }
+}
+
+// Pixel discretisation σ of object-to-object values from the actual item buffers (the method of
+// tests/gl/test_hemicube_rows.cpp): a pixel cut by an outline counts wholly or not at all, an
+// error roughly uniform in ±ΔF/2 (variance ΔF²/12) under the seeded rotation; both pixels of
+// each neighbouring pair with different objects are counted (conservative). σ[a][b].
+std::vector<std::vector<double>> pixel_sigma(HemicubeRowProvider& provider, const Scene& scene, int resolution) {
+    const std::size_t m = scene.objects.size();
+    std::vector<std::vector<double>> var(m, std::vector<double>(m, 0.0));
+    std::vector<double> area(m, 0.0);
+    for (const Patch& p : scene.patches) area[p.object] += p.area;
+    const HemicubeLayout layout(resolution);
+    const auto& dff = layout.delta_ff();
+    const int W = layout.atlas_width();
+    auto object_of = [&](std::uint32_t id) -> int {
+        return id == 0 || id == 0xFFFFFFFFu ? -1 : static_cast<int>(scene.patches[id - 1].object);
+    };
+    for (std::uint32_t i = 0; i < scene.size(); ++i) {
+        const auto ids = provider.item_buffer(i);
+        std::vector<double> vi(m, 0.0);
+        for (const FaceSpec& f : layout.faces()) {
+            const auto& vp = f.viewport;
+            for (int y = vp.y; y < vp.y + vp.height; ++y)
+                for (int x = vp.x; x < vp.x + vp.width; ++x) {
+                    const std::size_t k = static_cast<std::size_t>(y) * W + x;
+                    const std::size_t nb[2] = {x + 1 < vp.x + vp.width ? k + 1 : k, y + 1 < vp.y + vp.height ? k + W : k};
+                    for (std::size_t kk : nb) {
+                        const int o = object_of(ids[k]), o2 = object_of(ids[kk]);
+                        if (o == o2) continue;
+                        for (int obj : {o, o2})
+                            if (obj >= 0) vi[static_cast<std::size_t>(obj)] += (dff[k] * dff[k] + dff[kk] * dff[kk]) / 12.0;
+                    }
+                }
+        }
+        const Patch& p = scene.patches[i];
+        const double w = p.area / area[p.object];
+        for (std::size_t b = 0; b < m; ++b) var[p.object][b] += w * w * vi[b];
+    }
+    for (auto& row : var)
+        for (double& v : row) v = std::sqrt(v);
+    return var;
+}
+
+// Meshing part of the hemicube's error: it measures point-to-area factors from patch centres,
+// so its object value converges to the midpoint rule Σ A_i F(c_i → receiver)/A, computed here
+// exactly with Lambert's formula (no occlusion).
+double midpoint_rule(const Scene& scene, std::size_t sender, const std::vector<Vec3>& receiver) {
+    double num = 0, den = 0;
+    for (const Patch& p : scene.patches) {
+        if (p.object != sender) continue;
+        num += p.area * ff_point_polygon(p.centroid, p.normal, receiver);
+        den += p.area;
+    }
+    return num / den;
+}
+
+// A bench run on one tiny case through the library: CSV header and one line per (case,
+// setting), finite errors, and the hemicube's error on parallel plates within a derived bound:
+// |meshing error| (exact, from the midpoint rule) + 6σ of the pixel error (from the item buffers).
+TEST(BenchRun, TinyRunWritesCsvAndHemicubeErrorIsBounded) {
+    const auto cs = bench_cases(true);
+    const std::vector<BenchCase> one = {find_case(cs, "parallel_d1")};
+    BenchOptions o;
+    o.resolutions = {32};
+    o.rays = {256};
+    o.threads = 2;
+    const auto results = run_bench(one, o);
+    ASSERT_EQ(results.size(), 2u);
+    const auto dir = std::filesystem::temp_directory_path() / ("ffcube_bench_test_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir);
+    write_bench_csv(dir / "results.csv", results);
+    write_bench_json(dir / "results.json", results, o);
+    write_bench_plot_svg(dir / "error_vs_time.svg", results);
+    write_bench_plot_png(dir / "error_vs_time.png", results);
+    std::ifstream in(dir / "results.csv");
+    std::string line;
+    std::getline(in, line);
+    EXPECT_EQ(line.rfind("case,group,method,setting,seconds,max_abs_error,mean_abs_error,max_rel_error,row_sum_dev,"
+                         "reciprocity_dev",
+                         0),
+              0u);
+    std::vector<std::string> lines;
+    while (std::getline(in, line)) lines.push_back(line);
+    ASSERT_EQ(lines.size(), 2u);
+    EXPECT_EQ(lines[0].rfind("parallel_d1,basic,hemicube,N=32,", 0), 0u);
+    EXPECT_EQ(lines[1].rfind("parallel_d1,basic,raycast,rays=256,", 0), 0u);
+    for (const BenchResult& r : results) {
+        EXPECT_TRUE(std::isfinite(r.errors.max_abs_error) && std::isfinite(r.errors.max_rel_error) &&
+                    std::isfinite(r.errors.row_sum_dev) && std::isfinite(r.errors.reciprocity_dev));
+        EXPECT_GE(r.seconds, 0.0);
+    }
+    // PNG signature and SVG root.
+    std::ifstream png(dir / "error_vs_time.png", std::ios::binary);
+    char sig[8] = {};
+    png.read(sig, 8);
+    EXPECT_EQ(std::string(sig + 1, 3), "PNG");
+    EXPECT_NE(bench_plot_svg(results).find("<svg"), std::string::npos);
+    std::filesystem::remove_all(dir);
+
+    // The bound, recomputed on the same scene and settings.
+    const Scene scene = build_bench_scene(one[0]);
+    HemicubeOptions h;
+    h.resolution = 32;
+    h.threads = 2;
+    HemicubeRowProvider provider(scene, h);
+    const auto G = object_form_factors(compute_all_rows(provider), scene);
+    const auto sigma = pixel_sigma(provider, scene, 32);
+    const double exact = one[0].exact[0][1];
+    const double mesh = std::abs(midpoint_rule(scene, 0, one[0].polygons[1].vertices) - exact);
+    EXPECT_NEAR(G[0][1], exact, mesh + 6 * sigma[0][1]);
+    EXPECT_LE(results[0].errors.max_abs_error, mesh + 6 * std::max(sigma[0][1], sigma[1][0]));
+}
+
+TEST(BenchRun, UnknownSuiteAndBadSettingsAreInputErrors) {
+    const auto cs = bench_cases(true);
+    BenchOptions o;
+    o.suite = "nonsense";
+    EXPECT_THROW(run_bench(cs, o), InputError);
+    o.suite = "basic";
+    o.resolutions = {33};
+    EXPECT_THROW(run_bench(cs, o), InputError);
+    o.resolutions = {};
+    o.rays = {0};
+    EXPECT_THROW(run_bench(cs, o), InputError);
+}
+
+// Where no formula exists: the ray caster checks the hemicube on a scene with an off-centre
+// blocker. Tolerance = 5σ (ray statistics, binomial bound) + 6σ (pixels, from the item buffers)
+// + the meshing term. The meshing term is bounded by twice the midpoint rule's error on the same
+// sender/receiver pair without the blocker: the shadow adds kinks to the integrand, which the
+// factor 2 allows for (not derived; the test would flag errors several times larger).
+TEST(BenchRun, RaycastAgreesWithHemicubeOnAnOccludedScene) {
+    BenchCase c;
+    c.name = "offcentre_blocker";
+    auto rect = [](double x0, double x1, double y0, double y1, double z, bool up) {
+        const Vec3 a(x0, y0, z), b(x1, y0, z), cc(x1, y1, z), d(x0, y1, z);
+        return up ? std::vector<Vec3>{a, b, cc, d} : std::vector<Vec3>{a, d, cc, b};
+    };
+    c.polygons = {{"sender", rect(0, 1, 0, 1, 0, true)},
+                  {"receiver", rect(0, 1, 0, 1, 1, false)},
+                  {"blocker", rect(0.3, 0.8, 0.2, 0.6, 0.4, false)}};
+    c.max_patch_edge = 0.1;
+    const Scene scene = build_bench_scene(c);
+    const int N = 128;
+    HemicubeOptions h;
+    h.resolution = N;
+    h.threads = 2;
+    HemicubeRowProvider hemi(scene, h);
+    const auto Gh = object_form_factors(compute_all_rows(hemi), scene);
+    const auto sigma = pixel_sigma(hemi, scene, N);
+    const std::uint64_t rays = 4000;
+    RaycastOptions ro;
+    ro.rays = rays;
+    ro.threads = 2;
+    RaycastRowProvider ray(scene, ro);
+    const auto Gr = object_form_factors(compute_all_rows(ray), scene);
+    double wmax = 0, area = 0;
+    for (const Patch& p : scene.patches)
+        if (p.object == 0) area += p.area;
+    for (const Patch& p : scene.patches)
+        if (p.object == 0) wmax = std::max(wmax, p.area / area);
+    for (std::size_t b : {std::size_t{1}, std::size_t{2}}) {
+        const double x = Gr[0][b];
+        const double mesh =
+            2 * std::abs(midpoint_rule(scene, 0, c.polygons[b].vertices) - ff_polygon_polygon(c.polygons[0].vertices, c.polygons[b].vertices));
+        const double tol = 5 * std::sqrt(wmax * x * (1 - x) / static_cast<double>(rays)) + 6 * sigma[0][b] + mesh;
+        EXPECT_NEAR(Gh[0][b], Gr[0][b], tol) << "receiver " << b;
+    }
+    EXPECT_GT(Gr[0][2], 0.05);  // the blocker is seen
+    EXPECT_LT(Gr[0][1], ff_parallel_rectangles(1, 1, 1) - 0.05);  // and casts a shadow
+}
+
+}  // namespace
+}  // namespace ffcube

@@ -1,0 +1,123 @@
+// Resumable precomputation end to end: `ffcube formfactors ... --checkpoint DIR` killed with
+// SIGKILL part-way, then the same command with --resume, writes a .ffm byte-identical to an
+// uninterrupted run; a resume with different settings is refused.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <thread>
+#include <vector>
+
+#include "cli/cli_util.hpp"
+
+namespace fs = std::filesystem;
+
+namespace ffcube {
+namespace {
+
+using test::run_ffcube;
+using test::TempDir;
+
+// The job: big enough that it is still running when killed (2000 hemicubes at 64² on one worker
+// take about a second on llvmpipe, and the kill comes after a few rows), small enough for a test.
+std::string job(const TempDir& dir, const std::string& output, const std::string& extra = "") {
+    return "formfactors " + test::example("cube.obj") + " --patches 2000 --resolution 64 --threads 1 -q -o " +
+           (dir / output) + " " + extra;
+}
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> v;
+    std::size_t b = 0;
+    while (b < s.size()) {
+        const std::size_t e = s.find(' ', b);
+        const std::size_t end = e == std::string::npos ? s.size() : e;
+        if (end > b) v.push_back(s.substr(b, end - b));
+        b = end + 1;
+    }
+    return v;
+}
+
+TEST(ResumeCli, KilledRunResumesToByteIdenticalMatrix) {
+    TempDir dir;
+    const std::string ck = dir / "ck";
+    const std::string log = dir / "rows.log";
+
+    // Start the checkpointed run and kill -9 it once some rows (but not all) are in the log. A
+    // row record at 64² is about 10 KB; 64 KB of log is a handful of rows out of 2000.
+    const std::vector<std::string> args = split(job(dir, "killed.ffm", "--checkpoint " + ck));
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        std::vector<char*> argv{const_cast<char*>(FFCUBE_BINARY)};
+        for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        execv(FFCUBE_BINARY, argv.data());
+        _exit(127);
+    }
+    const fs::path rows = fs::path(ck) / "rows.log";
+    bool exited = false;
+    int status = 0;
+    for (;;) {
+        std::error_code ec;
+        if (fs::file_size(rows, ec) >= 64 * 1024 && !ec) break;
+        if (waitpid(pid, &status, WNOHANG) == pid) {
+            exited = true;
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_FALSE(exited) << "the run ended (status " << status << ") before it could be killed";
+    ::kill(pid, SIGKILL);
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    // Worker processes die with their parent's pipes; the log no longer grows once the writer (the
+    // parent) is gone.
+    EXPECT_FALSE(fs::exists(dir / "killed.ffm"));  // atomic output: nothing half-written
+    const auto killed_size = fs::file_size(rows);
+
+    // A resume with other settings is refused, naming the setting, and writes nothing.
+    const auto bad = run_ffcube(job(dir, "other.ffm", "--checkpoint " + ck + " --resume --no-rotate"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("settings: checkpoint 'rotate=1"), std::string::npos) << bad.output;
+    EXPECT_FALSE(fs::exists(dir / "other.ffm"));
+    // Starting a new checkpoint over it is refused too: finished rows are never thrown away.
+    const auto again = run_ffcube(job(dir, "other.ffm", "--checkpoint " + ck));
+    EXPECT_EQ(again.code, 2) << again.output;
+    EXPECT_NE(again.output.find("already holds a checkpoint"), std::string::npos) << again.output;
+
+    const auto resumed = run_ffcube(job(dir, "resumed.ffm", "--checkpoint " + ck + " --resume --report " + (dir / "r.json")));
+    ASSERT_EQ(resumed.code, 0) << resumed.output;
+    const std::string report = test::read_text(dir / "r.json");
+    // At least the rows whose records were whole when killed were reused (a torn last record is not).
+    const auto pos = report.find("\"rows_reused\":");
+    ASSERT_NE(pos, std::string::npos) << report;
+    const long reused = std::stol(report.substr(pos + 14));
+    EXPECT_GT(reused, 0);
+    EXPECT_LT(reused, 2000);
+    EXPECT_GE(fs::file_size(rows), killed_size);
+
+    const auto plain = run_ffcube(job(dir, "plain.ffm"));
+    ASSERT_EQ(plain.code, 0) << plain.output;
+    const std::string a = test::read_text(dir / "resumed.ffm"), b = test::read_text(dir / "plain.ffm");
+    EXPECT_GT(a.size(), 0u);
+    EXPECT_TRUE(a == b) << "resumed " << a.size() << " bytes, uninterrupted " << b.size() << " bytes";
+}
+
+TEST(ResumeCli, ResumeNeedsACheckpointDirectory) {
+    TempDir dir;
+    const auto r = run_ffcube("formfactors " + test::example("cube.obj") + " --max-patch-edge 0.5 -q --resume -o " +
+                              (dir / "F.ffm"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--resume requires --checkpoint"), std::string::npos) << r.output;
+    const auto none = run_ffcube("formfactors " + test::example("cube.obj") + " --max-patch-edge 0.5 -q --resume " +
+                                 "--checkpoint " + (dir / "nothing") + " -o " + (dir / "F.ffm"));
+    EXPECT_EQ(none.code, 2) << none.output;
+    EXPECT_NE(none.output.find("holds no checkpoint"), std::string::npos) << none.output;
+    EXPECT_FALSE(fs::exists(dir / "F.ffm"));
+}
+
+}  // namespace
+}  // namespace ffcube

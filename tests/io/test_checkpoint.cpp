@@ -1,0 +1,163 @@
+// The row checkpoint: rows survive a kill (a torn last record is ignored), damage is detected and
+// dropped with a warning, a checkpoint is never reused for different rows, and the assembled
+// matrix is bit-identical to one built from the same rows directly.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/checkpoint.hpp"
+#include "io/io_test_util.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::read_all;
+using test::write_all;
+
+class Checkpoint : public test::ScratchDir {
+protected:
+    static CheckpointManifest manifest() {
+        CheckpointManifest m;
+        m.fingerprint = 0x0123456789abcdefULL;
+        m.patches = 5;
+        m.meshing = "--patches 5 -> --max-patch-edge 0.5";
+        m.max_patch_edge = 0.5;
+        m.meta = FfmMetadata{"hemicube", 64, "rotate=1 seed=24301"};
+        return m;
+    }
+    // Row i of a fixed 5×5 matrix: row i has entries in every column but i, with values that are
+    // not exactly representable as float (so the double → float rounding is exercised).
+    static SparseRow row(std::uint32_t i) {
+        SparseRow r;
+        for (std::uint32_t j = 0; j < 5; ++j)
+            if (j != i) {
+                r.col.push_back(j);
+                r.val.push_back(0.1 * (i + 1) / (j + 3.0));
+            }
+        return r;
+    }
+    static CsrMatrix direct() {
+        CsrMatrix F(5);
+        for (std::uint32_t i = 0; i < 5; ++i) F.append_row(row(i));
+        return F;
+    }
+    static void expect_same(const CsrMatrix& a, const CsrMatrix& b) {
+        EXPECT_EQ(a.row_ptr(), b.row_ptr());
+        EXPECT_EQ(a.col(), b.col());
+        ASSERT_EQ(a.val().size(), b.val().size());
+        EXPECT_EQ(std::memcmp(a.val().data(), b.val().data(), 4 * a.val().size()), 0);  // bit-identical
+    }
+    std::filesystem::path dir() const { return path("ck"); }
+    std::filesystem::path log() const { return path("ck") / "rows.log"; }
+};
+
+TEST_F(Checkpoint, RowsInAnyOrderAssembleToTheDirectMatrix) {
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        for (std::uint32_t i : {3u, 0u, 4u}) c.append(i, row(i));
+        EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{1, 2}));
+    }
+    RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+    EXPECT_TRUE(c.warnings().empty());
+    EXPECT_EQ(c.rows_stored(), 3u);
+    EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{1, 2}));
+    for (std::uint32_t i : c.missing()) c.append(i, row(i));
+    expect_same(c.assemble(), direct());
+}
+
+TEST_F(Checkpoint, TornLastRecordIsIgnored) {
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        for (std::uint32_t i = 0; i < 3; ++i) c.append(i, row(i));
+    }
+    // Each record of a row with 4 entries is 16 + 4·8 + 8 = 56 bytes. Cut the third anywhere:
+    // inside its header (5 bytes left) and inside its payload (30 bytes left).
+    const std::string bytes = read_all(log());
+    ASSERT_EQ(bytes.size(), 3u * 56u);
+    for (std::size_t keep : {112u + 5u, 112u + 30u}) {
+        write_all(log(), bytes.substr(0, keep));
+        RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+        ASSERT_EQ(c.warnings().size(), 1u);
+        EXPECT_NE(c.warnings()[0].find("torn"), std::string::npos) << c.warnings()[0];
+        EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{2, 3, 4}));
+        EXPECT_EQ(std::filesystem::file_size(log()), 112u);  // the torn tail is cut before appending
+        for (std::uint32_t i : c.missing()) c.append(i, row(i));
+        expect_same(c.assemble(), direct());
+    }
+}
+
+TEST_F(Checkpoint, CorruptedRecordIsDroppedWithEverythingAfterIt) {
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        for (std::uint32_t i = 0; i < 5; ++i) c.append(i, row(i));
+    }
+    std::string bytes = read_all(log());
+    bytes[56 + 16 + 4 * 4 + 1] ^= 0x01;  // one bit of a value of the second record (row 1)
+    write_all(log(), bytes);
+    RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+    ASSERT_EQ(c.warnings().size(), 1u);
+    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 56 (row 1: checksum mismatch)"), std::string::npos)
+        << c.warnings()[0];
+    EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{1, 2, 3, 4}));
+    for (std::uint32_t i : c.missing()) c.append(i, row(i));
+    expect_same(c.assemble(), direct());
+}
+
+TEST_F(Checkpoint, GarbageHeaderIsDropped) {
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        c.append(0, row(0));
+    }
+    // A record claiming row 7 of 5, with a correct length: refused by its header, not trusted.
+    std::string bytes = read_all(log());
+    bytes += bytes;
+    bytes[56 + 4] = 7;
+    write_all(log(), bytes);
+    RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+    ASSERT_EQ(c.warnings().size(), 1u);
+    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 56 (bad header)"), std::string::npos) << c.warnings()[0];
+    EXPECT_EQ(c.rows_stored(), 1u);
+}
+
+TEST_F(Checkpoint, ManifestMismatchIsRefusedNamingEachSetting) {
+    { RowCheckpoint::create(dir(), manifest()); }
+    CheckpointManifest other = manifest();
+    other.meta.resolution = 128;
+    other.meta.settings = "rotate=0 seed=24301";
+    try {
+        RowCheckpoint::resume(dir(), other);
+        FAIL() << "no InputError";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("was made for different rows"), std::string::npos) << m;
+        EXPECT_NE(m.find("resolution: checkpoint '64', this run '128'"), std::string::npos) << m;
+        EXPECT_NE(m.find("settings: checkpoint 'rotate=1 seed=24301', this run 'rotate=0 seed=24301'"), std::string::npos)
+            << m;
+        EXPECT_EQ(m.find("fingerprint:"), std::string::npos) << m;  // only what differs
+    }
+    other = manifest();
+    other.fingerprint ^= 1;
+    EXPECT_THROW(RowCheckpoint::resume(dir(), other), InputError);
+}
+
+TEST_F(Checkpoint, NewCheckpointNeverOverwritesOneAndResumeNeedsOne) {
+    EXPECT_THROW(RowCheckpoint::resume(dir(), manifest()), InputError);  // nothing there yet
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        c.append(2, row(2));
+    }
+    try {
+        RowCheckpoint::create(dir(), manifest());
+        FAIL() << "no InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("already holds a checkpoint; add --resume"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(RowCheckpoint::resume(dir(), manifest()).rows_stored(), 1u);  // the row is still there
+    write_all(path("file"), "x");
+    EXPECT_THROW(RowCheckpoint::create(path("file"), manifest()), InputError);
+}
+
+}  // namespace
+}  // namespace ffcube

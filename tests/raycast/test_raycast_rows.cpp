@@ -1,0 +1,159 @@
+// Ray-cast rows against closed forms, and the provider's guarantees (closed rows sum to 1,
+// one-sided faces, determinism across thread counts, offsets and scales).
+//
+// Tolerances: the ray caster samples the whole sender patch, so an object-to-object value
+// G_ab = Σ_i w_i F̂_ib (w_i = A_i/A_a) is an unbiased estimate of the exact area-to-area factor:
+// no meshing error, only statistics. Each F̂_ib is a binomial fraction over N rays, variance
+// F_ib(1−F_ib)/N or less (stratification only lowers it), so
+//   Var G_ab ≤ Σ w_i² F_ib(1−F_ib)/N ≤ max_i w_i · Σ w_i F_ib(1−F_ib)/N ≤ max_i w_i · G(1−G)/N
+// (the last step: x(1−x) is concave, Jensen). Comparisons allow 5σ of that bound (a false
+// failure about once in 3.5e6 per comparison under the normal approximation).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/geometry/analytic.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+#include "support/scenes.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::NamedPolygon;
+
+std::size_t object_index(const Scene& s, const std::string& name) {
+    for (std::size_t k = 0; k < s.objects.size(); ++k)
+        if (s.objects[k] == name) return k;
+    ADD_FAILURE() << "no object " << name;
+    return 0;
+}
+
+// 5σ with σ from the bound in the header comment, for sender object a.
+double tolerance(const Scene& s, std::size_t a, double exact, std::uint64_t rays) {
+    double area = 0.0, wmax = 0.0;
+    for (const Patch& p : s.patches)
+        if (p.object == a) area += p.area;
+    for (const Patch& p : s.patches)
+        if (p.object == a) wmax = std::max(wmax, p.area / area);
+    return 5.0 * std::sqrt(wmax * exact * (1.0 - exact) / static_cast<double>(rays));
+}
+
+RaycastOptions options(std::uint64_t rays, unsigned threads = 2) {
+    RaycastOptions o;
+    o.rays = rays;
+    o.threads = threads;
+    return o;
+}
+
+std::vector<std::vector<double>> object_ff(const Scene& scene, const RaycastOptions& o) {
+    RaycastRowProvider provider(scene, o);
+    return object_form_factors(compute_all_rows(provider), scene);
+}
+
+TEST(RaycastRows, ParallelSquaresMatchTheClosedForm) {
+    const Scene scene = test::make_scene({test::square_z("a", 0.0, true), test::square_z("b", 1.0, false)}, 0.25);
+    const std::uint64_t rays = 4000;
+    const auto G = object_ff(scene, options(rays));
+    const std::size_t a = object_index(scene, "a"), b = object_index(scene, "b");
+    const double exact = ff_parallel_rectangles(1, 1, 1);
+    EXPECT_NEAR(G[a][b], exact, tolerance(scene, a, exact, rays));
+    EXPECT_NEAR(G[b][a], exact, tolerance(scene, b, exact, rays));
+    EXPECT_EQ(G[a][a], 0.0);  // a planar object cannot see itself
+}
+
+TEST(RaycastRows, PerpendicularSquaresMatchTheClosedForm) {
+    const std::vector<NamedPolygon> polys = {
+        {"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},  // normal +z
+        {"wall", {{0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}}},   // x = 0, normal +x
+    };
+    const Scene scene = test::make_scene(polys, 0.25);
+    const std::uint64_t rays = 4000;
+    const auto G = object_ff(scene, options(rays));
+    const std::size_t f = object_index(scene, "floor"), w = object_index(scene, "wall");
+    const double exact = ff_perpendicular_rectangles_common_edge(1, 1, 1);
+    EXPECT_NEAR(G[f][w], exact, tolerance(scene, f, exact, rays));
+    EXPECT_NEAR(G[w][f], exact, tolerance(scene, w, exact, rays));
+}
+
+// Every ray leaving a wall of a closed box hits some wall's front: rows sum to 1 up to the
+// rounding of the normalisation (values are hits/N on these parallelogram patches).
+TEST(RaycastRows, ClosedBoxRowsSumToOneAndMatchClosedForms) {
+    const Scene scene = test::make_scene(test::inward_box(1, 1, 1), 0.25);
+    const std::uint64_t rays = 2000;
+    RaycastRowProvider provider(scene, options(rays));
+    const CsrMatrix F = compute_all_rows(provider);
+    for (std::uint32_t i = 0; i < F.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-6) << "row " << i;  // float storage
+    const auto G = object_form_factors(F, scene);
+    const std::size_t z0 = object_index(scene, "z0"), z1 = object_index(scene, "z1"), x0 = object_index(scene, "x0");
+    const double opposite = ff_parallel_rectangles(1, 1, 1);
+    const double adjacent = ff_perpendicular_rectangles_common_edge(1, 1, 1);
+    EXPECT_NEAR(G[z0][z1], opposite, tolerance(scene, z0, opposite, rays));
+    EXPECT_NEAR(G[z0][x0], adjacent, tolerance(scene, z0, adjacent, rays));
+    EXPECT_EQ(provider.rays_traced() >= F.size() * rays, true);
+}
+
+// A non-parallelogram quad (trapezoid) is sampled with the bilinear map's Jacobian as weight;
+// without it the narrow end would be over-sampled. The weights vary by at most 1.5× here, so the
+// binomial σ bound grows by at most √1.5; the tolerance is 5σ × √1.5.
+TEST(RaycastRows, TrapezoidSenderIsSampledUniformlyByArea) {
+    const std::vector<Vec3> trap = {{0, 0, 0}, {2, 0, 0}, {1.5, 1, 0}, {0.5, 1, 0}};
+    const std::vector<Vec3> recv = {{0, 0, 1}, {0, 1, 1}, {2, 1, 1}, {2, 0, 1}};
+    const Scene scene = test::make_scene({{"trap", trap}, {"recv", recv}}, 10.0);  // one patch each
+    ASSERT_EQ(scene.size(), 2u);
+    const std::uint64_t rays = 20000;
+    const auto G = object_ff(scene, options(rays));
+    const double exact = ff_polygon_polygon(trap, recv);
+    EXPECT_NEAR(G[0][1], exact, std::sqrt(1.5) * tolerance(scene, 0, exact, rays));
+}
+
+TEST(RaycastRows, BackFacesBlockAndReceiveNothing) {
+    const Scene scene = test::make_scene({test::square_z("sender", 0.0, true), test::square_z("backwards", 0.5, true),
+                                          test::square_z("hidden", 1.0, false)},
+                                         0.5);
+    const auto G = object_ff(scene, options(500));
+    const std::size_t s = object_index(scene, "sender"), bw = object_index(scene, "backwards"),
+                      h = object_index(scene, "hidden");
+    EXPECT_EQ(G[s][bw], 0.0);
+    EXPECT_EQ(G[s][h], 0.0);
+    EXPECT_GT(G[bw][h], 0.1);  // exact: 0.415 (C-11 at distance 0.5)
+}
+
+TEST(RaycastRows, SameRowsWithOneOrTwoThreadsAndAnyRowOrder) {
+    const Scene scene = test::make_scene(test::inward_box(1, 1, 2), 0.25);
+    RaycastRowProvider one(scene, options(300, 1));
+    RaycastRowProvider two(scene, options(300, 2));
+    const CsrMatrix a = compute_all_rows(one), b = compute_all_rows(two);
+    EXPECT_EQ(a.col(), b.col());
+    EXPECT_EQ(a.val(), b.val());
+    // A row asked for alone is the same row.
+    SparseRow r;
+    two.compute_row(7, r);
+    const RowView v = a.row(7);
+    ASSERT_EQ(r.nnz(), v.col.size());
+    for (std::size_t k = 0; k < r.nnz(); ++k) EXPECT_EQ(static_cast<float>(r.val[k]), v.val[k]);
+}
+
+// The scene is centred and scaled before Embree's float conversion, so an offset of 1e5 or a
+// scale of 1e-4 gives the same rows: same rays in the same relative geometry, equal up to
+// float rounding of the hit tests (a handful of rays may flip at patch boundaries).
+TEST(RaycastRows, OffsetsAndScalesGiveTheSameFactors) {
+    const std::uint64_t rays = 2000;
+    const double exact = ff_parallel_rectangles(1, 1, 1);
+    for (const auto& [scale, offset] : {std::pair{1.0, 1e5}, std::pair{1e-4, 0.0}, std::pair{1e4, -3e4}}) {
+        const Scene scene = test::make_scene(
+            {test::square_z("a", 0.0, true, scale, Vec3(offset)), test::square_z("b", scale, false, scale, Vec3(offset))},
+            0.25 * scale);
+        const auto G = object_ff(scene, options(rays));
+        EXPECT_NEAR(G[0][1], exact, tolerance(scene, 0, exact, rays)) << "scale " << scale << " offset " << offset;
+    }
+}
+
+TEST(RaycastRows, ZeroRaysIsAnInputError) {
+    const Scene scene = test::make_scene({test::square_z("a", 0.0, true)}, 1.0);
+    EXPECT_THROW(RaycastRowProvider(scene, options(0)), InputError);
+}
+
+}  // namespace
+}  // namespace ffcube

@@ -1,0 +1,128 @@
+// The viewer's CPU side: the display mesh, flat and smooth colours, the row heat map and the
+// hemicube image colours.
+#include <gtest/gtest.h>
+
+#include <glm/geometric.hpp>
+
+#include "ffcube/viewer/display.hpp"
+#include "support/scenes.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::make_scene;
+using test::NamedPolygon;
+using test::square_z;
+
+// The unit square facing up, 2 × 2 patches of equal area.
+Scene two_by_two() { return make_scene({square_z("floor", 0.0, true)}, 0.5); }
+
+Vec3 vertex_color(const std::vector<float>& c, std::size_t v) { return Vec3(c[3 * v], c[3 * v + 1], c[3 * v + 2]); }
+
+TEST(DisplayMesh, OneVertexPerCornerTwoTrianglesPerQuad) {
+    const Scene s = two_by_two();
+    ASSERT_EQ(s.size(), 4u);
+    const DisplayMesh m = build_display_mesh(s);
+    EXPECT_EQ(m.vertex_count(), 16u);
+    EXPECT_EQ(m.triangles.size(), 4u * 2 * 3);
+    EXPECT_EQ(m.lines.size(), 4u * 4 * 2);
+    for (std::uint32_t p = 0; p < 4; ++p) {
+        EXPECT_EQ(m.first_vertex[p + 1] - m.first_vertex[p], 4u);
+        EXPECT_EQ(m.first_line[p + 1] - m.first_line[p], 8u);
+        for (std::uint32_t v = m.first_vertex[p]; v < m.first_vertex[p + 1]; ++v) EXPECT_EQ(m.patch[v], p);
+    }
+    // Triangles face the patch's normal (CCW from the front): the viewer culls back faces.
+    for (std::size_t t = 0; t < m.triangles.size(); t += 3) {
+        auto pos = [&](std::uint32_t v) { return Vec3(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]); };
+        const Vec3 a = pos(m.triangles[t]), b = pos(m.triangles[t + 1]), c = pos(m.triangles[t + 2]);
+        EXPECT_GT(glm::dot(glm::cross(b - a, c - a), s.patches[m.patch[m.triangles[t]]].normal), 0.0);
+    }
+}
+
+TEST(DisplayMesh, FlatGivesEveryCornerItsPatchValue) {
+    const Scene s = two_by_two();
+    const DisplayMesh m = build_display_mesh(s);
+    const std::vector<Vec3> b = {Vec3(1.0), Vec3(2.0), Vec3(3.0), Vec3(4.0)};
+    std::vector<float> c;
+    flat_colors(m, b, c);
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) EXPECT_EQ(vertex_color(c, v), b[m.patch[v]]);
+}
+
+TEST(DisplayMesh, SmoothAveragesThePatchesMeetingAtAPoint) {
+    const Scene s = two_by_two();
+    const DisplayMesh m = build_display_mesh(s);
+    const std::vector<Vec3> b = {Vec3(1.0), Vec3(2.0), Vec3(3.0), Vec3(4.0)};
+    std::vector<float> c;
+    smooth_colors(m, s, b, c);
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) {
+        const Vec3 p(m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2]);
+        // Equal areas: the centre takes the mean of all four, an edge midpoint of its two patches,
+        // a corner of the square its own patch's value.
+        Vec3 expected(0.0);
+        int count = 0;
+        for (std::uint32_t q = 0; q < 4; ++q)
+            for (std::uint32_t k = 0; k < 4; ++k)
+                if (glm::length(s.positions[s.patches[q].v[k]] - p) < 1e-12) expected += b[q], ++count;
+        expected /= count;
+        EXPECT_NEAR(vertex_color(c, v).r, expected.r, 1e-6) << "vertex at " << p.x << "," << p.y;
+    }
+    // The centre really is shared by all four (so the check above covers averaging).
+    int centre_hits = 0;
+    for (std::size_t v = 0; v < m.vertex_count(); ++v)
+        if (std::abs(m.positions[3 * v] - 0.5f) < 1e-6f && std::abs(m.positions[3 * v + 1] - 0.5f) < 1e-6f) {
+            ++centre_hits;
+            EXPECT_NEAR(vertex_color(c, v).r, 2.5, 1e-6);
+        }
+    EXPECT_EQ(centre_hits, 4);
+}
+
+TEST(DisplayMesh, SmoothDoesNotCrossACrease) {
+    // Floor z = 0 and a wall x = 0 facing +x, one object, sharing the edge x = 0, z = 0.
+    const NamedPolygon floor{"box", {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0)}};
+    const NamedPolygon wall{"box", {Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 1, 1), Vec3(0, 0, 1)}};
+    const Scene s = make_scene({floor, wall}, 2.0);
+    ASSERT_EQ(s.size(), 2u);
+    const DisplayMesh m = build_display_mesh(s);
+    const std::vector<Vec3> b = {Vec3(1.0), Vec3(3.0)};
+    std::vector<float> c;
+    smooth_colors(m, s, b, c);
+    for (std::size_t v = 0; v < m.vertex_count(); ++v) EXPECT_EQ(vertex_color(c, v), b[m.patch[v]]);
+}
+
+TEST(RowHeatMap, ColoursByDensityOnALogRamp) {
+    const Scene s = two_by_two();
+    SparseRow row;
+    row.col = {1, 2};
+    row.val = {0.1, 0.0001};  // equal areas: densities 1 and 1/1000 of the largest
+    const std::vector<Vec3> h = row_heat_map(s, 0, row);
+    EXPECT_EQ(h[0], kPicked);
+    EXPECT_EQ(h[1], heat_color(1.0));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(h[2][c], heat_color(0.0)[c], 1e-12);
+    EXPECT_EQ(h[3], kNoContribution);
+}
+
+TEST(RowHeatMap, RampBrightensMonotonicallyAndAvoidsTheMarkers) {
+    auto luminance = [](const Vec3& c) { return 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b; };
+    double previous = -1.0;
+    for (int k = 0; k <= 100; ++k) {
+        const Vec3 c = heat_color(k / 100.0);
+        EXPECT_GT(luminance(c), previous);
+        previous = luminance(c);
+        // The markers stay distinguishable from every ramp colour (by more than 8-bit rounding).
+        EXPECT_GT(glm::length(c - kPicked), 0.1);
+        EXPECT_GT(glm::length(c - kNoContribution), 0.1);
+    }
+}
+
+TEST(ItemColor, BackgroundBackFacesAndDistinctPatches) {
+    EXPECT_EQ(item_color(0), 0xFF000000u);
+    EXPECT_EQ(item_color(0xFFFFFFFFu), 0xFF404040u);
+    for (std::uint32_t id = 1; id < 2000; ++id) {
+        const std::uint32_t c = item_color(id);
+        for (int ch = 0; ch < 3; ++ch) EXPECT_GE((c >> (8 * ch)) & 0xFFu, 96u);  // brighter than the markers
+        EXPECT_NE(c, item_color(id + 1));
+    }
+}
+
+}  // namespace
+}  // namespace ffcube

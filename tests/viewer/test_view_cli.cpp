@@ -1,0 +1,171 @@
+// ffcube view end to end: the real binary in a real window under Xvfb (started by xvfb-run -a on
+// a free display), driven by --frames/--pick/--screenshot, checked through the saved images.
+// Small on purpose (320×240, about 300 patches, 64-pixel hemicubes) so that llvmpipe keeps each
+// run well under a second or two.
+#include <OpenEXR/ImfRgbaFile.h>
+#include <gtest/gtest.h>
+
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <vector>
+
+#include "cli/cli_util.hpp"
+#include <glm/geometric.hpp>
+
+#include "ffcube/viewer/display.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+
+struct Image {
+    int width = 0, height = 0;
+    std::vector<std::uint8_t> rgb;
+    Vec3 at(int x, int y) const {  // 0..255 per channel, (0, 0) the top left
+        const std::size_t i = 3 * (static_cast<std::size_t>(y) * width + x);
+        return Vec3(rgb[i], rgb[i + 1], rgb[i + 2]);
+    }
+    double mean() const {
+        double s = 0.0;
+        for (std::uint8_t v : rgb) s += v;
+        return s / static_cast<double>(rgb.size());
+    }
+};
+
+Image load_png(const std::string& path) {
+    Image im;
+    int n = 0;
+    stbi_uc* data = stbi_load(path.c_str(), &im.width, &im.height, &n, 3);
+    if (!data) return im;
+    im.rgb.assign(data, data + 3 * im.width * im.height);
+    stbi_image_free(data);
+    return im;
+}
+
+bool have_xvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+// Runs `ffcube view` with the small test settings and ARGS inside a fresh Xvfb.
+RunResult view(const std::string& args) {
+    const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(FFCUBE_BINARY) +
+                            " view -q --patches 300 --resolution 64 --size 320x240 --hide-ui " + args + " 2>&1";
+    RunResult r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) r.output.append(buf, n);
+    const int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return r;
+}
+
+#define REQUIRE_XVFB() \
+    if (!have_xvfb()) GTEST_SKIP() << "xvfb-run is not installed (Debian packages xvfb and xauth): no X display for the viewer"
+
+TEST(ViewCli, ScreenshotShowsTheLitCornellBox) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    const RunResult r = view("--frames 20 --screenshot " + dir / "a.png");
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Image im = load_png(dir / "a.png");
+    ASSERT_EQ(im.width, 320);
+    ASSERT_EQ(im.height, 240);
+    double mean = im.mean(), var = 0.0;
+    for (std::uint8_t v : im.rgb) var += (v - mean) * (v - mean);
+    EXPECT_GT(var / static_cast<double>(im.rgb.size()), 100.0);  // not one flat colour
+    // The red and green walls: pixels where one channel clearly dominates (by 40 of 255).
+    int red = 0, green = 0;
+    for (int y = 0; y < im.height; ++y)
+        for (int x = 0; x < im.width; ++x) {
+            const Vec3 c = im.at(x, y);
+            red += c.r > c.g + 40 && c.r > c.b + 40;
+            green += c.g > c.r + 20 && c.g > c.b + 40;
+        }
+    EXPECT_GT(red, 500) << "no red wall";
+    EXPECT_GT(green, 500) << "no green wall";
+}
+
+TEST(ViewCli, MoreShotsBrightenTheImage) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    // One shot per frame, no ambient term, a fixed exposure: each classic shot (no overshoot)
+    // only adds radiosity, so the display can only brighten, and 38 more shots bring light to
+    // surfaces in view.
+    const std::string common = "--no-ambient --exposure 0 --shots-per-frame 1 --batch 1 ";
+    ASSERT_EQ(view(common + "--frames 2 --screenshot " + dir / "few.png").code, 0);
+    ASSERT_EQ(view(common + "--frames 40 --screenshot " + dir / "many.png").code, 0);
+    const double few = load_png(dir / "few.png").mean(), many = load_png(dir / "many.png").mean();
+    EXPECT_GT(many, few + 1.0) << "few " << few << " many " << many;
+}
+
+TEST(ViewCli, ScriptedPickShowsTheRowAsAHeatMap) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    // (170, 100) lies on the back wall in the default view of the built-in box.
+    const RunResult plain = view("--frames 3 --screenshot " + dir / "plain.png");
+    const RunResult picked = view("--frames 3 --pick 170,100 --screenshot " + dir / "picked.png");
+    ASSERT_EQ(plain.code, 0) << plain.output;
+    ASSERT_EQ(picked.code, 0) << picked.output;
+    const Image a = load_png(dir / "plain.png"), b = load_png(dir / "picked.png");
+    ASSERT_EQ(b.width, 320);
+    auto is = [](const Vec3& pixel, const Vec3& colour) { return glm::length(pixel - 255.0 * colour) < 1.5; };
+    EXPECT_TRUE(is(b.at(170, 100), kPicked));
+    // The back wall around it is coplanar with the picked patch: F = 0 exactly, so the marker
+    // colour; the same pixels in the plain run show lit wall.
+    int picked_px = 0, zero_px = 0, ramp_px = 0;
+    for (int y = 0; y < b.height; ++y)
+        for (int x = 0; x < b.width; ++x) {
+            const Vec3 c = b.at(x, y);
+            picked_px += is(c, kPicked);
+            zero_px += is(c, kNoContribution);
+            for (int k = 0; k <= 200; ++k)
+                if (is(c, heat_color(k / 200.0)) || glm::length(c - 255.0 * heat_color(k / 200.0)) < 3.0) {
+                    ++ramp_px;
+                    break;
+                }
+            EXPECT_FALSE(is(a.at(x, y), kPicked) || is(a.at(x, y), kNoContribution)) << "plain run at " << x << "," << y;
+        }
+    EXPECT_GT(picked_px, 50);     // the patch (about 20 × 20 pixels, less its outline)
+    EXPECT_GT(zero_px, 2000);     // the rest of the back wall, and what the blocks hide
+    EXPECT_GT(ramp_px, 2000);     // ceiling, side walls and floor that the patch sees
+}
+
+TEST(ViewCli, ExrHoldsTheLinearRadiosity) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    ASSERT_EQ(view("--frames 5 --exr " + dir / "a.exr").code, 0);
+    Imf::RgbaInputFile in((dir / "a.exr").c_str());
+    const Imath::Box2i dw = in.dataWindow();
+    const int w = dw.max.x - dw.min.x + 1, h = dw.max.y - dw.min.y + 1;
+    ASSERT_EQ(w, 320);
+    ASSERT_EQ(h, 240);
+    std::vector<Imf::Rgba> px(static_cast<std::size_t>(w) * h);
+    in.setFrameBuffer(px.data(), 1, static_cast<std::size_t>(w));
+    in.readPixels(dw.min.y, dw.max.y);
+    // Not tone mapped: the light shows its emitted radiosity (Ke 53.407 in red) or more (it also
+    // reflects); half precision rounds 53.4 by at most 0.03. The corners show no surface: 0.
+    float max_red = 0.0f;
+    for (const Imf::Rgba& p : px) max_red = std::max(max_red, static_cast<float>(p.r));
+    EXPECT_GE(max_red, 53.407f - 0.03f);
+    EXPECT_EQ(static_cast<float>(px.front().r), 0.0f);
+    EXPECT_EQ(static_cast<float>(px.back().g), 0.0f);
+}
+
+TEST(ViewCli, BadOptionsAreRefusedBeforeAnyWindow) {
+    // No display needed: validation comes first, exit code 2 (bad input).
+    for (const char* args : {"--screenshot x.png", "--frames 2 --pick 5", "--size 320x240 --frames 2 --pick 999,5", "--size 10x10",
+                             "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png"}) {
+        const RunResult r = test::run_ffcube(std::string("view -q ") + args);
+        EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
+        EXPECT_NE(r.output.find("error"), std::string::npos) << args;
+    }
+}
+
+}  // namespace
+}  // namespace ffcube
