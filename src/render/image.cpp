@@ -99,6 +99,17 @@ void write_exr(const std::filesystem::path& path, const Image& image) {
     });
 }
 
+void write_png_rgba8(const std::filesystem::path& path, int width, int height, std::span<const std::uint8_t> rgba) {
+    FFCUBE_CHECK(width > 0 && height > 0 && rgba.size() == static_cast<std::size_t>(width) * height * 4);
+    std::string encoded;
+    const auto sink = [](void* context, void* data, int size) {
+        static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+    };
+    if (!stbi_write_png_to_func(sink, &encoded, width, height, 4, rgba.data(), width * 4))
+        throw IoError(fmt::format("{}: PNG encoding failed", path.string()));
+    write_file_atomically(path, [&](std::ostream& os) { os.write(encoded.data(), static_cast<std::streamsize>(encoded.size())); });
+}
+
 void write_png(const std::filesystem::path& path, const Image& image, double exposure) {
     FFCUBE_CHECK(image.width > 0 && image.height > 0);
     std::vector<std::uint8_t> px(static_cast<std::size_t>(image.width) * image.height * 4);
@@ -106,13 +117,7 @@ void write_png(const std::filesystem::path& path, const Image& image, double exp
         for (std::size_t c = 0; c < 3; ++c) px[4 * i + c] = encode_srgb8(image.rgba[4 * i + c], exposure);
         px[4 * i + 3] = static_cast<std::uint8_t>(std::lround(255.0 * std::clamp(double(image.rgba[4 * i + 3]), 0.0, 1.0)));
     }
-    std::string encoded;
-    const auto sink = [](void* context, void* data, int size) {
-        static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
-    };
-    if (!stbi_write_png_to_func(sink, &encoded, image.width, image.height, 4, px.data(), image.width * 4))
-        throw IoError(fmt::format("{}: PNG encoding failed", path.string()));
-    write_file_atomically(path, [&](std::ostream& os) { os.write(encoded.data(), static_cast<std::streamsize>(encoded.size())); });
+    write_png_rgba8(path, image.width, image.height, px);
 }
 
 }  // namespace ffcube

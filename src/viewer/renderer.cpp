@@ -145,7 +145,7 @@ std::uint32_t SceneRenderer::pick(const glm::mat4& view_projection, int width, i
     return item;
 }
 
-std::vector<float> SceneRenderer::render_linear(const glm::mat4& view_projection, int width, int height) {
+Image SceneRenderer::render_linear(const glm::mat4& view_projection, int width, int height) {
     gl::ItemTarget target = gl::make_color_target(gl_, width, height);  // leaves its framebuffer bound
     prepare(gl_, width, height);
     const float black[4] = {0.0f, 0.0f, 0.0f, 0.0f};
@@ -155,16 +155,16 @@ std::vector<float> SceneRenderer::render_linear(const glm::mat4& view_projection
     gl_.UseProgram(scene_.id());
     gl_.Uniform1i(gl_.GetUniformLocation(scene_.id(), "u_mode"), 1);
     draw_triangles(view_projection, scene_);
-    std::vector<float> rgb(3ull * width * height);
+    Image image{width, height, std::vector<float>(4ull * width * height)};
     gl_.PixelStorei(GL_PACK_ALIGNMENT, 4);
-    gl_.ReadPixels(0, 0, width, height, GL_RGB, GL_FLOAT, rgb.data());
+    gl_.ReadPixels(0, 0, width, height, GL_RGBA, GL_FLOAT, image.rgba.data());
     gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl_.BindVertexArray(0);
     gl_.UseProgram(0);
     gl::check_gl(gl_, "rendering the linear image");
-    flip_rows(std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(rgb.data()), rgb.size() * sizeof(float)),
-              3 * sizeof(float) * static_cast<std::size_t>(width), height);
-    return rgb;
+    flip_rows(std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(image.rgba.data()), image.rgba.size() * sizeof(float)),
+              4 * sizeof(float) * static_cast<std::size_t>(width), height);
+    return image;
 }
 
 std::vector<std::uint8_t> read_back_buffer(const gl::Api& gl, int width, int height) {

@@ -10,6 +10,7 @@
 #include <span>
 #include <vector>
 
+#include "ffcube/render/image.hpp"
 #include "ffcube/viewer/display.hpp"
 #include "gl/objects.hpp"
 
@@ -39,8 +40,9 @@ public:
     // 1 + the index of the patch seen at pixel (x, y) (GL convention: y = 0 the bottom row), 0 when
     // none, from an ID render of view_projection into an R32UI target.
     std::uint32_t pick(const glm::mat4& view_projection, int width, int height, int x, int y);
-    // The colours as they are (no exposure, no tone map) into an RGBA32F target; RGB, top row first.
-    std::vector<float> render_linear(const glm::mat4& view_projection, int width, int height);
+    // The colours as they are (no exposure, no tone map) into an RGBA32F target; alpha 1 where a
+    // surface was drawn, 0 elsewhere; top row first.
+    Image render_linear(const glm::mat4& view_projection, int width, int height);
 
 private:
     void draw_triangles(const glm::mat4& view_projection, const gl::Program& program);

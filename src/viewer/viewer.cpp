@@ -1,6 +1,7 @@
 #include "ffcube/viewer/viewer.hpp"
 
 #define GLFW_INCLUDE_NONE  // GL declarations come from gl/gl_api.hpp (glcorearb.h), never gl.h
+#include <numbers>
 #include <GLFW/glfw3.h>
 #include <fmt/format.h>
 #include <imgui.h>
@@ -18,7 +19,7 @@
 #include "ffcube/solver/progressive.hpp"
 #include "ffcube/viewer/camera.hpp"
 #include "ffcube/viewer/display.hpp"
-#include "ffcube/viewer/image_io.hpp"
+#include "ffcube/render/image.hpp"
 #include "renderer.hpp"
 #include "window_context.hpp"
 
@@ -322,19 +323,21 @@ private:
     }
 
     void write_screenshot(const std::string& path, int width, int height) {
-        write_png(path, width, height, read_back_buffer(window_.api(), width, height));
+        write_png_rgba8(path, width, height, read_back_buffer(window_.api(), width, height));
         status_ = "saved " + path;
         info("viewer: wrote {}", path);
     }
 
-    // Linear radiosity as displayed (ambient and smoothing as set), without exposure or tone map.
+    // Linear radiance L = B/π as displayed (ambient and smoothing as set), without exposure or tone
+    // map: the same convention as `ffcube solve --render X.exr` (docs/solve.md).
     void write_linear(const std::string& path, int width, int height) {
-        const std::vector<Vec3> b = displayed_radiosity();
+        std::vector<Vec3> b = displayed_radiosity();
+        for (Vec3& v : b) v /= std::numbers::pi;
         std::vector<float> linear;
         if (smooth_) smooth_colors(mesh_, scene_, b, linear);
         else flat_colors(mesh_, b, linear);
         renderer_.set_colors(linear);
-        write_exr(path, width, height, renderer_.render_linear(camera_.view_projection(aspect(width, height)), width, height));
+        write_exr(path, renderer_.render_linear(camera_.view_projection(aspect(width, height)), width, height));
         status_ = "saved " + path;
         info("viewer: wrote {}", path);
     }

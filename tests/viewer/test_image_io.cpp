@@ -1,4 +1,4 @@
-// PNG and EXR files written by the viewer, read back through independent decoders.
+// PNG and EXR files as the viewer writes them (render/image.hpp), read back through independent decoders.
 #include <OpenEXR/ImfRgbaFile.h>
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 
 #include "cli/cli_util.hpp"
 #include "ffcube/core/error.hpp"
-#include "ffcube/viewer/image_io.hpp"
+#include "ffcube/render/image.hpp"
 
 namespace ffcube {
 namespace {
@@ -21,7 +21,7 @@ TEST(ImageIo, PngRoundTripsExactlyTopRowFirst) {
     const std::vector<std::uint8_t> rgba = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255,
                                             10,  20, 30, 255, 40, 50, 60, 255, 70, 80, 90, 255};
     const std::string path = dir / "a.png";
-    write_png(path, 3, 2, rgba);
+    write_png_rgba8(path, 3, 2, rgba);
     int w = 0, h = 0, n = 0;
     stbi_uc* data = stbi_load(path.c_str(), &w, &h, &n, 3);
     ASSERT_NE(data, nullptr);
@@ -36,7 +36,7 @@ TEST(ImageIo, ExrRoundTripsWithinHalfPrecision) {
     test::TempDir dir;
     const std::vector<float> rgb = {0.0f, 1.0f, 53.407f, 0.001f, 0.5f, 2.25f};
     const std::string path = dir / "a.exr";
-    write_exr(path, 2, 1, rgb);
+    write_exr(path, Image{2, 1, {rgb[0], rgb[1], rgb[2], 1.0f, rgb[3], rgb[4], rgb[5], 1.0f}});
     Imf::RgbaInputFile in(path.c_str());
     const Imath::Box2i dw = in.dataWindow();
     ASSERT_EQ(dw.max.x - dw.min.x + 1, 2);
@@ -55,7 +55,7 @@ TEST(ImageIo, UnwritablePathLeavesNoFile) {
     test::TempDir dir;
     const std::string path = (dir.path() / "missing" / "a.png").string();
     const std::vector<std::uint8_t> rgba(4, 0);
-    EXPECT_THROW(write_png(path, 1, 1, rgba), IoError);
+    EXPECT_THROW(write_png_rgba8(path, 1, 1, rgba), IoError);
     EXPECT_FALSE(std::filesystem::exists(path));
 }
 

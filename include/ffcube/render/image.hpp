@@ -34,6 +34,10 @@ std::uint8_t encode_srgb8(double linear, double exposure);
 // values unchanged. Atomic (atomic_file.hpp); IoError when it cannot be written.
 void write_exr(const std::filesystem::path& path, const Image& image);
 
+// A PNG of 8-bit RGBA pixels as they are (e.g. a window's contents), row 0 at the top.
+// Atomic; IoError when it cannot be written.
+void write_png_rgba8(const std::filesystem::path& path, int width, int height, std::span<const std::uint8_t> rgba);
+
 // 8-bit sRGB PNG with alpha: each of R, G, B through encode_srgb8(value, exposure), alpha
 // round(255 × clamp(A, 0, 1)). Atomic; IoError when it cannot be written.
 void write_png(const std::filesystem::path& path, const Image& image, double exposure);
