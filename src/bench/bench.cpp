@@ -23,7 +23,7 @@ BenchErrors measure_errors(const CsrMatrix& F, const Scene& scene, const BenchCa
     std::vector<std::size_t> idx(m);
     {
         std::vector<std::string> names;
-        for (const BenchPolygon& p : c.polygons)
+        for (const NamedPolygon& p : c.polygons)
             if (std::find(names.begin(), names.end(), p.object) == names.end()) names.push_back(p.object);
         FFCUBE_CHECK(names.size() == m);
         for (std::size_t k = 0; k < m; ++k) {

@@ -39,7 +39,7 @@ Poly transformed(Poly p, double scale, Vec3 offset) {
 using Matrix = std::vector<std::vector<double>>;
 
 // Meshing: about `target` patches on the largest object (square cells of its area).
-double edge_for(const std::vector<BenchPolygon>& polys, double target) {
+double edge_for(const std::vector<NamedPolygon>& polys, double target) {
     double amax = 0;
     for (const auto& p : polys) amax = std::max(amax, polygon_area(p.vertices));
     return std::sqrt(amax / target) * (1.0 + 1e-9);
@@ -47,7 +47,7 @@ double edge_for(const std::vector<BenchPolygon>& polys, double target) {
 
 // A case whose objects are single polygons that all see each other unoccluded: exact[a][b] is
 // the polygon-to-polygon contour integral (0 on the diagonal: planar objects).
-BenchCase unoccluded(std::string name, std::string group, std::string description, std::vector<BenchPolygon> polys) {
+BenchCase unoccluded(std::string name, std::string group, std::string description, std::vector<NamedPolygon> polys) {
     BenchCase c{std::move(name), std::move(group), std::move(description), std::move(polys), 0, {}};
     const std::size_t m = c.polygons.size();
     c.exact.assign(m, std::vector<double>(m, 0.0));
@@ -86,7 +86,7 @@ BenchCase box_case(std::string name, std::string description, double sx, double 
 
 // The polygons of the two-walls-at-angle family: floor [0,1]² (normal +z) and a unit square
 // hinged on the floor's edge x = 0, at angle θ to the floor, both facing into the wedge.
-std::vector<BenchPolygon> wedge(double theta) {
+std::vector<NamedPolygon> wedge(double theta) {
     const Vec3 dir(std::cos(theta), 0, std::sin(theta));
     const Vec3 e0(0, 0, 0), e1(0, 1, 0);
     // Seen from inside the wedge, the hinged square's corners e0, e0+dir, e1+dir, e1 run CCW
@@ -276,23 +276,7 @@ std::vector<BenchCase> bench_cases(bool quick) {
 }
 
 Scene build_bench_scene(const BenchCase& c) {
-    ObjModel m;
-    m.source = "<bench case " + c.name + ">";
-    m.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
-    std::uint32_t line = 1;
-    for (const BenchPolygon& p : c.polygons) {
-        std::uint32_t obj = 0;
-        while (obj < m.objects.size() && m.objects[obj] != p.object) ++obj;
-        if (obj == m.objects.size()) m.objects.push_back(p.object);
-        ObjFace f;
-        f.object = obj;
-        f.line = line++;
-        for (const Vec3& v : p.vertices) {
-            f.v.push_back(static_cast<std::uint32_t>(m.positions.size()));
-            m.positions.push_back(v);
-        }
-        m.faces.push_back(std::move(f));
-    }
+    const ObjModel m = model_from_polygons(c.polygons, "<bench case " + c.name + ">");
     MeshOptions o;
     o.max_patch_edge = c.max_patch_edge;
     return build_scene(m, o);

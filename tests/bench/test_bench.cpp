@@ -29,7 +29,7 @@ const BenchCase& find_case(const std::vector<BenchCase>& cs, const std::string& 
 std::vector<double> object_areas(const BenchCase& c) {
     std::vector<double> a(c.exact.size(), 0.0);
     std::vector<std::string> names;
-    for (const BenchPolygon& p : c.polygons) {
+    for (const NamedPolygon& p : c.polygons) {
         auto it = std::find(names.begin(), names.end(), p.object);
         if (it == names.end()) {
             names.push_back(p.object);

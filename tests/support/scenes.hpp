@@ -5,41 +5,17 @@
 #include <vector>
 
 #include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/polygons.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube::test {
 
-struct NamedPolygon {
-    std::string object;
-    std::vector<Vec3> vertices;  // CCW seen from the front
-};
-
-// One OBJ face per polygon, each polygon's object created on first use, default material.
-inline ObjModel make_model(const std::vector<NamedPolygon>& polys) {
-    ObjModel m;
-    m.source = "<test scene>";
-    m.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
-    std::uint32_t line = 1;
-    for (const NamedPolygon& p : polys) {
-        std::uint32_t obj = 0;
-        while (obj < m.objects.size() && m.objects[obj] != p.object) ++obj;
-        if (obj == m.objects.size()) m.objects.push_back(p.object);
-        ObjFace f;
-        f.object = obj;
-        f.line = line++;
-        for (const Vec3& v : p.vertices) {
-            f.v.push_back(static_cast<std::uint32_t>(m.positions.size()));
-            m.positions.push_back(v);
-        }
-        m.faces.push_back(std::move(f));
-    }
-    return m;
-}
+using ffcube::NamedPolygon;
 
 inline Scene make_scene(const std::vector<NamedPolygon>& polys, double max_patch_edge) {
     MeshOptions o;
     o.max_patch_edge = max_patch_edge;
-    return build_scene(make_model(polys), o);
+    return build_scene(model_from_polygons(polys, "<test scene>"), o);
 }
 
 // Unit square [0,1]² at height z, facing down (-z) or up (+z).

@@ -14,23 +14,18 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/scene/polygons.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/gl/context.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
 
-// One polygon of a case: one OBJ face of the named object, CCW from its front.
-struct BenchPolygon {
-    std::string object;
-    std::vector<Vec3> vertices;
-};
-
 struct BenchCase {
     std::string name;   // unique, e.g. "parallel_d1"
     std::string group;  // basic, enclosure, proximity, extreme, occlusion
     std::string description;
-    std::vector<BenchPolygon> polygons;
+    std::vector<NamedPolygon> polygons;
     double max_patch_edge = 0;  // meshing (scene units)
     // exact[a][b]: object-to-object F in the order objects are first named in `polygons`;
     // NaN where no exact value is known (such entries are not measured).
