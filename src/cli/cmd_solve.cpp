@@ -51,26 +51,6 @@ void report_vec3(Report& r, std::string_view key, const Vec3& v) {
     r.set_array(key, a);
 }
 
-// The hemicube provider's figures, as `ffcube formfactors` reports them (the rows computed here
-// are only the shooters').
-void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
-    const HemicubeStats st = provider.stats();
-    r.set("backend", provider.backend());
-    r.set("renderer", provider.renderer());
-    r.set("resolution", provider.resolution());
-    r.set("threads", provider.threads());
-    r.set("workers", provider.workers());
-    r.set("hemicubes", st.hemicubes);
-    // CPU-seconds summed over workers.
-    r.set("time.prepare", st.prepare_seconds);
-    r.set("time.drawing", st.draw_seconds);
-    r.set("time.readback", st.readback_seconds);
-    r.set("time.accumulation", st.accumulate_seconds);
-    const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
-    r.set("coverage.mean_miss_fraction", st.miss_weight / h);
-    r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
-    r.set("self_hits", st.self_hits);
-}
 
 void report_result(Report& r, const SolveResult& res, const SolverOptions& so, std::size_t patches) {
     r.set("solver.method", to_string(res.method));
@@ -158,7 +138,7 @@ int run(const Options& o) {
     // GL context of its own (the picture's), so that its workers can be forked processes.
     std::optional<FfmFile> ffm;
     std::unique_ptr<MatrixRowProvider> matrix_rows;
-    std::unique_ptr<HemicubeRowProvider> hemicube_rows;
+    RowSource computed_rows;
     RowProvider* provider = nullptr;
     Stopwatch watch;
     if (!o.matrix.empty()) {
@@ -171,12 +151,9 @@ int run(const Options& o) {
         report.set("time.reading_matrix", watch.seconds());
         info("rows from {} ({} non-zeros, {} {})", o.matrix, ffm->matrix.nnz(), ffm->meta.method, ffm->meta.settings);
     } else {
-        hemicube_rows = std::make_unique<HemicubeRowProvider>(scene, hopt);
-        provider = hemicube_rows.get();
-        report.set("rows", "hemicube");
-        report.set("time.context_setup", watch.seconds());
-        info("{} on {} ({}), {} {}, resolution {}", hemicube_rows->name(), hemicube_rows->backend(), hemicube_rows->renderer(),
-             hemicube_rows->threads(), hemicube_rows->workers(), hemicube_rows->resolution());
+        computed_rows = make_row_source(scene, o.ff, report);
+        provider = &computed_rows.provider();
+        report.set("rows", provider->name());
     }
 
     double last_print = 0.0;
@@ -191,9 +168,9 @@ int run(const Options& o) {
          to_string(res.stop), res.iterations, res.method == SolverMethod::Shoot ? "shots" : "sweeps",
          res.cache.rows_computed, res.cache.rows_reused, res.unshot_fraction, res.timings.total);
     report_result(report, res, so, scene.size());
-    if (hemicube_rows) {
-        report_hemicube(report, *hemicube_rows);
-        hemicube_rows.reset();  // its workers are done
+    if (o.matrix.empty()) {
+        report_row_source(report, computed_rows);
+        computed_rows = RowSource{};  // its workers are done
     }
     if (res.stop == StopReason::Diverged) {
         if (!o.report.empty()) report.write(o.report);

@@ -22,6 +22,11 @@ void add_scene_options(CLI::App& app, SceneOptions& o) {
 }
 
 void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
+    app.add_option("--method", o.method, "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)")
+        ->check(CLI::IsMember({"hemicube", "raycast"}))
+        ->default_val("hemicube");
+    app.add_option("--rays", o.rays, "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays))")
+        ->default_val(4096);
     app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
         ->default_val(256);
     app.add_option("--backend", o.backend, "OpenGL context: auto (EGL, then OSMesa), egl or osmesa")
@@ -89,6 +94,73 @@ HemicubeOptions hemicube_options(const FormFactorOptions& o) {
     if (h.resolution < 8 || h.resolution > 8192 || h.resolution % 2 != 0)
         throw InputError(fmt::format("--resolution {}: must be an even number of pixels from 8 to 8192", h.resolution));
     return h;
+}
+
+FfmMetadata row_metadata(const FormFactorOptions& o) {
+    FfmMetadata meta;
+    meta.method = o.method;
+    if (o.method == "raycast") {
+        meta.settings = fmt::format("rays={} seed={}", o.rays, o.seed);
+    } else {
+        meta.resolution = static_cast<std::uint32_t>(o.resolution);
+        meta.settings = fmt::format("rotate={} seed={}", o.no_rotate ? 0 : 1, o.seed);
+    }
+    return meta;
+}
+
+RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report& report) {
+    RowSource rows;
+    Stopwatch watch;
+    if (o.method == "raycast") {
+        if (o.rays == 0) throw InputError("--rays 0: at least 1 ray per patch");
+        RaycastOptions ropt;
+        ropt.rays = o.rays;
+        ropt.threads = o.threads;
+        ropt.seed = o.seed;
+        rows.raycast = std::make_unique<RaycastRowProvider>(scene, ropt);
+        info("raycast (Embree), {} thread(s), {} rays per patch", rows.raycast->threads(), rows.raycast->rays());
+    } else {
+        rows.hemicube = std::make_unique<HemicubeRowProvider>(scene, hemicube_options(o));
+        const HemicubeRowProvider& h = *rows.hemicube;
+        info("hemicube on {} ({}), {} {}, resolution {}", h.backend(), h.renderer(), h.threads(), h.workers(), h.resolution());
+    }
+    report.set("method", rows.provider().name());
+    report.set("time.setup", watch.seconds());
+    return rows;
+}
+
+void report_row_source(Report& r, const RowSource& rows) {
+    if (rows.raycast) {
+        r.set("rays_per_patch", rows.raycast->rays());
+        r.set("rays_traced", rows.raycast->rays_traced());
+        r.set("threads", rows.raycast->threads());
+        return;
+    }
+    const HemicubeRowProvider& provider = *rows.hemicube;
+    const HemicubeStats st = provider.stats();
+    r.set("backend", provider.backend());
+    r.set("renderer", provider.renderer());
+    r.set("resolution", provider.resolution());
+    r.set("threads", provider.threads());
+    r.set("workers", provider.workers());
+    r.set("hemicubes", st.hemicubes);
+    // CPU-seconds summed over workers.
+    r.set("time.prepare", st.prepare_seconds);
+    r.set("time.drawing", st.draw_seconds);
+    r.set("time.readback", st.readback_seconds);
+    r.set("time.accumulation", st.accumulate_seconds);
+    // Culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
+    r.set("left_out.pieces_considered", st.pieces_considered);
+    r.set("left_out.pieces_behind_plane", st.pieces_behind);
+    const char* names[5] = {"top", "pos_x", "neg_x", "pos_y", "neg_y"};
+    for (std::size_t f = 0; f < 5; ++f) {
+        r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);
+        r.set(fmt::format("drawn.pieces_per_face.{}", names[f]), st.pieces_drawn[f]);
+    }
+    const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
+    r.set("coverage.mean_miss_fraction", st.miss_weight / h);
+    r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
+    r.set("self_hits", st.self_hits);
 }
 
 void check_output_path(const std::string& option, const std::string& path) {

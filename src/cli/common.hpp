@@ -10,6 +10,8 @@
 #include <string>
 
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/io/ffm.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/scene.hpp"
@@ -24,11 +26,20 @@ struct SceneOptions {
 };
 
 struct FormFactorOptions {
+    std::string method = "hemicube";  // or "raycast" (Monte Carlo through Embree, no GL)
     int resolution = 256;
     std::string backend = "auto";
     unsigned threads = 0;
     bool no_rotate = false;
     std::uint64_t seed = 0x5eed;
+    std::uint64_t rays = 4096;  // raycast: rays per patch
+};
+
+// Where rows come from: hemicubes on a GL context, or rays through Embree.
+struct RowSource {
+    std::unique_ptr<HemicubeRowProvider> hemicube;
+    std::unique_ptr<RaycastRowProvider> raycast;
+    RowProvider& provider() { return hemicube ? static_cast<RowProvider&>(*hemicube) : *raycast; }
 };
 
 void add_scene_options(CLI::App& app, SceneOptions& o);
@@ -39,6 +50,18 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o);
 Scene load_and_mesh(const SceneOptions& o, Report& report);
 
 HemicubeOptions hemicube_options(const FormFactorOptions& o);
+
+// How rows are made, as recorded in .ffm files and checkpoints (deterministic settings only).
+FfmMetadata row_metadata(const FormFactorOptions& o);
+
+// Validates the options (throws InputError) and starts the provider they name, printing what it
+// runs on and recording its setup time. Start it before this process makes a GL context of its
+// own, so that hemicube workers can be forked processes.
+RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report& report);
+
+// The provider's figures: backend, renderer, resolution, workers, time split and culling for
+// hemicubes; rays for the ray caster.
+void report_row_source(Report& report, const RowSource& rows);
 
 // Refuses an output path up front (before hours of work) when its directory does not exist.
 void check_output_path(const std::string& option, const std::string& path);

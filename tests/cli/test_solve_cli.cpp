@@ -189,6 +189,30 @@ TEST(SolveCli, MatrixFileGivesTheSameRadiosityAndAForeignOneIsRefused) {
     for (const char* f : {"x.csv", "x.json", "x.png"}) EXPECT_FALSE(std::filesystem::exists(dir / f)) << f;
 }
 
+// The ray caster serves solve as it serves formfactors: rows made directly and rows read back from
+// the .ffm that `formfactors --method raycast` wrote (same seed, so the same rays) give the same B.
+TEST(SolveCli, RaycastRowsSolveLikeTheirMatrixFile) {
+    TempDir dir;
+    std::ofstream(dir / "m.mtl") << "newmtl m\nKd 0.6 0.5 0.4\nnewmtl light\nKd 0.2 0.2 0.2\nKe 3 2 1\n";
+    std::string obj = "mtllib m.mtl\nusemtl m\n" + test::read_text(test::example("cube.obj"));
+    obj.replace(obj.find("o z1\n"), 5, "o z1\nusemtl light\n");
+    std::ofstream(dir / "c.obj") << obj;
+    const std::string rows = (dir / "c.obj") + " --max-patch-edge 0.5 --method raycast --rays 512 -q";
+    ASSERT_EQ(run_ffcube("formfactors " + rows + " -o " + (dir / "F.ffm")).code, 0);
+    auto r = run_ffcube("solve " + rows + " --tolerance 1e-12 --radiosity " + (dir / "direct.csv") + " --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "r.json"))["rows"], "raycast");
+    r = run_ffcube("solve " + (dir / "c.obj") + " --max-patch-edge 0.5 -q --tolerance 1e-12 --matrix " + (dir / "F.ffm") +
+                   " --radiosity " + (dir / "file.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto a = read_patch_csv(dir / "direct.csv"), b = read_patch_csv(dir / "file.csv");
+    ASSERT_EQ(a.size(), 24u);
+    ASSERT_EQ(b.size(), a.size());
+    // As above: float storage moves B by about 1e-7 relative; 9 printed digits; margin 10.
+    for (std::size_t i = 0; i < a.size(); ++i)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(b[i].B[c], a[i].B[c], 1e-6 * a[i].B[c]) << i;
+}
+
 TEST(SolveCli, OutputsAreConsistentWithEachOther) {
     TempDir dir;
     const auto r = run_ffcube("solve --patches 150 --resolution 32 -q --objects " + (dir / "o.csv") + " --radiosity " +
