@@ -7,6 +7,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 
+#include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/checks.hpp"
@@ -81,7 +82,8 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     std::vector<Scene> scenes;
     for (const BenchCase* c : selected) scenes.push_back(build_bench_scene(*c));
 
-    const std::size_t per_case = options.resolutions.size() + options.rays.size();
+    const std::size_t hemicube_runs = options.resolutions.size() * (options.corrected ? 2 : 1);
+    const std::size_t per_case = hemicube_runs + options.rays.size();
     const std::size_t total = selected.size() * per_case;
     std::vector<BenchResult> results(total);
     std::size_t done = 0;
@@ -111,6 +113,17 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             const CsrMatrix F = compute_all_rows(provider);
             const double seconds = watch.seconds();
             record(k, s, "hemicube", fmt::format("N={}", h.resolution), h.resolution, F, seconds);
+            if (!options.corrected) continue;
+            // The same rows through the correction: identical to wrapping the hemicube provider
+            // (the correction sees each row after it is made), without rendering them twice.
+            MatrixRowProvider plain(F);
+            NearFieldOptions nf;
+            nf.k = options.near_k;
+            nf.sender_quadrature = true;
+            CorrectedRowProvider corrected(scenes[k], plain, nf);
+            const CsrMatrix C = compute_all_rows(corrected);
+            record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", h.resolution), h.resolution, C,
+                   seconds + corrected.stats().seconds);
         }
     for (std::size_t k = 0; k < selected.size(); ++k)
         for (std::size_t s = 0; s < options.rays.size(); ++s) {
@@ -122,7 +135,7 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             Stopwatch watch;
             const CsrMatrix F = compute_all_rows(provider);
             const double seconds = watch.seconds();
-            record(k, options.resolutions.size() + s, "raycast", fmt::format("rays={}", ro.rays),
+            record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays),
                    static_cast<double>(ro.rays), F, seconds);
         }
     return results;

@@ -64,7 +64,7 @@ constexpr double kMinError = 1e-8, kMinSeconds = 1e-4;
 
 std::vector<Curve> make_curves(const std::vector<BenchResult>& results) {
     std::vector<Curve> curves;
-    for (const char* method : {"hemicube", "raycast"})
+    for (const char* method : {"hemicube", "hemicube+near", "raycast"})
         for (const std::string& group : bench_groups()) {
             // setting value → (Σ seconds, max error)
             std::map<double, std::pair<double, double>> by_setting;
@@ -123,9 +123,10 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     for (const Curve& c : curves) {
         const Rgb col = group_color(c.group);
         const bool ray = c.method == "raycast";
+        const double width = c.method == "hemicube+near" ? 4 : 2;  // corrected: the thick solid line
         for (std::size_t k = 0; k + 1 < c.points.size(); ++k)
             cv.line(X(c.points[k].first), Y(c.points[k].second), X(c.points[k + 1].first), Y(c.points[k + 1].second), col,
-                    2, ray);
+                    width, ray);
         for (std::size_t k = 0; k < c.points.size(); ++k) {
             cv.marker(X(c.points[k].first), Y(c.points[k].second), ray, col);
             cv.text(X(c.points[k].first) + 6, Y(c.points[k].second) - 6, c.labels[k], 10, Anchor::Start);
@@ -145,6 +146,12 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     cv.marker(lx + 14, ly, false, axis);
     cv.text(lx + 36, ly + 4, "hemicube (N)", 12, Anchor::Start);
     ly += 20;
+    if (std::any_of(curves.begin(), curves.end(), [](const Curve& c) { return c.method == "hemicube+near"; })) {
+        cv.line(lx, ly, lx + 28, ly, axis, 4, false);
+        cv.marker(lx + 14, ly, false, axis);
+        cv.text(lx + 36, ly + 4, "hemicube+near (N)", 12, Anchor::Start);
+        ly += 20;
+    }
     cv.line(lx, ly, lx + 28, ly, axis, 2, true);
     cv.marker(lx + 14, ly, true, axis);
     cv.text(lx + 36, ly + 4, "raycast (rays)", 12, Anchor::Start);

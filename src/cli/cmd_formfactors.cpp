@@ -49,8 +49,9 @@ int run(const Options& o) {
 
     Stopwatch watch;
     watch.restart();
-    const CsrMatrix F = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
+    CsrMatrix computed = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
     const double seconds = watch.seconds();
+    const CsrMatrix F = apply_enforcement(o.ff, std::move(computed), scene, rows, report);
     report.set("seconds", seconds);
     report.set(rows.raycast ? "rows_per_second" : "hemicubes_per_second", static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
     report.set("nnz", F.nnz());
@@ -88,6 +89,7 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     CLI::App* sub = app.add_subcommand("formfactors", "compute the form-factor matrix of a scene (hemicubes, or rays with --method raycast)");
     add_scene_options(*sub, opts->scene);
     add_formfactor_options(*sub, opts->ff);
+    add_enforce_option(*sub, opts->ff);
     sub->add_option("-o,--output", opts->output, "write F to F.ffm (ffcube's binary format) or F.mtx (Matrix Market)");
     sub->add_option("--groups", opts->groups, "write object-to-object form factors as CSV (from,to,F)");
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");

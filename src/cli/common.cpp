@@ -5,6 +5,7 @@
 
 #include <algorithm>
 
+#include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
@@ -35,6 +36,18 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
     app.add_option("--threads", o.threads, "worker threads, one GL context each (default: every core)");
     app.add_flag("--no-rotate", o.no_rotate, "do not rotate hemicubes about the normal by a seeded random angle");
     app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed);
+    app.add_option("--correct", o.correct,
+                   "none, or near: exact form factors for near unoccluded pairs, sender quadrature (hemicube) for the rest")
+        ->check(CLI::IsMember({"none", "near"}))
+        ->default_val("none");
+    app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
+        ->check(CLI::PositiveNumber)
+        ->default_val(3.0);
+}
+
+void add_enforce_option(CLI::App& app, FormFactorOptions& o) {
+    app.add_option("--enforce", o.enforce, "reciprocity, closure or both (closed scenes only) on the finished matrix")
+        ->check(CLI::IsMember({"reciprocity", "closure", "both"}));
 }
 
 namespace {
@@ -105,6 +118,8 @@ FfmMetadata row_metadata(const FormFactorOptions& o) {
         meta.resolution = static_cast<std::uint32_t>(o.resolution);
         meta.settings = fmt::format("rotate={} seed={}", o.no_rotate ? 0 : 1, o.seed);
     }
+    // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
+    if (o.correct == "near") meta.settings += fmt::format(" correct=near k={}", o.near_k);
     return meta;
 }
 
@@ -124,12 +139,32 @@ RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report
         const HemicubeRowProvider& h = *rows.hemicube;
         info("hemicube on {} ({}), {} {}, resolution {}", h.backend(), h.renderer(), h.threads(), h.workers(), h.resolution());
     }
+    if (o.correct == "near") {
+        NearFieldOptions nf;
+        nf.k = o.near_k;
+        // The hemicube samples the sender at its centre; the ray caster samples all of it.
+        nf.sender_quadrature = !rows.raycast;
+        RowProvider& inner = rows.hemicube ? static_cast<RowProvider&>(*rows.hemicube) : *rows.raycast;
+        rows.corrected = std::make_unique<CorrectedRowProvider>(scene, inner, nf);
+        info("near-field correction: k = {}{}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "");
+    }
     report.set("method", rows.provider().name());
     report.set("time.setup", watch.seconds());
     return rows;
 }
 
 void report_row_source(Report& r, const RowSource& rows) {
+    if (rows.corrected) {
+        const NearFieldStats& c = rows.corrected->stats();
+        r.set("corrections.kind", "near");
+        r.set("corrections.rows", c.rows);
+        r.set("corrections.rows_touched", c.rows_touched);
+        r.set("corrections.near_pairs", c.near_pairs);
+        r.set("corrections.entries_replaced", c.replaced);
+        r.set("corrections.pairs_refused_possibly_occluded", c.refused);
+        r.set("corrections.entries_quadrature", c.quadrature);
+        r.set("corrections.seconds", c.seconds);
+    }
     if (rows.raycast) {
         r.set("rays_per_patch", rows.raycast->rays());
         r.set("rays_traced", rows.raycast->rays_traced());
@@ -161,6 +196,49 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
+}
+
+CsrMatrix apply_enforcement(const FormFactorOptions& o, CsrMatrix F, const Scene& scene, const RowSource& rows,
+                            Report& report) {
+    if (o.enforce.empty()) return F;
+    const EnforceMode mode = parse_enforce_mode(o.enforce);
+    if (mode == EnforceMode::Closure) {
+        if (rows.hemicube && rows.hemicube->stats().miss_weight > 0)
+            throw InputError(fmt::format(
+                "--enforce {}: hemicube pixels saw nothing (ΔF {:.3g} summed over hemicubes): the scene is open (light "
+                "escapes), and closure would hide that",
+                o.enforce, rows.hemicube->stats().miss_weight));
+        // Ray-cast rows of a closed scene sum to 1 up to rays lost at cracks; 1e-3 tolerates few.
+        // Corrected rows are judged as the inner provider made them (see NearFieldStats).
+        if (rows.corrected) {
+            const double s = rows.corrected->stats().inner_row_sum_min;
+            if (s < 1.0 - 1e-3)
+                throw InputError(fmt::format("--enforce {}: a row sums to {:.6g} < 1 - 0.001 before correction: the scene "
+                                             "is open (light escapes), and closure would hide that",
+                                             o.enforce, s));
+        } else {
+            require_closed(F, 1e-3);
+        }
+    }
+    std::vector<double> areas;
+    areas.reserve(scene.size());
+    for (const Patch& p : scene.patches) areas.push_back(p.area);
+    EnforceStats st;
+    Stopwatch watch;
+    const EnforcedMatrix E = enforce(F, areas, mode, st);
+    report.set("enforce.mode", o.enforce);
+    report.set("enforce.before.row_sum_min", st.before.row_sum_min);
+    report.set("enforce.before.row_sum_max", st.before.row_sum_max);
+    report.set("enforce.before.reciprocity_max", st.before.reciprocity_max);
+    report.set("enforce.after.row_sum_min", st.after.row_sum_min);
+    report.set("enforce.after.row_sum_max", st.after.row_sum_max);
+    report.set("enforce.after.reciprocity_max", st.after.reciprocity_max);
+    report.set("enforce.iterations", st.iterations);
+    report.set("enforce.seconds", watch.seconds());
+    info("--enforce {}: row sums {:.6f}..{:.6f} -> {:.6f}..{:.6f}, reciprocity {:.2e} -> {:.2e} (in double; stored as float)",
+         o.enforce, st.before.row_sum_min, st.before.row_sum_max, st.after.row_sum_min, st.after.row_sum_max,
+         st.before.reciprocity_max, st.after.reciprocity_max);
+    return E.to_csr();
 }
 
 void check_output_path(const std::string& option, const std::string& path) {

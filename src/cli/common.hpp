@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
@@ -33,17 +35,28 @@ struct FormFactorOptions {
     bool no_rotate = false;
     std::uint64_t seed = 0x5eed;
     std::uint64_t rays = 4096;  // raycast: rays per patch
+    // "none" or "near": near-field analytic correction (docs/accuracy.md), with sender
+    // quadrature for the hemicube's other entries.
+    std::string correct = "none";
+    double near_k = 3.0;
+    std::string enforce;  // formfactors only: "", reciprocity, closure or both
 };
 
 // Where rows come from: hemicubes on a GL context, or rays through Embree.
 struct RowSource {
     std::unique_ptr<HemicubeRowProvider> hemicube;
     std::unique_ptr<RaycastRowProvider> raycast;
-    RowProvider& provider() { return hemicube ? static_cast<RowProvider&>(*hemicube) : *raycast; }
+    std::unique_ptr<CorrectedRowProvider> corrected;  // wraps one of the two (--correct near)
+    RowProvider& provider() {
+        if (corrected) return *corrected;
+        return hemicube ? static_cast<RowProvider&>(*hemicube) : *raycast;
+    }
 };
 
 void add_scene_options(CLI::App& app, SceneOptions& o);
 void add_formfactor_options(CLI::App& app, FormFactorOptions& o);
+// --enforce (formfactors only: it acts on the finished matrix).
+void add_enforce_option(CLI::App& app, FormFactorOptions& o);
 
 // Loads (or takes the built-in scene), prints warnings, meshes, prints the meshing summary.
 // Records meshing figures and its time in the report.
@@ -62,6 +75,12 @@ RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report
 // The provider's figures: backend, renderer, resolution, workers, time split and culling for
 // hemicubes; rays for the ray caster.
 void report_row_source(Report& report, const RowSource& rows);
+
+// --enforce: reciprocity/closure on the finished matrix, with before/after figures in the report
+// ("enforce.*"). Refused (InputError) for open scenes: a hemicube pixel that saw nothing, or a row
+// summing below 1 − 1e-3. Returns F unchanged when no --enforce was given.
+CsrMatrix apply_enforcement(const FormFactorOptions& o, CsrMatrix F, const Scene& scene, const RowSource& rows,
+                            Report& report);
 
 // Refuses an output path up front (before hours of work) when its directory does not exist.
 void check_output_path(const std::string& option, const std::string& path);

@@ -113,7 +113,7 @@ constexpr std::array<double, 4> kWg = {
 // singularities here sit at interval ends (the callers split there), where bisection converges
 // geometrically; 50 levels reach intervals of 1e-15 of the edge, below double resolution.
 template <class F>
-double integrate(const F& f, double a, double b, double tol, int depth = 50) {
+double integrate(const F& f, double a, double b, double tol, double noise, int depth = 50) {
     const double c = 0.5 * (a + b), hl = 0.5 * (b - a);
     const double fc = f(c);
     double k = kWgk[7] * fc, g = kWg[3] * fc;
@@ -126,8 +126,11 @@ double integrate(const F& f, double a, double b, double tol, int depth = 50) {
     k *= hl;
     g *= hl;
     FFCUBE_CHECK_MSG(std::isfinite(k), "non-finite integrand in the contour integral");
-    if (std::abs(k - g) <= tol || depth == 0) return k;
-    return integrate(f, a, c, 0.5 * tol, depth - 1) + integrate(f, c, b, 0.5 * tol, depth - 1);
+    // 'noise' is the integrand's absolute rounding error: |K − G| below noise × (b − a) cannot be
+    // told from rounding, and bisecting further would split noise in both halves at every level
+    // (2^depth evaluations: a sliver clipped 1e-16 thick by an ulp of rounding did exactly that).
+    if (std::abs(k - g) <= std::max(tol, noise * (b - a)) || depth == 0) return k;
+    return integrate(f, a, c, 0.5 * tol, noise, depth - 1) + integrate(f, c, b, 0.5 * tol, noise, depth - 1);
 }
 
 // Parameter t ∈ [0, lq] of the point of segment q0 + t e closest to the segment p0 + s d,
@@ -179,9 +182,15 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1)
     // Absolute tolerance 1e-13 of the pair's scale lp·lq: the sum over all pairs of a polygon
     // pair then carries ≲ 1e-13 × perimeter1 × perimeter2 of quadrature error.
     const double tol = 1e-13 * lp * lq;
+    // g is a difference of two log primitives, each of size about S (1 + |ln S|) with S the
+    // extent of the pair (coordinates are scaled to the pair, so S and |ln r| stay moderate): its
+    // rounding error is about 1e-15 S whatever lp is (the terms do not shrink with a short P). The
+    // noise accepted over all of Q is then 1e-14 S lq: the floor that doubles allow.
+    const double extent = lp + lq + glm::length(q0 - p0);
+    const double noise = 1e-14 * extent;
     double integral = 0.0;
     for (std::size_t i = 0; i + 1 < cuts.size(); ++i)
-        if (cuts[i + 1] > cuts[i]) integral += integrate(g, cuts[i], cuts[i + 1], tol);
+        if (cuts[i + 1] > cuts[i]) integral += integrate(g, cuts[i], cuts[i + 1], tol, noise);
     return cos_angle * integral;
 }
 

@@ -383,3 +383,32 @@ TEST(PolygonPolygon, MatchesMonteCarlo) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// A box's wall and ceiling patches as the mesher rounds them: the ceiling's vertices are an ulp
+// or two below z = 1, so the wall's top edge lies 1e-16 behind the ceiling's plane and clipping
+// leaves a sliver 1e-16 thick. The adaptive quadrature used to bisect rounding noise in both
+// halves at every level (2^50 evaluations, never returning). It must now return, and agree with
+// the same pair with the ceiling exactly at z = 1: moving vertices by 2.2e-16 changes F by
+// O(1e-15) relative, so 1e-12 leaves room for the quadrature tolerance (1e-13 per edge pair).
+TEST(PolygonPolygon, SliverClippedByRoundingReturnsTheUnroundedValue) {
+    const std::vector<Vec3> wall = {{0, 0.58333333333333337, 0.91666666666666663},
+                                    {0, 0.66666666666666663, 0.91666666666666663},
+                                    {0, 0.66666666666666663, 1},
+                                    {0, 0.58333333333333337, 1}};
+    const std::vector<Vec3> rounded = {{0.083333333333333329, 0.41666666666666663, 0.99999999999999978},
+                                       {0.083333333333333329, 0.5, 0.99999999999999989},
+                                       {0.16666666666666666, 0.5, 1},
+                                       {0.16666666666666666, 0.41666666666666674, 0.99999999999999989}};
+    std::vector<Vec3> exact = rounded;
+    for (Vec3& v : exact) v.z = 1.0;
+    const double f = ff_polygon_polygon(wall, rounded);
+    const double ref = ff_polygon_polygon(wall, exact);
+    EXPECT_GT(ref, 0.0);
+    EXPECT_NEAR(f, ref, 1e-12 * ref);
+}
+
+}  // namespace
+}  // namespace ffcube

@@ -60,11 +60,16 @@ struct BenchOptions {
     unsigned threads = 0;                 // 0: every core (both methods)
     Backend backend = Backend::Auto;
     std::uint64_t seed = 0x5eed;
+    // Also measure each hemicube run with the near-field correction and sender quadrature
+    // (accuracy/near_field.hpp) as method "hemicube+near": the plain run's rows corrected, its
+    // seconds = the plain run's + the correction's (what `--correct near` costs).
+    bool corrected = false;
+    double near_k = 3.0;
 };
 
 // One line of results.csv.
 struct BenchResult {
-    std::string case_name, group, method, setting;  // method "hemicube" (setting "N=256") or "raycast" (setting "rays=1000")
+    std::string case_name, group, method, setting;  // method "hemicube" (setting "N=256"), "hemicube+near" or "raycast" (setting "rays=1000")
     double value = 0;                                // the resolution or ray count, for plotting
     std::size_t patches = 0;
     double seconds = 0;  // wall seconds of the row computation (provider start-up excluded)

@@ -1,0 +1,62 @@
+// Reciprocity and closure enforcement on a finished form-factor matrix (`--enforce`).
+//
+//  * reciprocity: G_ij = (A_i F_ij + A_j F_ji) / 2 on the union of the two patterns, then
+//    F_ij = G_ij / A_i. Row sums change by the antisymmetric part only.
+//  * closure (implies reciprocity): symmetric diagonal scaling of G, d_i Σ_j G_ij d_j = A_i,
+//    by the symmetric Sinkhorn–Knopp iteration d_i ← √(d_i A_i / (G d)_i) until every row sums to
+//    1 within 1e-12; F_ij = d_i G_ij d_j / A_i. G stays symmetric, so reciprocity is kept.
+// Both only rescale non-negative numbers: no entry becomes negative.
+// Closure is only meaningful for closed scenes: in an open one, rows sum below 1 because light
+// escapes, and scaling them up would hide that. require_closed() refuses such matrices.
+// Results are kept in double (EnforcedMatrix): CsrMatrix stores float, whose 6e-8 relative
+// rounding would undo the 1e-12 closure; to_csr() makes the float matrix for writing.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ffcube/formfactor/sparse.hpp"
+
+namespace ffcube {
+
+enum class EnforceMode { Reciprocity, Closure };
+
+// Parses "reciprocity", "closure" or "both" (= closure, which implies reciprocity); InputError
+// otherwise.
+EnforceMode parse_enforce_mode(const std::string& name);
+
+struct EnforcedMatrix {
+    std::uint32_t n = 0;
+    std::vector<std::uint64_t> row_ptr{0};
+    std::vector<std::uint32_t> col;
+    std::vector<double> val;
+    double at(std::uint32_t i, std::uint32_t j) const;  // 0 when absent
+    double row_sum(std::uint32_t i) const;
+    CsrMatrix to_csr() const;
+};
+
+struct MatrixFigures {
+    double row_sum_min = 0, row_sum_max = 0;
+    // max over pairs of |A_i F_ij − A_j F_ji| / ((A_i + A_j)/2): absolute, in units of F.
+    double reciprocity_max = 0;
+};
+
+struct EnforceStats {
+    MatrixFigures before, after;
+    unsigned iterations = 0;  // closure iterations (0 for reciprocity only)
+};
+
+// Throws InputError when some row sums below 1 − tolerance (row, its sum and the rule named):
+// the scene is open (or a row missed part of its view) and closure would hide escaping light.
+void require_closed(const CsrMatrix& F, double tolerance);
+
+// areas.size() == F.size(), every area > 0 (InputError otherwise). Closure also throws
+// InputError for a row with no entries (nothing to scale) and when 100000 iterations do not
+// reach 1e-12 (the pattern has no symmetric scaling, e.g. a patch seen by no one).
+EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats);
+
+MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> areas);
+
+}  // namespace ffcube

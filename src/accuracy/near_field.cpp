@@ -1,0 +1,399 @@
+// Near-field correction: near-pair search and the conservative shaft (occlusion) test.
+#include "ffcube/accuracy/near_field.hpp"
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/analytic.hpp"
+
+namespace ffcube {
+
+namespace {
+
+struct Box {
+    Vec3 lo{0.0}, hi{0.0};
+    bool overlaps(const Box& o) const {
+        return lo.x <= o.hi.x && o.lo.x <= hi.x && lo.y <= o.hi.y && o.lo.y <= hi.y && lo.z <= o.hi.z && o.lo.z <= hi.z;
+    }
+};
+
+// Patch vertices without a triangle's repeated last one.
+struct Poly {
+    std::array<Vec3, 4> v{};
+    std::size_t n = 3;
+    std::span<const Vec3> span() const { return {v.data(), n}; }
+};
+
+// How far from a patch's plane a vertex of another counts as lying in it: 1e-9 of the pair's
+// size (the planarity tolerance of geometry/analytic.hpp), plus the rounding of coordinates far
+// from the origin (16 ulps of the largest one: a scene offset by 1e5 has its patch normals off by
+// 1e-10 and its vertices off their planes by 1e-11).
+double plane_tolerance(const Patch& a, const Patch& b) {
+    const double coord = std::max({std::abs(a.centroid.x), std::abs(a.centroid.y), std::abs(a.centroid.z),
+                                   std::abs(b.centroid.x), std::abs(b.centroid.y), std::abs(b.centroid.z)});
+    return 1e-9 * std::max(a.size, b.size) + 16 * std::numeric_limits<double>::epsilon() * coord;
+}
+
+// ff_polygon_polygon for two facing patches, with the vertices of each that lie within
+// plane_tolerance of the other's plane moved to that distance in front of it. Why: rounding
+// leaves such vertices a hair *behind* the plane (a box's ceiling meshed at z =
+// 0.99999999999999978 puts a wall's top vertices 1e-16 behind it; an offset of 1e5 does the same
+// at 1e-11); the contour integral then clips a sliver of that height, and its adaptive
+// quadrature, whose tolerance scales with the sliver, recurses to its depth limit (2^50
+// evaluations: it never returns). The move changes F by O(1e-9) relative.
+double exact_ff(const Poly& a, const Patch& pa, const Poly& b, const Patch& pb) {
+    const double tol = plane_tolerance(pa, pb);
+    auto lift = [&](const Poly& p, const Patch& other) {
+        Poly q = p;
+        for (std::size_t k = 0; k < q.n; ++k) {
+            const double d = glm::dot(q.v[k] - other.centroid, other.normal);
+            if (std::abs(d) <= tol) q.v[k] += (tol - d) * other.normal;
+        }
+        return q;
+    };
+    const Poly a2 = lift(a, pb), b2 = lift(b, pa);
+    return ff_polygon_polygon(a2.span(), b2.span());
+}
+
+}  // namespace
+
+struct NearFieldCorrector::Impl {
+    const Scene& scene;
+    NearFieldOptions options;
+    std::vector<Poly> polys;
+    std::vector<Box> boxes;
+    double max_size = 0;
+    // Uniform grid of bounding boxes: cell (x, y, z) of side h from `origin`, hashed.
+    Vec3 origin{0.0};
+    double h = 1;
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> cells;
+    std::vector<std::uint32_t> big;  // patches too large for the grid, checked by every query
+
+    static constexpr long kMaxCellsPerQuery = 4096;  // beyond: scan every patch instead
+
+    std::array<long, 3> cell_of(const Vec3& p) const {
+        const Vec3 c = (p - origin) / h;
+        return {static_cast<long>(std::floor(c.x)), static_cast<long>(std::floor(c.y)), static_cast<long>(std::floor(c.z))};
+    }
+    static std::uint64_t key(long x, long y, long z) {
+        // 21 bits per axis; the grid spans at most 2^21 cells per axis (h ≥ extent / 2^20).
+        const auto u = [](long v) { return static_cast<std::uint64_t>(v) & 0x1FFFFFu; };
+        return u(x) | (u(y) << 21) | (u(z) << 42);
+    }
+
+    // Every patch whose bounding box may meet `box` (a superset, sorted, unique).
+    void query(const Box& box, std::vector<std::uint32_t>& out) const {
+        out.clear();
+        const auto a = cell_of(box.lo), b = cell_of(box.hi);
+        const long count = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
+        if (count > kMaxCellsPerQuery) {
+            for (std::uint32_t q = 0; q < boxes.size(); ++q)
+                if (boxes[q].overlaps(box)) out.push_back(q);
+            return;
+        }
+        for (long x = a[0]; x <= b[0]; ++x)
+            for (long y = a[1]; y <= b[1]; ++y)
+                for (long z = a[2]; z <= b[2]; ++z) {
+                    const auto it = cells.find(key(x, y, z));
+                    if (it == cells.end()) continue;
+                    for (std::uint32_t q : it->second)
+                        if (boxes[q].overlaps(box)) out.push_back(q);
+                }
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+    }
+
+    Impl(const Scene& s, const NearFieldOptions& o) : scene(s), options(o) {
+        const std::size_t n = s.size();
+        polys.resize(n);
+        boxes.resize(n);
+        std::vector<double> sizes(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const Patch& p = s.patches[i];
+            polys[i].n = p.count;
+            for (std::size_t k = 0; k < p.count; ++k) polys[i].v[k] = s.positions[p.v[k]];
+            Box b{polys[i].v[0], polys[i].v[0]};
+            for (std::size_t k = 1; k < p.count; ++k) {
+                b.lo = glm::min(b.lo, polys[i].v[k]);
+                b.hi = glm::max(b.hi, polys[i].v[k]);
+            }
+            boxes[i] = b;
+            sizes[i] = p.size;
+            max_size = std::max(max_size, p.size);
+        }
+        if (n == 0) return;
+        // Cell side: the median patch size (most patches then fall in a few cells), but no finer
+        // than 2^-20 of the extent so that cell coordinates fit the hash key.
+        std::nth_element(sizes.begin(), sizes.begin() + static_cast<long>(n / 2), sizes.end());
+        h = std::max({sizes[n / 2], s.extent() * std::ldexp(1.0, -20), 1e-300});
+        origin = s.bbox_min - Vec3(h);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const auto a = cell_of(boxes[i].lo), b = cell_of(boxes[i].hi);
+            const long count = (b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1);
+            if (count > kMaxCellsPerQuery) {
+                // A patch far larger than the median would fill thousands of cells: it goes on a
+                // list that every query scans instead.
+                big.push_back(i);
+                continue;
+            }
+            for (long x = a[0]; x <= b[0]; ++x)
+                for (long y = a[1]; y <= b[1]; ++y)
+                    for (long z = a[2]; z <= b[2]; ++z) cells[key(x, y, z)].push_back(i);
+        }
+    }
+
+    void query_all(const Box& box, std::vector<std::uint32_t>& out) const {
+        query(box, out);
+        bool added = false;
+        for (std::uint32_t q : big)
+            if (boxes[q].overlaps(box)) {
+                out.push_back(q);
+                added = true;
+            }
+        if (added) {
+            std::sort(out.begin(), out.end());
+            out.erase(std::unique(out.begin(), out.end()), out.end());
+        }
+    }
+
+    bool unoccluded(std::uint32_t i, std::uint32_t j) const;
+};
+
+// Separating-axis test between the convex hull of patches i ∪ j and each other patch q whose
+// bounding box meets the pair's. Candidate axes: the normals of q, i and j; the cross products of
+// q's edges with every segment between two hull points (the edge–edge axes of the full test);
+// and the normals of every plane through three hull points (the hull's face planes are among
+// them). Touching (interval overlap ≤ tol) counts as separated: see the header for why that
+// blocks nothing. A missed separating axis can only make the test refuse.
+bool NearFieldCorrector::Impl::unoccluded(std::uint32_t i, std::uint32_t j) const {
+    std::array<Vec3, 8> hull{};
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < polys[i].n; ++k) hull[m++] = polys[i].v[k];
+    for (std::size_t k = 0; k < polys[j].n; ++k) hull[m++] = polys[j].v[k];
+    Box pair{glm::min(boxes[i].lo, boxes[j].lo), glm::max(boxes[i].hi, boxes[j].hi)};
+    const double scale = glm::length(pair.hi - pair.lo);
+    // Relative tolerance of touching: a q that enters the hull by less than 1e-9 of the pair's
+    // size blocks at most a sliver of that relative width (documented in docs/accuracy.md).
+    const double tol = 1e-9 * scale;
+    const Box inflated{pair.lo - Vec3(tol), pair.hi + Vec3(tol)};
+    std::vector<std::uint32_t> candidates;
+    query_all(inflated, candidates);
+
+    // Hull-only axes are the same for every q: precompute them.
+    std::vector<Vec3> axes{scene.patches[i].normal, scene.patches[j].normal};
+    for (std::size_t a = 0; a < m; ++a)
+        for (std::size_t b = a + 1; b < m; ++b)
+            for (std::size_t c = b + 1; c < m; ++c) {
+                const Vec3 nrm = glm::cross(hull[b] - hull[a], hull[c] - hull[a]);
+                if (glm::dot(nrm, nrm) > 1e-24 * scale * scale * scale * scale) axes.push_back(glm::normalize(nrm));
+            }
+    std::vector<Vec3> seg;
+    for (std::size_t a = 0; a < m; ++a)
+        for (std::size_t b = a + 1; b < m; ++b) seg.push_back(hull[b] - hull[a]);
+
+    auto separated = [&](const Vec3& axis, const Poly& q) {
+        double hlo = INFINITY, hhi = -INFINITY, qlo = INFINITY, qhi = -INFINITY;
+        for (std::size_t k = 0; k < m; ++k) {
+            const double d = glm::dot(axis, hull[k]);
+            hlo = std::min(hlo, d);
+            hhi = std::max(hhi, d);
+        }
+        for (std::size_t k = 0; k < q.n; ++k) {
+            const double d = glm::dot(axis, q.v[k]);
+            qlo = std::min(qlo, d);
+            qhi = std::max(qhi, d);
+        }
+        return hhi <= qlo + tol || qhi <= hlo + tol;
+    };
+
+    for (std::uint32_t qi : candidates) {
+        if (qi == i || qi == j) continue;
+        const Poly& q = polys[qi];
+        bool sep = separated(scene.patches[qi].normal, q);
+        for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], q);
+        for (std::size_t e = 0; !sep && e < q.n; ++e) {
+            const Vec3 edge = q.v[(e + 1) % q.n] - q.v[e];
+            for (std::size_t s = 0; !sep && s < seg.size(); ++s) {
+                const Vec3 axis = glm::cross(edge, seg[s]);
+                const double len2 = glm::dot(axis, axis);
+                if (len2 <= 1e-24 * scale * scale * scale * scale) continue;
+                sep = separated(axis / std::sqrt(len2), q);
+            }
+        }
+        if (!sep) return false;
+    }
+    return true;
+}
+
+NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOptions& options) {
+    if (!(options.k > 0) || !std::isfinite(options.k))
+        throw InputError(fmt::format("near-field correction: k = {} must be a positive number", options.k));
+    impl_ = std::make_unique<Impl>(scene, options);
+}
+
+NearFieldCorrector::~NearFieldCorrector() = default;
+
+bool NearFieldCorrector::provably_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->unoccluded(i, j); }
+
+void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats) const {
+    const Impl& im = *impl_;
+    ++stats.rows;
+    const Patch& pi = im.scene.patches[i];
+    const double k = im.options.k;
+    const double reach = k * std::max(pi.size, im.max_size);
+    std::vector<std::uint32_t> near;
+    im.query_all(Box{pi.centroid - Vec3(reach), pi.centroid + Vec3(reach)}, near);
+
+    std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
+    for (std::uint32_t j : near) {
+        if (j == i) continue;
+        const Patch& pj = im.scene.patches[j];
+        const double d = glm::length(pj.centroid - pi.centroid);
+        if (d >= k * std::max(pi.size, pj.size)) continue;
+        // Facing: some vertex farther than plane_tolerance in front of the other's plane (a
+        // polygon within it is seen edge-on; coplanar neighbours must not count as facing).
+        const double tol = 2 * plane_tolerance(pi, pj);
+        const Poly& qi = im.polys[i];
+        const Poly& qj = im.polys[j];
+        double front_j = -INFINITY, front_i = -INFINITY;
+        for (std::size_t v = 0; v < qj.n; ++v) front_j = std::max(front_j, glm::dot(pi.normal, qj.v[v] - pi.centroid));
+        for (std::size_t v = 0; v < qi.n; ++v) front_i = std::max(front_i, glm::dot(pj.normal, qi.v[v] - pj.centroid));
+        if (front_j <= tol || front_i <= tol) continue;
+        ++stats.near_pairs;
+        if (!im.unoccluded(i, j)) {
+            ++stats.refused;
+            continue;
+        }
+        exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
+    }
+    const bool quadrature = im.options.sender_quadrature;
+    if (exact.empty() && !quadrature) return;
+    if (!exact.empty()) ++stats.rows_touched;
+    stats.replaced += exact.size();
+    // Sender quadrature points and weights on patch i (see NearFieldOptions).
+    std::array<Vec3, 4> qp{};
+    std::array<double, 4> qw{};
+    std::size_t nq = 0;
+    if (quadrature) {
+        const Poly& P = im.polys[i];
+        if (P.n == 4) {
+            const double g[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
+            double wsum = 0;
+            for (double u : g)
+                for (double v : g) {
+                    const Vec3 du = (1 - v) * (P.v[1] - P.v[0]) + v * (P.v[2] - P.v[3]);
+                    const Vec3 dv = (1 - u) * (P.v[3] - P.v[0]) + u * (P.v[2] - P.v[1]);
+                    qp[nq] = (1 - u) * (1 - v) * P.v[0] + u * (1 - v) * P.v[1] + u * v * P.v[2] + (1 - u) * v * P.v[3];
+                    qw[nq] = glm::length(glm::cross(du, dv));
+                    wsum += qw[nq++];
+                }
+            for (std::size_t q = 0; q < nq; ++q) qw[q] /= wsum;
+        } else {
+            const double a = 2.0 / 3.0, b = 1.0 / 6.0;
+            for (const auto& [s, t] : {std::pair{b, b}, std::pair{a, b}, std::pair{b, a}}) {
+                qp[nq] = P.v[0] + s * (P.v[1] - P.v[0]) + t * (P.v[2] - P.v[0]);
+                qw[nq++] = 1.0 / 3.0;
+            }
+        }
+    }
+    const double far_reach = im.options.far_k * pi.size;
+    // Beyond this many sizes the quadrature ratio uses the point kernel cosθ_i cosθ_j / r⁴ (see
+    // below): its relative error on the correction is about (size_j/d)² ≤ 1/36 at 6 sizes, where
+    // the correction itself is ≈ (size_i/d)²/24 ≤ 1e-3 of F_ij: 3e-5 of F_ij.
+    constexpr double kPointKernelK = 6.0;
+    // The quadrature ratio is a small correction where the midpoint rule is sound. A ratio far
+    // from 1 means j straddles i's horizon or the centre sees little of it (the hemicube's value
+    // is then pixels at a grazing angle, not a midpoint value): scaling it would amplify pixel
+    // error (rows of the Cornell box grew to 1.098). Such entries are left alone.
+    constexpr double kMaxRatioChange = 0.25;
+    auto ratio = [&](double f, double r) {
+        if (!(std::abs(r - 1.0) <= kMaxRatioChange)) return f;
+        ++stats.quadrature;
+        return f * r;
+    };
+    auto rescale = [&](std::uint32_t j, double f) {
+        if (!quadrature) return f;
+        const Patch& pj = im.scene.patches[j];
+        const double d = glm::length(pj.centroid - pi.centroid);
+        if (d >= far_reach) return f;
+        // Near pairs were replaced or refused above: a refused one may be occluded, and its
+        // hemicube value is kept as it is.
+        if (d < k * std::max(pi.size, pj.size)) return f;
+        if (d >= kPointKernelK * std::max(pi.size, pj.size)) {
+            // Far: the receiver as a point at its centroid (see kPointKernelK); a few flops per
+            // point instead of Lambert's contour.
+            auto kernel = [&](const Vec3& x) {
+                const Vec3 r = pj.centroid - x;
+                const double r2 = glm::dot(r, r);
+                return std::max(0.0, glm::dot(pi.normal, r)) * std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2);
+            };
+            const double mid = kernel(pi.centroid);
+            if (!(mid > 0)) return f;
+            double q = 0;
+            for (std::size_t k2 = 0; k2 < nq; ++k2) q += qw[k2] * kernel(qp[k2]);
+            return ratio(f, q / mid);
+        }
+        const auto poly = im.polys[j].span();
+        const double mid = ff_point_polygon(pi.centroid, pi.normal, poly);
+        if (!(mid > 0)) return f;  // the inner provider saw j where the centre sees it edge-on: keep
+        double q = 0;
+        // One-sided: points behind j's plane (a patch that j stands on, cut by j's base) see its
+        // back, which ff_point_polygon would count.
+        for (std::size_t k2 = 0; k2 < nq; ++k2)
+            if (glm::dot(qp[k2] - pj.centroid, pj.normal) > 0)
+                q += qw[k2] * ff_point_polygon(qp[k2], pi.normal, poly);
+        return ratio(f, q / mid);
+    };
+    // Merge: the replaced columns take their exact value (dropped when it is 0), others stay.
+    SparseRow out;
+    out.col.reserve(row.nnz() + exact.size());
+    out.val.reserve(row.nnz() + exact.size());
+    std::size_t a = 0, b = 0;
+    while (a < row.nnz() || b < exact.size()) {
+        if (b == exact.size() || (a < row.nnz() && row.col[a] < exact[b].first)) {
+            const double f = rescale(row.col[a], row.val[a]);
+            if (f > 0) {
+                out.col.push_back(row.col[a]);
+                out.val.push_back(f);
+            }
+            ++a;
+            continue;
+        }
+        if (a < row.nnz() && row.col[a] == exact[b].first) ++a;
+        if (exact[b].second > 0) {
+            out.col.push_back(exact[b].first);
+            out.val.push_back(exact[b].second);
+        }
+        ++b;
+    }
+    row = std::move(out);
+}
+
+CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options)
+    : inner_(inner), corrector_(scene, options) {
+    if (inner.size() != scene.size())
+        throw InputError(fmt::format("near-field correction: the provider has {} rows, the scene {} patches", inner.size(),
+                                     scene.size()));
+}
+
+void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
+    inner_.compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) {
+        Stopwatch watch;
+        stats_.inner_row_sum_min = std::min(stats_.inner_row_sum_min, row.sum());
+        scratch_ = row;
+        corrector_.correct(i, scratch_, stats_);
+        stats_.seconds += watch.seconds();
+        sink(i, scratch_);
+    });
+}
+
+}  // namespace ffcube
