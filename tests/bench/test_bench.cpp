@@ -9,6 +9,7 @@
 #include <sstream>
 #include <unistd.h>
 
+#include "support/pixel_sigma.hpp"
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
@@ -110,46 +111,6 @@ TEST(BenchCases, OccludedExactValuesAgreeWithRayCasting) {
     }
 }
 
-// Pixel discretisation σ of object-to-object values from the actual item buffers (the method of
-// tests/gl/test_hemicube_rows.cpp): a pixel cut by an outline counts wholly or not at all, an
-// error roughly uniform in ±ΔF/2 (variance ΔF²/12) under the seeded rotation; both pixels of
-// each neighbouring pair with different objects are counted (conservative). σ[a][b].
-std::vector<std::vector<double>> pixel_sigma(HemicubeRowProvider& provider, const Scene& scene, int resolution) {
-    const std::size_t m = scene.objects.size();
-    std::vector<std::vector<double>> var(m, std::vector<double>(m, 0.0));
-    std::vector<double> area(m, 0.0);
-    for (const Patch& p : scene.patches) area[p.object] += p.area;
-    const HemicubeLayout layout(resolution);
-    const auto& dff = layout.delta_ff();
-    const int W = layout.atlas_width();
-    auto object_of = [&](std::uint32_t id) -> int {
-        return id == 0 || id == 0xFFFFFFFFu ? -1 : static_cast<int>(scene.patches[id - 1].object);
-    };
-    for (std::uint32_t i = 0; i < scene.size(); ++i) {
-        const auto ids = provider.item_buffer(i);
-        std::vector<double> vi(m, 0.0);
-        for (const FaceSpec& f : layout.faces()) {
-            const auto& vp = f.viewport;
-            for (int y = vp.y; y < vp.y + vp.height; ++y)
-                for (int x = vp.x; x < vp.x + vp.width; ++x) {
-                    const std::size_t k = static_cast<std::size_t>(y) * W + x;
-                    const std::size_t nb[2] = {x + 1 < vp.x + vp.width ? k + 1 : k, y + 1 < vp.y + vp.height ? k + W : k};
-                    for (std::size_t kk : nb) {
-                        const int o = object_of(ids[k]), o2 = object_of(ids[kk]);
-                        if (o == o2) continue;
-                        for (int obj : {o, o2})
-                            if (obj >= 0) vi[static_cast<std::size_t>(obj)] += (dff[k] * dff[k] + dff[kk] * dff[kk]) / 12.0;
-                    }
-                }
-        }
-        const Patch& p = scene.patches[i];
-        const double w = p.area / area[p.object];
-        for (std::size_t b = 0; b < m; ++b) var[p.object][b] += w * w * vi[b];
-    }
-    for (auto& row : var)
-        for (double& v : row) v = std::sqrt(v);
-    return var;
-}
 
 // Meshing part of the hemicube's error: it measures point-to-area factors from patch centres,
 // so its object value converges to the midpoint rule Σ A_i F(c_i → receiver)/A, computed here
@@ -214,7 +175,7 @@ TEST(BenchRun, TinyRunWritesCsvAndHemicubeErrorIsBounded) {
     h.threads = 2;
     HemicubeRowProvider provider(scene, h);
     const auto G = object_form_factors(compute_all_rows(provider), scene);
-    const auto sigma = pixel_sigma(provider, scene, 32);
+    const auto sigma = test::pixel_sigma(provider, scene, 32);
     const double exact = one[0].exact[0][1];
     const double mesh = std::abs(midpoint_rule(scene, 0, one[0].polygons[1].vertices) - exact);
     EXPECT_NEAR(G[0][1], exact, mesh + 6 * sigma[0][1]);
@@ -257,7 +218,7 @@ TEST(BenchRun, RaycastAgreesWithHemicubeOnAnOccludedScene) {
     h.threads = 2;
     HemicubeRowProvider hemi(scene, h);
     const auto Gh = object_form_factors(compute_all_rows(hemi), scene);
-    const auto sigma = pixel_sigma(hemi, scene, N);
+    const auto sigma = test::pixel_sigma(hemi, scene, N);
     const std::uint64_t rays = 4000;
     RaycastOptions ro;
     ro.rays = rays;

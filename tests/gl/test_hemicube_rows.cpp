@@ -7,13 +7,9 @@
 //    reference is computed exactly here: Σ_i A_i F(c_i → receiver) / Σ_i A_i with Lambert's
 //    contour formula (geometry/analytic). Its distance to the closed form is the meshing error,
 //    added to the tolerance when comparing with the closed form.
-//  * Pixels: a pixel cut by a receiver's outline counts wholly or not at all, an error of at
-//    most its ΔF. With the seeded rotation the per-pixel errors are independent and roughly
-//    uniform in ±ΔF/2 (variance ΔF²/12), so for sender patch i, σ_i² = Σ_{cut pixels} ΔF²/12,
-//    and for the object value σ² = Σ_i (A_i/A)² σ_i². Cut pixels are counted from the actual
-//    item buffers (pixels whose 4-neighbour in the same face shows another object: both sides
-//    of the outline, so the count is about twice the cut pixels: conservative). The tolerance
-//    is 6σ (a false failure about once in 5e8 under the model).
+//  * Pixels: σ of each object value from the actual item buffers (support/pixel_sigma.hpp: cut
+//    pixels count wholly or not at all, error uniform in ±ΔF/2). The tolerance is 6σ (a false
+//    failure about once in 5e8 under the model).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -25,6 +21,7 @@
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/hemicube/layout.hpp"
+#include "support/pixel_sigma.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -52,44 +49,7 @@ Result run(const std::vector<NamedPolygon>& polys, double edge, const HemicubeOp
     HemicubeRowProvider provider(r.scene, opt);
     r.F = compute_all_rows(provider);
     r.G = object_form_factors(r.F, r.scene);
-    if (!with_sigma) return r;
-    const std::size_t m = r.scene.objects.size();
-    std::vector<std::vector<double>> var(m, std::vector<double>(m, 0.0));
-    std::vector<double> area(m, 0.0);
-    for (const Patch& p : r.scene.patches) area[p.object] += p.area;
-    const HemicubeLayout layout(opt.resolution);
-    const auto& dff = layout.delta_ff();
-    const int W = layout.atlas_width();
-    auto object_of = [&](std::uint32_t id) -> int {
-        if (id == 0 || id == 0xFFFFFFFFu) return -1;
-        return static_cast<int>(r.scene.patches[id - 1].object);
-    };
-    for (std::uint32_t i = 0; i < r.scene.size(); ++i) {
-        const auto ids = provider.item_buffer(i);
-        std::vector<double> vi(m, 0.0);
-        for (const FaceSpec& f : layout.faces()) {
-            const auto& vp = f.viewport;
-            for (int y = vp.y; y < vp.y + vp.height; ++y)
-                for (int x = vp.x; x < vp.x + vp.width; ++x) {
-                    const std::size_t k = static_cast<std::size_t>(y) * W + x;
-                    const int o = object_of(ids[k]);
-                    const std::size_t nb[2] = {x + 1 < vp.x + vp.width ? k + 1 : k, y + 1 < vp.y + vp.height ? k + W : k};
-                    for (std::size_t kk : nb) {
-                        const int o2 = object_of(ids[kk]);
-                        if (o2 == o) continue;
-                        // Both pixels of the pair are cut candidates for both objects.
-                        for (int obj : {o, o2})
-                            if (obj >= 0) vi[static_cast<std::size_t>(obj)] += (dff[k] * dff[k] + dff[kk] * dff[kk]) / 12.0;
-                    }
-                }
-        }
-        const Patch& p = r.scene.patches[i];
-        const double w = p.area / area[p.object];
-        for (std::size_t b = 0; b < m; ++b) var[p.object][b] += w * w * vi[b];
-    }
-    r.sigma.assign(m, std::vector<double>(m, 0.0));
-    for (std::size_t a = 0; a < m; ++a)
-        for (std::size_t b = 0; b < m; ++b) r.sigma[a][b] = std::sqrt(var[a][b]);
+    if (with_sigma) r.sigma = test::pixel_sigma(provider, r.scene, opt.resolution);
     return r;
 }
 
