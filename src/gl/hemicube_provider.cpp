@@ -161,10 +161,8 @@ public:
         gl::check_gl(gl, "hemicube worker setup");
 
         local_.resize(slots * 3);
-        for (int f = 0; f < 5; ++f) {
-            face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
-            lists_[f].reserve(slots);
-        }
+        for (int f = 0; f < 5; ++f) face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
+        for (auto& l : lists_) l.reserve(slots);
         all_idx_.reserve(slots * 2);
         ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
         acc_.assign(scene.patches.size(), 0.0);
@@ -200,7 +198,7 @@ public:
         gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
         gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
         all_idx_.clear();
-        for (int f = 0; f < 5; ++f) all_idx_.insert(all_idx_.end(), lists_[f].begin(), lists_[f].end());
+        for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
         gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
                       all_idx_.data(), GL_STREAM_DRAW);
 
@@ -209,19 +207,30 @@ public:
         gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
         gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
         const double near = HemicubeRowProvider::kNear * pa.size;
+        // Front-facing pieces first, then back-facing ones pushed a few depth units farther
+        // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
+        // back shows its front side, never the back of the other (no z-fighting; GL_GREATER also
+        // lets the first drawn win exact ties).
         std::size_t first_index = 0;
-        for (int f = 0; f < 5; ++f) {
-            const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
-            const std::size_t count = lists_[f].size();
-            if (count > 0) {
-                const auto m = face_matrix(fs, near);
-                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
-                gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
-                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
-                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
+        for (int pass = 0; pass < 2; ++pass) {
+            if (pass == 1) {
+                gl.Enable(GL_POLYGON_OFFSET_FILL);
+                gl.PolygonOffset(-1.0f, -4.0f);
             }
-            first_index += count;
+            for (int f = 0; f < 5; ++f) {
+                const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
+                const std::size_t count = lists_[pass * 5 + f].size();
+                if (count > 0) {
+                    const auto m = face_matrix(fs, near);
+                    gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
+                    gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
+                    gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                                    reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
+                }
+                first_index += count;
+            }
         }
+        gl.Disable(GL_POLYGON_OFFSET_FILL);
         gl.Finish();
         st.draw_seconds += watch.seconds();
         watch.restart();
@@ -311,13 +320,23 @@ private:
             constexpr unsigned kNegY = (1u << 4) | (1u << 5) | (1u << 7) | (1u << 12);   // |x| ≤ -y, 0 ≤ z ≤ -y
             constexpr unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
             const auto base = static_cast<std::uint32_t>(4 * g);
+            // Front-facing: the eye (the origin) lies in front of the piece's plane, whose normal
+            // (c1 − c0) × (c2 − c0) points to its front (corners CCW from the front).
+            const float* c0 = &local_[(4 * g) * 3];
+            const float* c1 = c0 + 3;
+            const float* c2 = c0 + 6;
+            const double e1[3] = {double(c1[0]) - c0[0], double(c1[1]) - c0[1], double(c1[2]) - c0[2]};
+            const double e2[3] = {double(c2[0]) - c0[0], double(c2[1]) - c0[1], double(c2[2]) - c0[2]};
+            const double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+            const bool back = nrm[0] * c0[0] + nrm[1] * c0[1] + nrm[2] * c0[2] > 0;
             for (std::size_t f = 0; f < 5; ++f) {
                 if (all & masks[f]) {
                     ++st.pieces_culled[f];
                 } else {
                     ++st.pieces_drawn[f];
-                    lists_[f].insert(lists_[f].end(), {base, base + 1, base + 2});
-                    if (count == 4) lists_[f].insert(lists_[f].end(), {base, base + 2, base + 3});
+                    auto& l = lists_[f + (back ? 5 : 0)];
+                    l.insert(l.end(), {base, base + 1, base + 2});
+                    if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
                 }
             }
         }
@@ -335,7 +354,7 @@ private:
     gl::Buffer vbo_, static_vbo_, grid_vbo_, ebo_, ssbo_;
     GLint u_face_ = -1;
     std::vector<float> local_;
-    std::vector<std::uint32_t> lists_[5], all_idx_;
+    std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
     std::vector<std::uint32_t> ids_;
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;

@@ -223,6 +223,35 @@ TEST(HemicubeRows, BackFacesBlockAndReceiveNothing) {
     EXPECT_GT(G[bw][h], 0.1);
 }
 
+// A two-sided plate made of two one-sided faces back to back in one plane, inside a closed box:
+// each side must show its own front (no z-fighting with the other face's back, which would be
+// absorbed and drop row sums), and nothing may leak through. Rows of a closed scene sum to 1
+// up to float accumulation (5,000-odd ΔF terms of ~1e-5 each in double: ~1e-12; the ΔF table
+// itself sums to 1 within 1e-13) plus float storage of the entries (2^-24 relative each: ≤ 6e-8 on the
+// sum); a pixel lost to the wrong side costs ΔF ≥ 1/(π N²)·(1/3)^2 ≈
+// 8.6e-6 at N = 64 (a corner pixel of a side face), so 1e-7 separates the two cleanly.
+TEST(HemicubeRows, TwoSidedPlateShowsBothFrontsAndLeaksNothing) {
+    std::vector<NamedPolygon> polys = test::inward_box(1, 1, 1);
+    polys.push_back(test::square_z("plate_up", 0.5, true, 0.5, Vec3(0.25, 0.25, 0)));
+    polys.push_back(test::square_z("plate_down", 0.5, false, 0.5, Vec3(0.25, 0.25, 0)));
+    for (const int n : {32, 64}) {
+        const Scene scene = test::make_scene(polys, 0.125);
+        HemicubeRowProvider provider(scene, options(n));
+        const CsrMatrix F = compute_all_rows(provider);
+        for (std::uint32_t i = 0; i < scene.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i << " N=" << n;
+        EXPECT_EQ(provider.stats().back_face_weight, 0.0) << "a back face won a pixel somewhere (N=" << n << ")";
+        EXPECT_EQ(provider.stats().miss_weight, 0.0);
+        // The floor sees the plate's lower side, the ceiling its upper side, never the other.
+        const auto G = object_form_factors(F, scene);
+        const std::size_t up = object_index(scene, "plate_up"), down = object_index(scene, "plate_down"),
+                          floor = object_index(scene, "z0"), ceiling = object_index(scene, "z1");
+        EXPECT_GT(G[floor][down], 0.1);
+        EXPECT_EQ(G[floor][up], 0.0);
+        EXPECT_GT(G[ceiling][up], 0.1);
+        EXPECT_EQ(G[ceiling][down], 0.0);
+    }
+}
+
 TEST(HemicubeRows, SameRowsWithOneOrTwoThreads) {
     const auto polys = test::inward_box(1, 1, 2);
     const Result one = run(polys, 0.25, options(64, 1), false);
