@@ -14,6 +14,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/analytic.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 
 namespace ffcube {
 
@@ -64,7 +65,49 @@ double exact_ff(const Poly& a, const Patch& pa, const Poly& b, const Patch& pb) 
     return ff_polygon_polygon(a2.span(), b2.span());
 }
 
+
+// Sender quadrature on patch polygon P: an n × n Gauss–Legendre tensor rule on a quad (weights
+// by the bilinear Jacobian), on a triangle the 3-point degree-2 rule for n = 2 and a collapsed
+// (Duffy) n × n Gauss rule otherwise. Weights sum to 1.
+void sender_rule(const Poly& P, int n, std::vector<Vec3>& pts, std::vector<double>& wts) {
+    pts.clear();
+    wts.clear();
+    if (P.n == 3 && n == 2) {
+        const double a = 2.0 / 3.0, b = 1.0 / 6.0;
+        for (const auto& [s, t] : {std::pair{b, b}, std::pair{a, b}, std::pair{b, a}}) {
+            pts.push_back(P.v[0] + s * (P.v[1] - P.v[0]) + t * (P.v[2] - P.v[0]));
+            wts.push_back(1.0 / 3.0);
+        }
+        return;
+    }
+    const GaussRule g = gauss_legendre(n);
+    double wsum = 0;
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) {
+            const double u = 0.5 * (1 + g.x[static_cast<std::size_t>(a)]), v = 0.5 * (1 + g.x[static_cast<std::size_t>(b)]);
+            const double w = g.w[static_cast<std::size_t>(a)] * g.w[static_cast<std::size_t>(b)];
+            if (P.n == 4) {
+                const Vec3 du = (1 - v) * (P.v[1] - P.v[0]) + v * (P.v[2] - P.v[3]);
+                const Vec3 dv = (1 - u) * (P.v[3] - P.v[0]) + u * (P.v[2] - P.v[1]);
+                pts.push_back((1 - u) * (1 - v) * P.v[0] + u * (1 - v) * P.v[1] + u * v * P.v[2] + (1 - u) * v * P.v[3]);
+                wts.push_back(w * glm::length(glm::cross(du, dv)));
+            } else {
+                // (s, t) = (u, v (1 − u)): Jacobian (1 − u) times the triangle's.
+                pts.push_back(P.v[0] + u * (P.v[1] - P.v[0]) + v * (1 - u) * (P.v[2] - P.v[0]));
+                wts.push_back(w * (1 - u));
+            }
+            wsum += wts.back();
+        }
+    for (double& w : wts) w /= wsum;
+}
+
 }  // namespace
+
+// An inner row whose sum is within this of 1 counts as closed. Float storage of a hemicube
+// row's entries (2^-24 relative each) moves a closed row's sum by up to 6e-8, so the line must
+// be above that; a row open by less than 1e-7 (a few pixels at grazing angles) is changed by
+// at most that much when rebalanced to 1.
+constexpr double kClosedRowTolerance = 1e-7;
 
 struct NearFieldCorrector::Impl {
     const Scene& scene;
@@ -276,36 +319,33 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
     }
     const bool quadrature = im.options.sender_quadrature;
-    if (exact.empty() && !quadrature) return;
-    if (!exact.empty()) ++stats.rows_touched;
-    stats.replaced += exact.size();
-    // Sender quadrature points and weights on patch i (see NearFieldOptions).
-    std::array<Vec3, 4> qp{};
-    std::array<double, 4> qw{};
-    std::size_t nq = 0;
-    if (quadrature) {
-        const Poly& P = im.polys[i];
-        if (P.n == 4) {
-            const double g[2] = {0.5 - 0.5 / std::sqrt(3.0), 0.5 + 0.5 / std::sqrt(3.0)};
-            double wsum = 0;
-            for (double u : g)
-                for (double v : g) {
-                    const Vec3 du = (1 - v) * (P.v[1] - P.v[0]) + v * (P.v[2] - P.v[3]);
-                    const Vec3 dv = (1 - u) * (P.v[3] - P.v[0]) + u * (P.v[2] - P.v[1]);
-                    qp[nq] = (1 - u) * (1 - v) * P.v[0] + u * (1 - v) * P.v[1] + u * v * P.v[2] + (1 - u) * v * P.v[3];
-                    qw[nq] = glm::length(glm::cross(du, dv));
-                    wsum += qw[nq++];
-                }
-            for (std::size_t q = 0; q < nq; ++q) qw[q] /= wsum;
-        } else {
-            const double a = 2.0 / 3.0, b = 1.0 / 6.0;
-            for (const auto& [s, t] : {std::pair{b, b}, std::pair{a, b}, std::pair{b, a}}) {
-                qp[nq] = P.v[0] + s * (P.v[1] - P.v[0]) + t * (P.v[2] - P.v[0]);
-                qw[nq++] = 1.0 / 3.0;
+    const double inner_sum = row.sum();
+    // Trigger for the sender quadrature: some entry within quadrature_k sizes (beyond, the
+    // midpoint rule's relative error (h/d)²/24 is below 1e-5 and the entry is left as it is).
+    // O(nnz) flops; a row that triggers nothing is handed on untouched.
+    bool quadrature_needed = false;
+    if (quadrature)
+        for (std::uint32_t j : row.col) {
+            const Patch& pj = im.scene.patches[j];
+            const Vec3 r = pj.centroid - pi.centroid;
+            const double lim = im.options.quadrature_k * std::max(pi.size, pj.size);
+            if (glm::dot(r, r) < lim * lim) {
+                quadrature_needed = true;
+                break;
             }
         }
+    if (exact.empty() && !quadrature_needed) {
+        ++stats.rows_untouched;
+        return;
     }
-    const double far_reach = im.options.far_k * pi.size;
+    if (!exact.empty()) ++stats.rows_touched;
+    if (quadrature_needed) ++stats.rows_quadrature;
+    stats.replaced += exact.size();
+    // Sender quadrature rule on patch i (see NearFieldOptions).
+    std::vector<Vec3> qp;
+    std::vector<double> qw;
+    if (quadrature_needed) sender_rule(im.polys[i], 2, qp, qw);
+    const std::size_t nq = qp.size();
     // Beyond this many sizes the quadrature ratio uses the point kernel cosθ_i cosθ_j / r⁴ (see
     // below): its relative error on the correction is about (size_j/d)² ≤ 1/36 at 6 sizes, where
     // the correction itself is ≈ (size_i/d)²/24 ≤ 1e-3 of F_ij: 3e-5 of F_ij.
@@ -321,14 +361,15 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         return f * r;
     };
     auto rescale = [&](std::uint32_t j, double f) {
-        if (!quadrature) return f;
+        if (!quadrature_needed) return f;
         const Patch& pj = im.scene.patches[j];
         const double d = glm::length(pj.centroid - pi.centroid);
-        if (d >= far_reach) return f;
+        const double size = std::max(pi.size, pj.size);
+        if (d >= im.options.quadrature_k * size) return f;
         // Near pairs were replaced or refused above: a refused one may be occluded, and its
         // hemicube value is kept as it is.
-        if (d < k * std::max(pi.size, pj.size)) return f;
-        if (d >= kPointKernelK * std::max(pi.size, pj.size)) {
+        if (d < k * size) return f;
+        if (d >= kPointKernelK * size) {
             // Far: the receiver as a point at its centroid (see kPointKernelK); a few flops per
             // point instead of Lambert's contour.
             auto kernel = [&](const Vec3& x) {
@@ -357,6 +398,8 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     SparseRow out;
     out.col.reserve(row.nnz() + exact.size());
     out.val.reserve(row.nnz() + exact.size());
+    std::vector<std::uint8_t> is_exact;
+    is_exact.reserve(row.nnz() + exact.size());
     std::size_t a = 0, b = 0;
     while (a < row.nnz() || b < exact.size()) {
         if (b == exact.size() || (a < row.nnz() && row.col[a] < exact[b].first)) {
@@ -364,6 +407,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
             if (f > 0) {
                 out.col.push_back(row.col[a]);
                 out.val.push_back(f);
+                is_exact.push_back(0);
             }
             ++a;
             continue;
@@ -372,8 +416,26 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         if (exact[b].second > 0) {
             out.col.push_back(exact[b].first);
             out.val.push_back(exact[b].second);
+            is_exact.push_back(1);
         }
         ++b;
+    }
+    // Closed rows stay closed. When the inner row sums to 1 (the centre saw only front faces:
+    // no miss, no back face), so does the exact row of a patch in a closed scene: every point of
+    // the patch sees surfaces all round. Near values that are exact and far values rescaled
+    // from aliased pixels (thin slivers seen at grazing angles cover 0 or 3× their share of
+    // pixels) no longer add up to it (up to 1.6e-3 off in a 24 × 24-per-wall box). The far
+    // (non-exact) entries then share one factor that restores the sum; exact entries stay exact.
+    if (im.options.keep_closed_rows && std::abs(inner_sum - 1.0) <= kClosedRowTolerance) {
+        double fixed = 0, rest = 0;
+        for (std::size_t e = 0; e < out.nnz(); ++e) (is_exact[e] ? fixed : rest) += out.val[e];
+        const double scale = (1.0 - fixed) / rest;
+        if (rest > 0 && scale > 0 && std::isfinite(scale)) {
+            for (std::size_t e = 0; e < out.nnz(); ++e)
+                if (!is_exact[e]) out.val[e] *= scale;
+            ++stats.rows_closed;
+            stats.closed_scale_max_change = std::max(stats.closed_scale_max_change, std::abs(scale - 1.0));
+        }
     }
     row = std::move(out);
 }

@@ -37,9 +37,11 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
     app.add_flag("--no-rotate", o.no_rotate, "do not rotate hemicubes about the normal by a seeded random angle");
     app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed);
     app.add_option("--correct", o.correct,
-                   "none, or near: exact form factors for near unoccluded pairs, sender quadrature (hemicube) for the rest")
+                   "near (default): exact form factors for near unoccluded pairs, sender quadrature (hemicube) for "
+                   "entries within 64 patch sizes, closed rows kept closed; switched on per row where a row needs it. "
+                   "none: the plain rows")
         ->check(CLI::IsMember({"none", "near"}))
-        ->default_val("none");
+        ->default_val("near");
     app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
         ->default_val(3.0);
@@ -163,6 +165,10 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.entries_replaced", c.replaced);
         r.set("corrections.pairs_refused_possibly_occluded", c.refused);
         r.set("corrections.entries_quadrature", c.quadrature);
+        r.set("corrections.rows_quadrature", c.rows_quadrature);
+        r.set("corrections.rows_untouched", c.rows_untouched);
+        r.set("corrections.rows_closed_rebalanced", c.rows_closed);
+        r.set("corrections.closed_rebalance_max_change", c.closed_scale_max_change);
         r.set("corrections.seconds", c.seconds);
     }
     if (rows.raycast) {

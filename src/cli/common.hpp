@@ -37,7 +37,7 @@ struct FormFactorOptions {
     std::uint64_t rays = 4096;  // raycast: rays per patch
     // "none" or "near": near-field analytic correction (docs/accuracy.md), with sender
     // quadrature for the hemicube's other entries.
-    std::string correct = "none";
+    std::string correct = "near";
     double near_k = 3.0;
     std::string enforce;  // formfactors only: "", reciprocity, closure or both
 };

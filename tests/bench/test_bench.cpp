@@ -136,7 +136,7 @@ TEST(BenchRun, TinyRunWritesCsvAndHemicubeErrorIsBounded) {
     o.rays = {256};
     o.threads = 2;
     const auto results = run_bench(one, o);
-    ASSERT_EQ(results.size(), 2u);
+    ASSERT_EQ(results.size(), 3u);  // hemicube, the same rows corrected (default), raycast
     const auto dir = std::filesystem::temp_directory_path() / ("ffcube_bench_test_" + std::to_string(::getpid()));
     std::filesystem::create_directories(dir);
     write_bench_csv(dir / "results.csv", results);
@@ -152,9 +152,10 @@ TEST(BenchRun, TinyRunWritesCsvAndHemicubeErrorIsBounded) {
               0u);
     std::vector<std::string> lines;
     while (std::getline(in, line)) lines.push_back(line);
-    ASSERT_EQ(lines.size(), 2u);
+    ASSERT_EQ(lines.size(), 3u);
     EXPECT_EQ(lines[0].rfind("parallel_d1,basic,hemicube,N=32,", 0), 0u);
-    EXPECT_EQ(lines[1].rfind("parallel_d1,basic,raycast,rays=256,", 0), 0u);
+    EXPECT_EQ(lines[1].rfind("parallel_d1,basic,hemicube+near,N=32,", 0), 0u);
+    EXPECT_EQ(lines[2].rfind("parallel_d1,basic,raycast,rays=256,", 0), 0u);
     for (const BenchResult& r : results) {
         EXPECT_TRUE(std::isfinite(r.errors.max_abs_error) && std::isfinite(r.errors.max_rel_error) &&
                     std::isfinite(r.errors.row_sum_dev) && std::isfinite(r.errors.reciprocity_dev));

@@ -63,7 +63,7 @@ struct BenchOptions {
     // Also measure each hemicube run with the near-field correction and sender quadrature
     // (accuracy/near_field.hpp) as method "hemicube+near": the plain run's rows corrected, its
     // seconds = the plain run's + the correction's (what `--correct near` costs).
-    bool corrected = false;
+    bool corrected = true;
     double near_k = 3.0;
 };
 
