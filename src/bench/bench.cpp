@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <nlohmann/json.hpp>
 
 #include "ffcube/accuracy/near_field.hpp"
@@ -120,6 +121,7 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             NearFieldOptions nf;
             nf.k = options.near_k;
             nf.sender_quadrature = true;
+            nf.pixel_delta_ff = 4.0 / (std::numbers::pi * h.resolution * h.resolution);
             CorrectedRowProvider corrected(scenes[k], plain, nf);
             const CsrMatrix C = compute_all_rows(corrected);
             record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", h.resolution), h.resolution, C,

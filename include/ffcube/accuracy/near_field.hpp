@@ -29,6 +29,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/scene/scene.hpp"
@@ -54,6 +55,10 @@ struct NearFieldOptions {
     // Closed rows stay closed: when the inner row sums to 1 (within float storage), the
     // corrected row's non-exact entries share one factor so that it sums to 1 too.
     bool keep_closed_rows = true;
+    // The inner provider's noise, for the per-row error estimate: the largest ΔF of one hemicube
+    // pixel, 4/(π N²) at resolution N (0: not a hemicube), or rays per row (0: not the ray caster).
+    double pixel_delta_ff = 0;
+    double rays = 0;
 };
 
 struct NearFieldStats {
@@ -84,8 +89,9 @@ public:
     NearFieldCorrector& operator=(const NearFieldCorrector&) = delete;
 
     // Corrects row i in place (columns stay strictly increasing, values > 0) and adds to stats
-    // (all but seconds).
-    void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats) const;
+    // (all but seconds). With error_estimate: the row's estimated error Σ_j |F_ij − exact_ij|
+    // (docs/accuracy.md, "Per-row error estimate").
+    void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
 
@@ -103,12 +109,16 @@ public:
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     const NearFieldStats& stats() const { return stats_; }
+    // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
+    // computed; empty before the first row).
+    const std::vector<float>& row_error_estimates() const { return row_error_; }
 
 private:
     RowProvider& inner_;
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
     SparseRow scratch_;
+    std::vector<float> row_error_;
 };
 
 }  // namespace ffcube
