@@ -465,14 +465,17 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     // from aliased pixels (thin slivers seen at grazing angles cover 0 or 3× their share of
     // pixels) no longer add up to it (up to 1.6e-3 off in a 24 × 24-per-wall box). The far
     // (non-exact) entries then share one factor that restores the sum; exact entries stay exact.
-    if (im.options.keep_closed_rows && std::abs(inner_sum - 1.0) <= kClosedRowTolerance) {
-        double fixed = 0, rest = 0;
-        for (std::size_t e = 0; e < out.nnz(); ++e) (is_exact[e] ? fixed : rest) += out.val[e];
+    // Likewise no row may sum above 1 (energy leaving i cannot arrive more than once): an open
+    // row that the correction pushed above 1 gets the same treatment, down to 1.
+    double fixed = 0, rest = 0;
+    for (std::size_t e = 0; e < out.nnz(); ++e) (is_exact[e] ? fixed : rest) += out.val[e];
+    const bool closed = std::abs(inner_sum - 1.0) <= kClosedRowTolerance;
+    if (im.options.keep_closed_rows && (closed || fixed + rest > 1.0)) {
         const double scale = (1.0 - fixed) / rest;
         if (rest > 0 && scale > 0 && std::isfinite(scale)) {
             for (std::size_t e = 0; e < out.nnz(); ++e)
                 if (!is_exact[e]) out.val[e] *= scale;
-            ++stats.rows_closed;
+            ++(closed ? stats.rows_closed : stats.rows_capped);
             stats.closed_scale_max_change = std::max(stats.closed_scale_max_change, std::abs(scale - 1.0));
             estimate += std::abs(1.0 - scale) * rest;  // the factor moved them by this much
         }

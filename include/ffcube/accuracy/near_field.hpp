@@ -53,7 +53,8 @@ struct NearFieldOptions {
     bool sender_quadrature = false;
     double quadrature_k = 64.0;
     // Closed rows stay closed: when the inner row sums to 1 (within float storage), the
-    // corrected row's non-exact entries share one factor so that it sums to 1 too.
+    // corrected row's non-exact entries share one factor so that it sums to 1 too; and an open
+    // row pushed above 1 is scaled back to 1 the same way.
     bool keep_closed_rows = true;
     // The inner provider's noise, for the per-row error estimate: the largest ΔF of one hemicube
     // pixel, 4/(π N²) at resolution N (0: not a hemicube), or rays per row (0: not the ray caster).
@@ -71,6 +72,7 @@ struct NearFieldStats {
     std::uint64_t rows_quadrature = 0;  // rows with an entry within quadrature_k sizes
     std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
+    std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
     // Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any
