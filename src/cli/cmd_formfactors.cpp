@@ -71,7 +71,11 @@ int run(const Options& o) {
 
     watch.restart();
     if (ffm) {
-        write_ffm(o.output, F, scene, meta);
+        // The written matrix records its enforcement too (the checkpoint's rows are from before
+        // it, so `meta` without it is what resuming compares).
+        FfmMetadata written = meta;
+        if (!o.ff.enforce.empty()) written.settings += " enforce=" + o.ff.enforce;
+        write_ffm(o.output, F, scene, written);
     } else if (mtx) {
         write_mtx(o.output, F);
     }
