@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "ffcube/core/error.hpp"
 
@@ -47,24 +48,22 @@ ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene) {
     ReciprocityStats s;
     const std::uint32_t n = F.rows_filled();
     if (n != F.size()) return s;  // needs every row
+    // F_ji for every entry F_ij: rows are visited with i increasing, so the entries (j, i) looked
+    // up in a row j come in increasing column order too, and a cursor per row finds each in
+    // amortised O(1) (O(nnz) in all; a binary search per entry was a quarter of a 3,744-patch run).
+    // Every pair with F_ij > 0 is checked from row i, one with only F_ji > 0 from row j.
+    std::vector<std::size_t> cursor(n, 0);
     for (std::uint32_t i = 0; i < n; ++i) {
         const RowView r = F.row(i);
         const double ai = scene.patches[i].area;
         for (std::size_t k = 0; k < r.col.size(); ++k) {
             const std::uint32_t j = r.col[k];
-            if (j < i) continue;  // each pair once (entries with j<i are seen from row j if F_ji>0)
+            const RowView rj = F.row(j);
+            std::size_t& c = cursor[j];
+            while (c < rj.col.size() && rj.col[c] < i) ++c;
+            const double fji = c < rj.col.size() && rj.col[c] == i ? static_cast<double>(rj.val[c]) : 0.0;
             const double aj = scene.patches[j].area;
-            const double d = std::abs(ai * r.val[k] - aj * F.at(j, i)) / (0.5 * (ai + aj));
-            s.patch_max_abs = std::max(s.patch_max_abs, d);
-        }
-        // pairs where F_ij = 0 but F_ji > 0 are caught from row j's side with j < i? No: cover them here.
-        for (std::size_t k = 0; k < r.col.size(); ++k) {
-            const std::uint32_t j = r.col[k];
-            if (j >= i) continue;
-            if (F.at(j, i) == 0.0) {
-                const double aj = scene.patches[j].area;
-                s.patch_max_abs = std::max(s.patch_max_abs, ai * r.val[k] / (0.5 * (ai + aj)));
-            }
+            s.patch_max_abs = std::max(s.patch_max_abs, std::abs(ai * r.val[k] - aj * fji) / (0.5 * (ai + aj)));
         }
     }
     const auto G = object_form_factors(F, scene);
