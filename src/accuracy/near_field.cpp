@@ -66,41 +66,6 @@ double exact_ff(const Poly& a, const Patch& pa, const Poly& b, const Patch& pb) 
 }
 
 
-// Sender quadrature on patch polygon P: an n × n Gauss–Legendre tensor rule on a quad (weights
-// by the bilinear Jacobian), on a triangle the 3-point degree-2 rule for n = 2 and a collapsed
-// (Duffy) n × n Gauss rule otherwise. Weights sum to 1.
-void sender_rule(const Poly& P, int n, std::vector<Vec3>& pts, std::vector<double>& wts) {
-    pts.clear();
-    wts.clear();
-    if (P.n == 3 && n == 2) {
-        const double a = 2.0 / 3.0, b = 1.0 / 6.0;
-        for (const auto& [s, t] : {std::pair{b, b}, std::pair{a, b}, std::pair{b, a}}) {
-            pts.push_back(P.v[0] + s * (P.v[1] - P.v[0]) + t * (P.v[2] - P.v[0]));
-            wts.push_back(1.0 / 3.0);
-        }
-        return;
-    }
-    const GaussRule g = gauss_legendre(n);
-    double wsum = 0;
-    for (int a = 0; a < n; ++a)
-        for (int b = 0; b < n; ++b) {
-            const double u = 0.5 * (1 + g.x[static_cast<std::size_t>(a)]), v = 0.5 * (1 + g.x[static_cast<std::size_t>(b)]);
-            const double w = g.w[static_cast<std::size_t>(a)] * g.w[static_cast<std::size_t>(b)];
-            if (P.n == 4) {
-                const Vec3 du = (1 - v) * (P.v[1] - P.v[0]) + v * (P.v[2] - P.v[3]);
-                const Vec3 dv = (1 - u) * (P.v[3] - P.v[0]) + u * (P.v[2] - P.v[1]);
-                pts.push_back((1 - u) * (1 - v) * P.v[0] + u * (1 - v) * P.v[1] + u * v * P.v[2] + (1 - u) * v * P.v[3]);
-                wts.push_back(w * glm::length(glm::cross(du, dv)));
-            } else {
-                // (s, t) = (u, v (1 − u)): Jacobian (1 − u) times the triangle's.
-                pts.push_back(P.v[0] + u * (P.v[1] - P.v[0]) + v * (1 - u) * (P.v[2] - P.v[0]));
-                wts.push_back(w * (1 - u));
-            }
-            wsum += wts.back();
-        }
-    for (double& w : wts) w /= wsum;
-}
-
 }  // namespace
 
 // An inner row whose sum is within this of 1 counts as closed. Float storage of a hemicube
@@ -287,16 +252,14 @@ NearFieldCorrector::~NearFieldCorrector() = default;
 
 bool NearFieldCorrector::provably_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->unoccluded(i, j); }
 
-void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate) const {
+void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
     const Impl& im = *impl_;
-    ++stats.rows;
+    out = NearAnalysis{};
     const Patch& pi = im.scene.patches[i];
     const double k = im.options.k;
     const double reach = k * std::max(pi.size, im.max_size);
     std::vector<std::uint32_t> near;
     im.query_all(Box{pi.centroid - Vec3(reach), pi.centroid + Vec3(reach)}, near);
-
-    std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     for (std::uint32_t j : near) {
         if (j == i) continue;
         const Patch& pj = im.scene.patches[j];
@@ -311,14 +274,33 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         for (std::size_t v = 0; v < qj.n; ++v) front_j = std::max(front_j, glm::dot(pi.normal, qj.v[v] - pi.centroid));
         for (std::size_t v = 0; v < qi.n; ++v) front_i = std::max(front_i, glm::dot(pj.normal, qi.v[v] - pj.centroid));
         if (front_j <= tol || front_i <= tol) continue;
-        ++stats.near_pairs;
+        ++out.near_pairs;
         if (!im.unoccluded(i, j)) {
-            ++stats.refused;
+            ++out.refused;
             continue;
         }
-        exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
+        out.exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
     }
-    const bool quadrature = im.options.sender_quadrature;
+    out.done = true;
+}
+
+void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate,
+                                 const NearAnalysis* analysis, bool sampled_row) const {
+    const Impl& im = *impl_;
+    ++stats.rows;
+    const Patch& pi = im.scene.patches[i];
+    const double k = im.options.k;
+    NearAnalysis local;
+    if (!analysis || !analysis->done) {
+        analyse(i, local);
+        analysis = &local;
+    }
+    const auto& exact = analysis->exact;  // (j, exact F_ij), j increasing
+    stats.near_pairs += analysis->near_pairs;
+    stats.refused += analysis->refused;
+    if (sampled_row) ++stats.rows_sampled;
+    // A sampled row is already the 2 × 2 sender quadrature (sub-hemicubes): no ratio on top.
+    const bool quadrature = im.options.sender_quadrature && !sampled_row;
     const double inner_sum = row.sum();
     // Trigger for the sender quadrature: some entry within quadrature_k sizes (beyond, the
     // midpoint rule's relative error (h/d)²/24 is below 1e-5 and the entry is left as it is).
@@ -338,9 +320,11 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     // by how the entry was made, plus the inner provider's noise.
     const auto midpoint_error = [&](std::uint32_t j, double f) {
         // The midpoint rule's relative error, (h_i/d)²/24 times a shape constant of at most ~2.
-        if (!quadrature) return 0.0;  // the inner provider samples the whole sender (ray caster)
         const Vec3 r = im.scene.patches[j].centroid - pi.centroid;
-        return f * pi.size * pi.size / glm::dot(r, r) / 12.0;
+        const double m = pi.size * pi.size / glm::dot(r, r) / 12.0;
+        if (sampled_row) return f * m * m;  // the 2 × 2 rule's residual, about the square
+        if (!quadrature) return 0.0;        // the inner provider samples the whole sender (ray caster)
+        return f * m;
     };
     const auto noise = [&](double f) {
         double e = 0;
@@ -369,7 +353,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     // Sender quadrature rule on patch i (see NearFieldOptions).
     std::vector<Vec3> qp;
     std::vector<double> qw;
-    if (quadrature_needed) sender_rule(im.polys[i], 2, qp, qw);
+    if (quadrature_needed) patch_quadrature(im.polys[i].span(), 2, qp, qw);
     const std::size_t nq = qp.size();
     // Beyond this many sizes the quadrature ratio uses the point kernel cosθ_i cosθ_j / r⁴ (see
     // below): its relative error on the correction is about (size_j/d)² ≤ 1/36 at 6 sizes, where
@@ -403,7 +387,8 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         // hemicube value is kept as it is (the midpoint rule's error there reaches ~5%: the
         // issue's −4.7% on squares sharing an edge).
         if (d < k * size) {
-            systematic = quadrature ? 0.05 * f : 0.0;
+            // (A sampled row's value is the 2 × 2 rule's, with its own visibility: ~1%.)
+            systematic = quadrature ? 0.05 * f : sampled_row ? 0.01 * f : 0.0;
             return f;
         }
         if (d >= kPointKernelK * size) {
@@ -485,24 +470,45 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
 }
 
 CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options)
-    : inner_(inner), corrector_(scene, options) {
+    : inner_(inner), corrector_(scene, options), options_(options) {
     if (inner.size() != scene.size())
         throw InputError(fmt::format("near-field correction: the provider has {} rows, the scene {} patches", inner.size(),
                                      scene.size()));
 }
 
 void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
-    inner_.compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) {
+    // Near analysis per listed row, made when the inner provider asks whether to sample the row
+    // (from its own threads: each slot is written once, by one of them, before its row exists)
+    // or, failing that, when the row arrives.
+    analyses_.assign(rows.size(), NearAnalysis{});
+    std::size_t position = 0;
+    const bool sample = options_.sub_hemicubes && inner_.can_sample_sender();
+    const RowSink correct_row = [&](std::uint32_t i, const SparseRow& row) {
         Stopwatch watch;
+        const std::size_t pos = position++;
         stats_.inner_row_sum_min = std::min(stats_.inner_row_sum_min, row.sum());
         scratch_ = row;
         double estimate = 0;
-        corrector_.correct(i, scratch_, stats_, &estimate);
+        const NearAnalysis& a = analyses_[pos];
+        corrector_.correct(i, scratch_, stats_, &estimate, &a, sample && a.done && a.refused > 0);
         if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
         row_error_[i] = static_cast<float>(estimate);
         stats_.seconds += watch.seconds();
         sink(i, scratch_);
-    });
+    };
+    if (!sample) {
+        inner_.compute_rows(rows, correct_row);
+        return;
+    }
+    // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
+    // quadrature points: the pair keeps a value with its own visibility and sender quadrature.
+    inner_.compute_rows_sampled(
+        rows,
+        [&](std::size_t pos) {
+            corrector_.analyse(rows[pos], analyses_[pos]);
+            return analyses_[pos].refused > 0;
+        },
+        correct_row);
 }
 
 }  // namespace ffcube

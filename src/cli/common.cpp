@@ -173,6 +173,7 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.rows_untouched", c.rows_untouched);
         r.set("corrections.rows_closed_rebalanced", c.rows_closed);
         r.set("corrections.rows_capped_at_one", c.rows_capped);
+        r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
         r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
         // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row,
         // then the largest, the mean and the row that has the largest.

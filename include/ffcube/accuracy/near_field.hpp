@@ -60,6 +60,9 @@ struct NearFieldOptions {
     // pixel, 4/(π N²) at resolution N (0: not a hemicube), or rays per row (0: not the ray caster).
     double pixel_delta_ff = 0;
     double rays = 0;
+    // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
+    // rows (RowProvider::compute_rows_sampled), when it can make them.
+    bool sub_hemicubes = true;
 };
 
 struct NearFieldStats {
@@ -73,12 +76,21 @@ struct NearFieldStats {
     std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
     std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
+    std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (a near pair possibly occluded)
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
     // Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any
     // row): whether light escapes is a property of the uncorrected rows, since replacing noisy
     // near entries by exact ones moves ray-cast row sums of a closed scene off 1.
     double inner_row_sum_min = INFINITY;
+};
+
+// The near pairs of one row (NearFieldCorrector::analyse).
+struct NearAnalysis {
+    std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
+    std::uint64_t near_pairs = 0;                         // near, facing pairs examined
+    std::uint64_t refused = 0;                            // of which possibly occluded
+    bool done = false;
 };
 
 // Finds near pairs and decides occlusion for one scene. Builds a uniform grid of the patches'
@@ -90,10 +102,15 @@ public:
     NearFieldCorrector(const NearFieldCorrector&) = delete;
     NearFieldCorrector& operator=(const NearFieldCorrector&) = delete;
 
+    // The near pairs of row i: exact values of those proven unoccluded, counts. Thread-safe.
+    void analyse(std::uint32_t i, NearAnalysis& out) const;
     // Corrects row i in place (columns stay strictly increasing, values > 0) and adds to stats
     // (all but seconds). With error_estimate: the row's estimated error Σ_j |F_ij − exact_ij|
-    // (docs/accuracy.md, "Per-row error estimate").
-    void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr) const;
+    // (docs/accuracy.md, "Per-row error estimate"). analysis: row i's, if already made.
+    // sampled_row: the inner row is the average of sub-hemicubes at i's 2 × 2 quadrature points
+    // (no sender quadrature ratio on top).
+    void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr,
+                 const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
 
@@ -121,6 +138,8 @@ private:
     NearFieldStats stats_;
     SparseRow scratch_;
     std::vector<float> row_error_;
+    NearFieldOptions options_;
+    std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
 };
 
 }  // namespace ffcube

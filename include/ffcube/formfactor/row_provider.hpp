@@ -25,6 +25,21 @@ public:
     virtual void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) = 0;
     // One row, for convenience.
     void compute_row(std::uint32_t i, SparseRow& out);
+
+    // Sender sampling. A provider that measures F from one point of the sender (the hemicube:
+    // its centre) may be able to measure some rows as the average over the sender's quadrature
+    // points instead (geometry/quadrature.hpp, patch_quadrature with 2 points per axis), each
+    // with its own visibility ("sub-hemicubes"). compute_rows_sampled does that for the rows for
+    // which sampled(position in rows) returns true; it calls sampled once per listed row before
+    // computing it, possibly from several threads at once (so it must be thread-safe), and hands
+    // rows to sink in list order like compute_rows. The default never asks and samples nothing.
+    using SampleQuery = std::function<bool(std::size_t position)>;
+    virtual bool can_sample_sender() const { return false; }
+    virtual void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
+                                      const RowSink& sink) {
+        (void)sampled;
+        compute_rows(rows, sink);
+    }
 };
 
 // Rows of a matrix already in memory (loaded from .ffm, or made by hand in a test).
