@@ -406,14 +406,21 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
             return ratio(f, q / mid);
         }
         const auto poly = im.polys[j].span();
-        const double mid = ff_point_polygon(pi.centroid, pi.normal, poly);
+        // Lambert's contour; without clipping or checks when all of j is in front of the plane
+        // through x (then nothing needs clipping), which is nearly always the case here.
+        const auto lambert = [&](const Vec3& x) {
+            for (const Vec3& v : poly)
+                if (!(glm::dot(v - x, pi.normal) > 0)) return ff_point_polygon(x, pi.normal, poly);
+            return ff_point_polygon_unclipped(x, pi.normal, poly);
+        };
+        const double mid = lambert(pi.centroid);
         if (!(mid > 0)) return f;  // the inner provider saw j where the centre sees it edge-on: keep
         double q = 0;
         // One-sided: points behind j's plane (a patch that j stands on, cut by j's base) see its
         // back, which ff_point_polygon would count.
         for (std::size_t k2 = 0; k2 < nq; ++k2)
             if (glm::dot(qp[k2] - pj.centroid, pj.normal) > 0)
-                q += qw[k2] * ff_point_polygon(qp[k2], pi.normal, poly);
+                q += qw[k2] * lambert(qp[k2]);
         return ratio(f, q / mid);
     };
     // Merge: the replaced columns take their exact value (dropped when it is 0), others stay.

@@ -428,6 +428,10 @@ double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly
     return std::abs(lambert_sum(p, un, front)) / (2.0 * kPi);
 }
 
+double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<const Vec3> poly) {
+    return std::abs(lambert_sum(p, unit_n, poly)) / (2.0 * kPi);
+}
+
 double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
     const char* fn = "ff_polygon_polygon";
     validate_polygon(fn, "polygon 1", p1);

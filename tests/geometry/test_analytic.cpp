@@ -412,3 +412,33 @@ TEST(PolygonPolygon, SliverClippedByRoundingReturnsTheUnroundedValue) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// The unclipped fast path equals the checked one wherever its precondition holds: quads and
+// triangles wholly in front of the point's plane, at several distances and orientations.
+TEST(PointPolygon, PointPolygonFastPathAgrees) {
+    const Vec3 n = glm::normalize(Vec3(0.2, -0.3, 1.0));
+    int compared = 0;
+    for (int k = 0; k < 200; ++k) {
+        const double a = 0.1 * k, d = 0.05 + 0.02 * k;
+        const Vec3 c = Vec3(std::cos(a), std::sin(1.3 * a), 0.0) + n * (0.5 + d);
+        const Vec3 u = glm::normalize(Vec3(std::cos(0.7 * a), 0.3, std::sin(0.7 * a)));
+        const Vec3 v = glm::normalize(glm::cross(u, Vec3(0.1, 1.0, 0.2)));
+        const std::vector<Vec3> quad{c, c + 0.3 * u, c + 0.3 * u + 0.2 * v, c + 0.2 * v};
+        const std::vector<Vec3> tri{c, c + 0.3 * u, c + 0.2 * v};
+        for (const auto* poly : {&quad, &tri}) {
+            bool in_front = true;
+            for (const Vec3& x : *poly) in_front = in_front && glm::dot(x, n) > 0;
+            if (!in_front) continue;
+            const double slow = ff_point_polygon(Vec3(0.0), n, *poly);
+            EXPECT_NEAR(ff_point_polygon_unclipped(Vec3(0.0), n, *poly), slow, 1e-14 + 1e-12 * slow) << k;
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 300);
+}
+
+}  // namespace
+}  // namespace ffcube

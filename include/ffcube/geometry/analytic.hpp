@@ -85,6 +85,12 @@ SphereFactors ff_concentric_spheres(double r1, double r2);
 // polygon's plane (to 1e-12 of its size), its boundary included, sees it edge-on: 0.
 double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly);
 
+// The same for the common case in inner loops, without checks or clipping: the caller knows
+// that n is a unit vector and that every vertex of poly lies strictly in front of p's plane (so
+// nothing needs clipping). Returns the same value as ff_point_polygon there (test
+// PointPolygonFastPathAgrees), at a fraction of the cost.
+double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<const Vec3> poly);
+
 // Polygon 1 to polygon 2, no occlusion, front sides only: the parts of each polygon behind the
 // other's plane are clipped away first (the integrand is zero there unless counted with the
 // wrong sign), then Stokes' theorem turns the area integrals into the double contour integral
