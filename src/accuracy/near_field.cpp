@@ -255,6 +255,7 @@ bool NearFieldCorrector::provably_unoccluded(std::uint32_t i, std::uint32_t j) c
 void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
     const Impl& im = *impl_;
     out = NearAnalysis{};
+    Stopwatch watch;
     const Patch& pi = im.scene.patches[i];
     const double k = im.options.k;
     const double reach = k * std::max(pi.size, im.max_size);
@@ -281,6 +282,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
         }
         out.exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
     }
+    out.seconds = watch.seconds();
     out.done = true;
 }
 
@@ -298,6 +300,8 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     const auto& exact = analysis->exact;  // (j, exact F_ij), j increasing
     stats.near_pairs += analysis->near_pairs;
     stats.refused += analysis->refused;
+    stats.near_seconds += analysis->seconds;
+    Stopwatch quadrature_watch;
     if (sampled_row) ++stats.rows_sampled;
     // A sampled row is already the 2 × 2 sender quadrature (sub-hemicubes): no ratio on top.
     const bool quadrature = im.options.sender_quadrature && !sampled_row;
@@ -345,6 +349,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
             for (std::size_t a = 0; a < row.nnz(); ++a) e += midpoint_error(row.col[a], row.val[a]) + noise(row.val[a]);
             *error_estimate = e;
         }
+        stats.quadrature_seconds += quadrature_watch.seconds();
         return;
     }
     if (!exact.empty()) ++stats.rows_touched;
@@ -474,6 +479,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     }
     if (error_estimate) *error_estimate = estimate;
     row = std::move(out);
+    stats.quadrature_seconds += quadrature_watch.seconds();
 }
 
 CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options)

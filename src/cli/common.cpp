@@ -197,6 +197,8 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("row_error_estimate.worst_row", worst);
         r.set_array("row_error_estimate.rows", values);
         r.set("corrections.seconds", c.seconds);
+        r.set("corrections.near_seconds", c.near_seconds);
+        r.set("corrections.quadrature_seconds", c.quadrature_seconds);
     }
     if (rows.raycast) {
         r.set("rays_per_patch", rows.raycast->rays());

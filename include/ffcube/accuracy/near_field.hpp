@@ -79,6 +79,8 @@ struct NearFieldStats {
     std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (a near pair possibly occluded)
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
+    double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
+    double quadrature_seconds = 0;   // sender quadrature ratios and the error estimate
     // Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any
     // row): whether light escapes is a property of the uncorrected rows, since replacing noisy
     // near entries by exact ones moves ray-cast row sums of a closed scene off 1.
@@ -90,6 +92,7 @@ struct NearAnalysis {
     std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     std::uint64_t near_pairs = 0;                         // near, facing pairs examined
     std::uint64_t refused = 0;                            // of which possibly occluded
+    double seconds = 0;                                   // spent making it
     bool done = false;
 };
 
