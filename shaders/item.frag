@@ -1,6 +1,8 @@
 #version 450 core
 // Writes the ID of the visible patch: 1 + patch index for a front face, 0xFFFFFFFF for a back
-// face (it blocks but receives nothing); the clear value 0 means nothing was hit.
+// face (it blocks but receives nothing); the clear value 0 means nothing was hit. Front or back
+// is the draw pass's (u_back: the CPU's classification of the whole piece), not gl_FrontFacing,
+// which a sliver snapped to the subpixel grid can get wrong.
 // The patch comes from the fragment's position in its piece's plane (perspective-correct, so
 // exact up to float rounding): inverse bilinear for a quad grid, barycentric for a triangle.
 struct Grid {
@@ -12,12 +14,13 @@ struct Grid {
 layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
 in vec2 v_param;
 flat in uint v_grid;
+uniform uint u_back;  // 1 while drawing back-facing pieces
 layout(location = 0) out uint o_id;
 
 float cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
 void main() {
-    if (!gl_FrontFacing) {
+    if (u_back != 0u) {
         o_id = 0xFFFFFFFFu;
         return;
     }

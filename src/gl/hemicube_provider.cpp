@@ -1,16 +1,21 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 
 #include <fmt/format.h>
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <condition_variable>
 #include <cstdlib>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <thread>
 #include <tuple>
+#include <unordered_map>
 #include <fstream>
 #include <cstring>
 #include <cstdio>
@@ -43,36 +48,307 @@ struct GpuGrid {
 };
 static_assert(sizeof(GpuGrid) == 40);
 
-// The scene's mesher pieces, made once and shared read-only by all workers: four vertex slots
-// per piece (a triangle repeats its last corner), static plane coordinates and piece indices.
+// The scene's mesher pieces, made once and shared read-only by all workers. Each piece owns a
+// run of vertex slots: its corners first (count of them), then the T-vertices on its edges (see
+// prepare_pieces). Per slot: world position, static plane coordinates and the piece index.
 struct ScenePieces {
     std::vector<GpuGrid> gpu;
+    std::vector<Vec3> pos;             // 1 per vertex slot: world position
     std::vector<float> param;          // 2 per vertex slot
     std::vector<std::uint32_t> grid;   // 1 per vertex slot
+    std::vector<std::uint32_t> first;  // per piece, plus one at the end: its first vertex slot
+    // Per piece, plus one at the end: its range in 'tris'. An empty range means the piece is
+    // drawn as its corners say: (c0, c1, c2), and (c0, c2, c3) for a quad.
+    std::vector<std::uint32_t> tri_first;
+    std::vector<std::uint32_t> tris;   // vertex slot triples, CCW from the front
 };
 
+// A corner of another piece strictly inside edge k (corner k → k + 1) of piece g.
+struct EdgeVertex {
+    std::uint32_t g, k;
+    double t;            // position along the edge, 0 at corner k, 1 at corner k + 1
+    std::uint32_t at;    // index into the unique corner positions
+};
+
+// Points bucketed in a hierarchy of uniform grids: level 0 has cells of size h, level L cells of
+// 2^L × 2^L × 2^L level-0 cells. near_segment() walks a segment at the level where it takes a
+// step or two and goes down a level only where a step's box holds a point, so a segment costs
+// about its length in level-0 cells where points lie near it, and a few steps per level through
+// empty space, however long it is. Keys are hashes of cell coordinates: cells that share a key
+// merely have their points tested in vain.
+class PointGrid {
+public:
+    PointGrid(const std::vector<Vec3>& points, double h) : h_(h) {
+        origin_ = points.empty() ? Vec3(0.0) : points.front();
+        for (const Vec3& p : points) origin_ = glm::min(origin_, p);
+        std::int64_t top = 1;
+        std::vector<std::array<std::int64_t, 3>> cells(points.size());
+        for (std::size_t i = 0; i < points.size(); ++i) {
+            cells[i] = {cell(points[i].x, origin_.x), cell(points[i].y, origin_.y), cell(points[i].z, origin_.z)};
+            top = std::max({top, cells[i][0], cells[i][1], cells[i][2]});
+        }
+        levels_ = std::min(static_cast<int>(std::bit_width(static_cast<std::uint64_t>(top))) + 1, 62);
+        count_ = static_cast<std::uint32_t>(points.size());
+        by_cell_.resize(points.size());
+        for (std::size_t i = 0; i < points.size(); ++i)
+            by_cell_[i] = {key(cells[i], 0), static_cast<std::uint32_t>(i)};
+        std::sort(by_cell_.begin(), by_cell_.end());
+        ranges_.reserve(by_cell_.size());
+        for (std::uint32_t i = 0; i < by_cell_.size();) {
+            std::uint32_t j = i;
+            while (j < by_cell_.size() && by_cell_[j].first == by_cell_[i].first) ++j;
+            ranges_.emplace(by_cell_[i].first, std::pair{i, j});
+            i = j;
+        }
+        // The occupied cells of each level, from those of the level below (fewer and fewer).
+        occupied_.resize(static_cast<std::size_t>(levels_));
+        std::sort(cells.begin(), cells.end());
+        cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+        for (int l = 1; l < levels_; ++l) {
+            for (auto& c : cells)
+                for (auto& v : c) v >>= 1;
+            std::sort(cells.begin(), cells.end());
+            cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+            auto& occ = occupied_[static_cast<std::size_t>(l)];
+            for (const auto& c : cells) occ.push_back(key(c, 0));  // c is already level l's
+            std::sort(occ.begin(), occ.end());
+        }
+    }
+
+    // Calls f(index) for every point within the box of the segment a → b widened by tol (and
+    // for some others, some of them more than once). A tolerance wider than a cell (an edge a
+    // billion times the cell, or coordinates some 1e15 times it) is met by testing every point.
+    template <typename F>
+    void near_segment(const Vec3& a, const Vec3& b, double tol, F&& f) const {
+        if (!(tol <= h_)) {
+            for (std::uint32_t i = 0; i < count_; ++i) f(i);
+            return;
+        }
+        const double len = glm::length(b - a);
+        int level = 0;
+        while (level + 1 < levels_ && std::ldexp(h_, level) < len) ++level;
+        visit(level, a, b, 0.0, 1.0, tol, f);
+    }
+
+private:
+    std::int64_t cell(double x, double o) const { return static_cast<std::int64_t>(std::floor((x - o) / h_)); }
+    static std::uint64_t key(const std::array<std::int64_t, 3>& c, int level) {
+        std::uint64_t k = static_cast<std::uint64_t>(c[0] >> level) * 0x9E3779B97F4A7C15ull;
+        k ^= static_cast<std::uint64_t>(c[1] >> level) * 0xC2B2AE3D27D4EB4Full + (k << 6) + (k >> 2);
+        k ^= static_cast<std::uint64_t>(c[2] >> level) * 0x165667B19E3779F9ull + (k << 6) + (k >> 2);
+        return k;
+    }
+    // The part s0..s1 of a → b, at this level: in steps of at most one cell, each step's box
+    // widened by tol.
+    template <typename F>
+    void visit(int level, const Vec3& a, const Vec3& b, double s0, double s1, double tol, F& f) const {
+        const Vec3 d = b - a;
+        const double cell_size = std::ldexp(h_, level);
+        const auto steps = static_cast<std::size_t>(std::max(1.0, std::ceil((s1 - s0) * glm::length(d) / cell_size)));
+        for (std::size_t i = 0; i < steps; ++i) {
+            const double t0 = s0 + (s1 - s0) * static_cast<double>(i) / static_cast<double>(steps);
+            const double t1 = i + 1 == steps ? s1 : s0 + (s1 - s0) * static_cast<double>(i + 1) / static_cast<double>(steps);
+            const Vec3 p0 = a + d * t0, p1 = a + d * t1;
+            const Vec3 lo = glm::min(p0, p1) - tol, hi = glm::max(p0, p1) + tol;
+            const std::array<std::int64_t, 3> c0 = {cell(lo.x, origin_.x), cell(lo.y, origin_.y), cell(lo.z, origin_.z)};
+            const std::array<std::int64_t, 3> c1 = {cell(hi.x, origin_.x), cell(hi.y, origin_.y), cell(hi.z, origin_.z)};
+            bool any = false;
+            for (std::int64_t x = c0[0] >> level; x <= c1[0] >> level && !any; ++x)
+                for (std::int64_t y = c0[1] >> level; y <= c1[1] >> level && !any; ++y)
+                    for (std::int64_t z = c0[2] >> level; z <= c1[2] >> level && !any; ++z) {
+                        const std::uint64_t k = key({x, y, z}, 0);  // already shifted
+                        if (level > 0) {
+                            const auto& occ = occupied_[static_cast<std::size_t>(level)];
+                            any = std::binary_search(occ.begin(), occ.end(), k);
+                            continue;
+                        }
+                        const auto it = ranges_.find(k);
+                        if (it == ranges_.end()) continue;
+                        for (std::uint32_t j = it->second.first; j < it->second.second; ++j) f(by_cell_[j].second);
+                    }
+            if (any) visit(level - 1, a, b, t0, t1, tol, f);
+        }
+    }
+
+    double h_;
+    Vec3 origin_{0.0};
+    int levels_ = 1;
+    std::uint32_t count_ = 0;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> by_cell_;  // level 0: (key, point), sorted
+    std::unordered_map<std::uint64_t, std::pair<std::uint32_t, std::uint32_t>> ranges_;  // key → by_cell_ run
+    std::vector<std::vector<std::uint64_t>> occupied_;             // levels ≥ 1: sorted keys
+};
+
+// Corners of other pieces that lie on a piece's edge strictly between its endpoints, for every
+// piece edge, sorted by (piece, edge, t). Corner positions are deduplicated and put in a
+// PointGrid whose level-0 cell is the median edge length: a typical edge looks at a few cells
+// holding a few corners each, and long edges cost little where no corners lie.
+std::vector<EdgeVertex> find_edge_vertices(const Scene& scene, std::vector<Vec3>& corners) {
+    corners.clear();
+    std::vector<double> lengths;
+    for (const PatchGrid& pg : scene.grids)
+        for (std::uint32_t k = 0; k < pg.count; ++k) {
+            corners.push_back(pg.corners[k]);
+            lengths.push_back(glm::length(pg.corners[(k + 1) % pg.count] - pg.corners[k]));
+        }
+    const auto lex = [](const Vec3& a, const Vec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(corners.begin(), corners.end(), lex);
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    std::vector<EdgeVertex> found;
+    if (lengths.empty()) return found;
+    const auto mid = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+    std::nth_element(lengths.begin(), mid, lengths.end());
+    if (!(*mid > 0)) return found;  // cannot happen: pieces have area
+    const PointGrid grid(corners, *mid);
+
+    std::vector<EdgeVertex> on_edge;
+    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
+        const PatchGrid& pg = scene.grids[g];
+        for (std::uint32_t k = 0; k < pg.count; ++k) {
+            const Vec3 a = pg.corners[k], b = pg.corners[(k + 1) % pg.count];
+            const Vec3 d = b - a;
+            const double len2 = glm::dot(d, d), len = std::sqrt(len2);
+            const Vec3 m = glm::max(glm::abs(a), glm::abs(b));
+            const double tol = 1e-9 * len + 4 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
+            on_edge.clear();
+            grid.near_segment(a, b, tol, [&](std::uint32_t at) {
+                const Vec3 w = corners[at] - a;
+                const double t = glm::dot(w, d) / len2;
+                if (t * len <= tol || (1 - t) * len <= tol) return;  // an endpoint, or beyond
+                const Vec3 off = w - d * t;
+                if (glm::dot(off, off) > tol * tol) return;
+                on_edge.push_back(EdgeVertex{g, k, t, at});
+            });
+            // A corner seen from two cells (or two steps) counts once.
+            std::sort(on_edge.begin(), on_edge.end(),
+                      [](const EdgeVertex& u, const EdgeVertex& v) { return std::tie(u.t, u.at) < std::tie(v.t, v.at); });
+            for (std::size_t i = 0; i < on_edge.size(); ++i)
+                if (i == 0 || on_edge[i].at != on_edge[i - 1].at) found.push_back(on_edge[i]);
+        }
+    }
+    return found;
+}
+
+// Triangulates a convex piece whose boundary (vertex slots, CCW from the front) has T-vertices
+// inside some edges, into boundary.size() − 2 triangles none of which has its three vertices on
+// one edge of the piece (zero area: float rounding could turn it into a back face). on_edges[i]:
+// the piece edges vertex i lies on (two for a corner, one for a T-vertex), which is what decides
+// collinearity, exactly. A strip from corner 0: the part still to cover is the chain l, l+1 ... r
+// closed by the diagonal (r, l); each step cuts the triangle (l, l+1, r) or (l, r−1, r) off it,
+// the one whose new diagonal is shorter among those that have area and leave a chain with a
+// corner strictly inside (one with area) or of two vertices (done). One of the two always
+// qualifies: a chain with an inner corner has area, so its first and last vertices share no
+// edge with both their neighbours unless the diagonal lies along that edge, which the strip
+// never makes; and if neither cut left an inner corner, l + 1 = r − 1 would be the only one.
+void triangulate_boundary(const std::vector<std::uint32_t>& b, const std::vector<std::uint8_t>& on_edges,
+                          const std::vector<Vec3>& pos, std::vector<std::uint32_t>& tris) {
+    const std::size_t n = b.size();
+    const auto fwd = [n](std::size_t from, std::size_t to) { return (to + n - from) % n; };
+    const auto is_corner = [&](std::size_t i) { return (on_edges[i] & (on_edges[i] - 1)) != 0; };
+    // next_corner[i]: the first corner after position i, going forward.
+    std::vector<std::size_t> next_corner(n);
+    std::size_t c = 0;  // position 0 is corner 0
+    for (std::size_t k = 2 * n; k-- > 0;) {
+        const std::size_t i = k % n;
+        next_corner[i] = c;
+        if (is_corner(i)) c = i;
+    }
+    const auto has_area = [&](std::size_t from, std::size_t to) {  // the chain from .. to, closed
+        return fwd(from, to) == 1 || fwd(from, next_corner[from]) < fwd(from, to);
+    };
+    std::size_t l = 0, r = n - 1;
+    while (fwd(l, r) >= 2) {
+        const std::size_t l1 = (l + 1) % n, r1 = (r + n - 1) % n;
+        const bool cut_l = (on_edges[l] & on_edges[l1] & on_edges[r]) == 0 && has_area(l1, r);
+        const bool cut_r = (on_edges[l] & on_edges[r1] & on_edges[r]) == 0 && has_area(l, r1);
+        FFCUBE_CHECK_MSG(cut_l || cut_r, "triangulating a piece with T-vertices");
+        const auto len2 = [&](std::size_t i, std::size_t j) {
+            const Vec3 d = pos[b[i]] - pos[b[j]];
+            return glm::dot(d, d);
+        };
+        if (cut_l && (!cut_r || len2(l1, r) <= len2(l, r1))) {
+            tris.insert(tris.end(), {b[l], b[l1], b[r]});
+            l = l1;
+        } else {
+            tris.insert(tris.end(), {b[l], b[r1], b[r]});
+            r = r1;
+        }
+    }
+}
+
+// Pieces meet in T-junctions where a corner of one lies inside an edge of another (a wall split
+// at a height its neighbours are not, a floor of faces of different widths). Rasterized from
+// different endpoints, the long edge and the short ones beside it do not cover the same pixels:
+// pixel-size cracks open between them, and hemicubes see through closed walls. So each piece is
+// drawn as the polygon of its corners and of the other pieces' corners that lie strictly inside
+// its edges (within 1e-9 of the edge length, plus a few ulps of the coordinates): those
+// T-vertices take the other piece's corner position bit for bit, so after the shared
+// double → float transform in Worker::render both pieces' edges end at the very same vertices,
+// and the rasterizer's rules for shared edges leave no gap and no overlap.
+//   The polygon (convex, with collinear vertices on its edges) is cut into as many triangles as
+// it has vertices less two, none of zero area (triangulate_boundary). Plane coordinates are
+// affine in position, so the new vertices' are computed like the corners'. Pieces without
+// T-vertices keep exactly their old triangles (c0, c1, c2), (c0, c2, c3), in the old order:
+// their pixels do not change. Culling still uses the corners only (the polygon is the same
+// piece), and finding the T-vertices is done once per scene (find_edge_vertices).
 ScenePieces prepare_pieces(const Scene& scene) {
     ScenePieces sp;
-    sp.gpu.reserve(scene.grids.size());
-    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
+    const std::size_t ng = scene.grids.size();
+    sp.gpu.reserve(ng);
+    sp.first.reserve(ng + 1);
+    sp.tri_first.reserve(ng + 1);
+    std::vector<Vec3> corners;
+    const std::vector<EdgeVertex> tv = find_edge_vertices(scene, corners);
+    std::size_t next_tv = 0;
+    std::vector<std::uint32_t> boundary;
+    std::vector<std::uint8_t> on_edges;
+    sp.tri_first.push_back(0);
+    for (std::uint32_t g = 0; g < ng; ++g) {
         const PatchGrid& pg = scene.grids[g];
         // An orthonormal basis of the piece's plane; coordinates relative to corner 0 in double,
         // so far-off scenes lose nothing before the conversion to float.
         const Vec3 n = polygon_normal(std::span<const Vec3>(pg.corners.data(), pg.count));
         const Vec3 e1 = glm::normalize(pg.corners[1] - pg.corners[0]);
         const Vec3 e2 = glm::cross(n, e1);
+        const auto add_slot = [&](const Vec3& p) {
+            const Vec3 d = p - pg.corners[0];
+            sp.pos.push_back(p);
+            sp.param.push_back(static_cast<float>(glm::dot(d, e1)));
+            sp.param.push_back(static_cast<float>(glm::dot(d, e2)));
+            sp.grid.push_back(g);
+            return static_cast<std::uint32_t>(sp.pos.size() - 1);
+        };
         float q[4][2];
         for (int k = 0; k < 4; ++k) {
             const Vec3 d = pg.corners[static_cast<std::size_t>(k)] - pg.corners[0];
             q[k][0] = static_cast<float>(glm::dot(d, e1));
             q[k][1] = static_cast<float>(glm::dot(d, e2));
-            sp.param.push_back(q[k][0]);
-            sp.param.push_back(q[k][1]);
-            sp.grid.push_back(g);
         }
         sp.gpu.push_back(GpuGrid{{q[1][0], q[1][1]}, {q[2][0], q[2][1]}, {q[3][0], q[3][1]}, pg.count, pg.nu, pg.nv,
                                  pg.first_patch});
+        const auto base = static_cast<std::uint32_t>(sp.pos.size());
+        sp.first.push_back(base);
+        for (std::uint32_t k = 0; k < pg.count; ++k) add_slot(pg.corners[k]);
+        if (next_tv < tv.size() && tv[next_tv].g == g) {
+            // The boundary, CCW: each corner, then the T-vertices inside the edge it starts;
+            // with, per vertex, the piece edges it lies on (bit k: edge k, corner k → k + 1).
+            boundary.clear();
+            on_edges.clear();
+            for (std::uint32_t k = 0; k < pg.count; ++k) {
+                boundary.push_back(base + k);
+                on_edges.push_back(static_cast<std::uint8_t>((1u << k) | (1u << ((k + pg.count - 1) % pg.count))));
+                for (; next_tv < tv.size() && tv[next_tv].g == g && tv[next_tv].k == k; ++next_tv) {
+                    boundary.push_back(add_slot(corners[tv[next_tv].at]));
+                    on_edges.push_back(static_cast<std::uint8_t>(1u << k));
+                }
+            }
+            triangulate_boundary(boundary, on_edges, sp.pos, sp.tris);
+        }
+        sp.tri_first.push_back(static_cast<std::uint32_t>(sp.tris.size()));
     }
+    sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
     return sp;
 }
 
@@ -121,7 +397,7 @@ public:
         grid_vbo_ = gl::make_buffer(gl);
         ebo_ = gl::make_buffer(gl);
         ssbo_ = gl::make_buffer(gl);
-        const std::size_t slots = scene.grids.size() * 4;
+        const std::size_t slots = pieces.pos.size();
         gl.BindVertexArray(vao_.id());
         gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
         gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * 3 * sizeof(float)), nullptr,
@@ -145,6 +421,7 @@ public:
         gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo_.id());
         gl.UseProgram(program_.id());
         u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
+        u_back_ = gl.GetUniformLocation(program_.id(), "u_back");
         // All state the item pass needs is set here and never changed: nothing leaks in or out.
         gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
         gl.Enable(GL_DEPTH_TEST);
@@ -177,18 +454,17 @@ public:
         const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
         const HemicubeFrame fr = make_frame(pa.normal, angle);
         const Vec3 eye = pa.centroid + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
-        // Piece corners relative to the eye in the local frame, subtracted in double before they
-        // become floats: far-off coordinates (1e5) keep full float precision near the eye.
-        const std::size_t ng = scene_.grids.size();
-        for (std::size_t g = 0; g < ng; ++g) {
-            const PatchGrid& pg = scene_.grids[g];
-            for (std::size_t k = 0; k < 4; ++k) {
-                const Vec3 d = pg.corners[k] - eye;
-                float* out = &local_[(4 * g + k) * 3];
-                out[0] = static_cast<float>(glm::dot(d, fr.tangent));
-                out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
-                out[2] = static_cast<float>(glm::dot(d, fr.normal));
-            }
+        // Vertex slots (piece corners, T-vertices) relative to the eye in the local frame,
+        // subtracted in double before they become floats: far-off coordinates (1e5) keep full
+        // float precision near the eye. Equal world positions give bitwise equal vertices.
+        const std::size_t ns = pieces_.pos.size();
+        const Vec3* pos = pieces_.pos.data();
+        for (std::size_t s = 0; s < ns; ++s) {
+            const Vec3 d = pos[s] - eye;
+            float* out = &local_[s * 3];
+            out[0] = static_cast<float>(glm::dot(d, fr.tangent));
+            out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
+            out[2] = static_cast<float>(glm::dot(d, fr.normal));
         }
         cull(st);
         st.prepare_seconds += watch.seconds();
@@ -207,16 +483,24 @@ public:
         gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
         gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
         const double near = HemicubeRowProvider::kNear * pa.size;
-        // Front-facing pieces first, then back-facing ones pushed a few depth units farther
+        // Front-facing pieces first, then back-facing ones pushed 64 depth units farther
         // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
         // back shows its front side, never the back of the other (no z-fighting; GL_GREATER also
-        // lets the first drawn win exact ties).
+        // lets the first drawn win exact ties; 4 units were too few for the two faces' rounding,
+        // measured). No slope factor: a back face seen edge-on (a wall standing on the sender's
+        // plate) has a huge depth slope, and slope × 1 let what is behind it show through
+        // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (u_back,
+        // from cull()'s classification of the whole piece), not gl_FrontFacing: the rasterizer
+        // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
+        // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
+        // back-face pixel.
         std::size_t first_index = 0;
         for (int pass = 0; pass < 2; ++pass) {
             if (pass == 1) {
                 gl.Enable(GL_POLYGON_OFFSET_FILL);
-                gl.PolygonOffset(-1.0f, -4.0f);
+                gl.PolygonOffset(0.0f, -64.0f);
             }
+            gl.Uniform1ui(u_back_, static_cast<GLuint>(pass));
             for (int f = 0; f < 5; ++f) {
                 const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
                 const std::size_t count = lists_[pass * 5 + f].size();
@@ -286,17 +570,18 @@ private:
     // Sorts the pieces into the five faces' index lists: a piece goes to a face unless all its
     // corners lie outside one of the face's frustum planes; pieces wholly behind the hemicube
     // plane (z ≤ 0: this includes the patch's own piece and every piece coplanar with it) go
-    // nowhere.
+    // nowhere. Corners suffice for pieces drawn with T-vertices too: those lie on the edges.
     void cull(HemicubeStats& st) {
         for (auto& l : lists_) l.clear();
         const std::size_t ng = scene_.grids.size();
         st.pieces_considered += ng;
         for (std::size_t g = 0; g < ng; ++g) {
             const std::uint32_t count = scene_.grids[g].count;
+            const std::uint32_t base = pieces_.first[g];
             unsigned all = ~0u;
             bool behind = true;
             for (std::uint32_t k = 0; k < count; ++k) {
-                const float* c = &local_[(4 * g + k) * 3];
+                const float* c = &local_[(base + k) * 3];
                 const float x = c[0], y = c[1], z = c[2];
                 behind = behind && z <= 0;
                 // Outcodes against the planes x = ±z, y = ±z (top face) and y = ±x, x = ±y,
@@ -319,24 +604,29 @@ private:
             constexpr unsigned kPosY = (1u << 4) | (1u << 6) | (1u << 8) | (1u << 11);   // |x| ≤ y, 0 ≤ z ≤ y
             constexpr unsigned kNegY = (1u << 4) | (1u << 5) | (1u << 7) | (1u << 12);   // |x| ≤ -y, 0 ≤ z ≤ -y
             constexpr unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
-            const auto base = static_cast<std::uint32_t>(4 * g);
             // Front-facing: the eye (the origin) lies in front of the piece's plane, whose normal
             // (c1 − c0) × (c2 − c0) points to its front (corners CCW from the front).
-            const float* c0 = &local_[(4 * g) * 3];
+            const float* c0 = &local_[base * 3];
             const float* c1 = c0 + 3;
             const float* c2 = c0 + 6;
             const double e1[3] = {double(c1[0]) - c0[0], double(c1[1]) - c0[1], double(c1[2]) - c0[2]};
             const double e2[3] = {double(c2[0]) - c0[0], double(c2[1]) - c0[1], double(c2[2]) - c0[2]};
             const double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
             const bool back = nrm[0] * c0[0] + nrm[1] * c0[1] + nrm[2] * c0[2] > 0;
+            const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[g];
+            const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[g + 1];
             for (std::size_t f = 0; f < 5; ++f) {
                 if (all & masks[f]) {
                     ++st.pieces_culled[f];
                 } else {
                     ++st.pieces_drawn[f];
                     auto& l = lists_[f + (back ? 5 : 0)];
-                    l.insert(l.end(), {base, base + 1, base + 2});
-                    if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
+                    if (tri_begin == tri_end) {
+                        l.insert(l.end(), {base, base + 1, base + 2});
+                        if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
+                    } else {
+                        l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
+                    }
                 }
             }
         }
@@ -352,7 +642,7 @@ private:
     gl::ItemTarget target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, ebo_, ssbo_;
-    GLint u_face_ = -1;
+    GLint u_face_ = -1, u_back_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
     std::vector<std::uint32_t> ids_;

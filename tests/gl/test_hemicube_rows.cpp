@@ -12,7 +12,9 @@
 //    failure about once in 5e8 under the model).
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <numbers>
 
@@ -250,6 +252,187 @@ TEST(HemicubeRows, TwoSidedPlateShowsBothFrontsAndLeaksNothing) {
         EXPECT_GT(G[ceiling][up], 0.1);
         EXPECT_EQ(G[ceiling][down], 0.0);
     }
+}
+
+// T-junctions: a closed box whose floor is three faces meeting at a T (a vertex of two of them
+// lies inside an edge of the third) and whose x = 0 wall is two faces split at a height the
+// floor's faces do not share. Edges that do not share vertices are rasterized from different
+// endpoints; a crack between them would let a pixel see out of the box (miss) or see a back
+// face. Rows must sum to 1 as in a box without junctions (bound as above).
+TEST(HemicubeRows, TJunctionsLeakNothing) {
+    std::vector<NamedPolygon> polys;
+    for (const NamedPolygon& p : test::inward_box(1, 1, 1))
+        if (p.object != "z0" && p.object != "x0") polys.push_back(p);
+    polys.push_back({"floor_a", {{0, 0, 0}, {1, 0, 0}, {1, 0.5, 0}, {0, 0.5, 0}}});
+    polys.push_back({"floor_b", {{0, 0.5, 0}, {0.3, 0.5, 0}, {0.3, 1, 0}, {0, 1, 0}}});
+    polys.push_back({"floor_c", {{0.3, 0.5, 0}, {1, 0.5, 0}, {1, 1, 0}, {0.3, 1, 0}}});
+    polys.push_back({"wall_lo", {{0, 0, 0}, {0, 1, 0}, {0, 1, 0.37}, {0, 0, 0.37}}});
+    polys.push_back({"wall_hi", {{0, 0, 0.37}, {0, 1, 0.37}, {0, 1, 1}, {0, 0, 1}}});
+    const Scene scene = test::make_scene(polys, 0.15);
+    HemicubeRowProvider provider(scene, options(64));
+    const CsrMatrix F = compute_all_rows(provider);
+    for (std::uint32_t i = 0; i < scene.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i;
+    EXPECT_EQ(provider.stats().miss_weight, 0.0);
+    EXPECT_EQ(provider.stats().back_face_weight, 0.0);
+}
+
+// T-junctions in every arrangement: a floor piece with T-vertices inside all four edges, ceiling
+// triangles with T-vertices on one edge and on two, and brick-bonded walls where every brick has
+// T-vertices on two opposite edges (and the walls beside them many along their shared edge).
+// Near the origin and 1e5 away (the tolerance that finds T-vertices grows with the
+// coordinates). Bound as above.
+TEST(HemicubeRows, TJunctionsOnEveryEdgeTrianglesAndBricksLeakNothing) {
+    std::vector<NamedPolygon> polys;
+    for (const NamedPolygon& p : test::inward_box(1, 1, 1))
+        if (p.object == "x1" || p.object == "y1") polys.push_back(p);
+    // Floor: the square [0.25, 0.75]² in the middle, and strips around it split at x or y = 0.5, so
+    // the middle square has a T-vertex inside each edge and each strip one inside its inner edge.
+    const auto floor_rect = [&](const std::string& name, double x0, double y0, double x1, double y1) {
+        polys.push_back({name, {{x0, y0, 0}, {x1, y0, 0}, {x1, y1, 0}, {x0, y1, 0}}});
+    };
+    floor_rect("floor_mid", 0.25, 0.25, 0.75, 0.75);
+    floor_rect("floor_s0", 0, 0, 0.5, 0.25);
+    floor_rect("floor_s1", 0.5, 0, 1, 0.25);
+    floor_rect("floor_n0", 0, 0.75, 0.5, 1);
+    floor_rect("floor_n1", 0.5, 0.75, 1, 1);
+    floor_rect("floor_w0", 0, 0.25, 0.25, 0.5);
+    floor_rect("floor_w1", 0, 0.5, 0.25, 0.75);
+    floor_rect("floor_e0", 0.75, 0.25, 1, 0.5);
+    floor_rect("floor_e1", 0.75, 0.5, 1, 0.75);
+    // Ceiling (facing down): one triangle, and the other half split at the diagonal's midpoint.
+    polys.push_back({"ceil_a", {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}}});
+    polys.push_back({"ceil_b", {{0, 0, 1}, {0.5, 0.5, 1}, {1, 0, 1}}});
+    polys.push_back({"ceil_c", {{0.5, 0.5, 1}, {1, 1, 1}, {1, 0, 1}}});
+    // Walls x = 0 (facing +x) and y = 0 (facing +y) in brick bond: courses of height 1/5, bricks of
+    // width 1/3, every other course shifted by half a brick.
+    for (int c = 0; c < 5; ++c) {
+        const double z0 = c / 5.0, z1 = (c + 1) / 5.0, shift = c % 2 ? 1.0 / 6.0 : 0.0;
+        std::vector<double> cuts = {0.0};
+        for (double a = shift > 0 ? shift : 1.0 / 3.0; a < 1 - 1e-9; a += 1.0 / 3.0) cuts.push_back(a);
+        cuts.push_back(1.0);
+        for (std::size_t b = 0; b + 1 < cuts.size(); ++b) {
+            const double a0 = cuts[b], a1 = cuts[b + 1];
+            const std::string id = std::to_string(c) + "_" + std::to_string(b);
+            polys.push_back({"x0_" + id, {{0, a0, z0}, {0, a1, z0}, {0, a1, z1}, {0, a0, z1}}});
+            polys.push_back({"y0_" + id, {{a0, 0, z0}, {a0, 0, z1}, {a1, 0, z1}, {a1, 0, z0}}});
+        }
+    }
+    for (const Vec3 offset : {Vec3(0.0), Vec3(1e5, -1e5, 1e5)}) {
+        std::vector<NamedPolygon> moved = polys;
+        for (auto& p : moved)
+            for (auto& v : p.vertices) v += offset;
+        const Scene scene = test::make_scene(moved, 0.2);
+        HemicubeRowProvider provider(scene, options(64));
+        const CsrMatrix F = compute_all_rows(provider);
+        for (std::uint32_t i = 0; i < scene.size(); ++i)
+            EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i << " offset " << offset.x;
+        EXPECT_EQ(provider.stats().miss_weight, 0.0) << "offset " << offset.x;
+        EXPECT_EQ(provider.stats().back_face_weight, 0.0) << "offset " << offset.x;
+    }
+}
+
+// The walls of the box [0,1]³ as frames: o + a u + b v for a, b ∈ [0, 1], u × v the inward normal.
+struct WallFrame {
+    Vec3 o, u, v;
+};
+constexpr WallFrame kInwardWalls[6] = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 0, 1}, {0, 1, 0}, {1, 0, 0}},
+                                       {{0, 0, 0}, {0, 1, 0}, {0, 0, 1}}, {{1, 0, 0}, {0, 0, 1}, {0, 1, 0}},
+                                       {{0, 0, 0}, {0, 0, 1}, {1, 0, 0}}, {{0, 1, 0}, {1, 0, 0}, {0, 0, 1}}};
+
+// Arbitrary T-junctions: each wall of a closed box is cut at random (guillotine cuts at eighths
+// of the part being cut, so corners often fall inside other parts' edges, sometimes on their
+// corners), and some parts are drawn as two triangles or as three (one split at the midpoint of
+// the diagonal). The generator is spelled out so the scene is the same everywhere.
+TEST(HemicubeRows, RandomTJunctionLayoutsLeakNothing) {
+    std::uint64_t state = 0x2545F4914F6CDD1Dull;
+    const auto uniform = [&state] {  // splitmix64, to [0, 1)
+        std::uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return static_cast<double>((z ^ (z >> 31)) >> 11) * 0x1.0p-53;
+    };
+    for (const Vec3 offset : {Vec3(0.0), Vec3(1e5, -3e4, 7e4)}) {
+        std::vector<NamedPolygon> polys;
+        for (int w = 0; w < 6; ++w) {
+            const WallFrame& f = kInwardWalls[w];
+            const auto at = [&](double a, double b) { return f.o + f.u * a + f.v * b + offset; };
+            std::vector<std::array<double, 4>> todo = {{0, 0, 1, 1}};  // a0, b0, a1, b1
+            while (!todo.empty()) {
+                const auto r = todo.back();
+                todo.pop_back();
+                const double da = r[2] - r[0], db = r[3] - r[1];
+                if (da < 0.2 && db < 0.2) {
+                    const std::string name = "w" + std::to_string(w);
+                    const double kind = uniform();
+                    const Vec3 p00 = at(r[0], r[1]), p10 = at(r[2], r[1]), p11 = at(r[2], r[3]), p01 = at(r[0], r[3]);
+                    if (kind < 0.6) {
+                        polys.push_back({name, {p00, p10, p11, p01}});
+                    } else if (kind < 0.8) {
+                        polys.push_back({name, {p00, p10, p11}});
+                        polys.push_back({name, {p00, p11, p01}});
+                    } else {
+                        const Vec3 mid = at(0.5 * (r[0] + r[2]), 0.5 * (r[1] + r[3]));
+                        polys.push_back({name, {p00, p10, p11}});
+                        polys.push_back({name, {p00, mid, p01}});
+                        polys.push_back({name, {mid, p11, p01}});
+                    }
+                    continue;
+                }
+                const double cut = std::round((0.2 + 0.6 * uniform()) * 8) / 8;
+                if (da >= db) {
+                    const double a = r[0] + da * cut;
+                    todo.push_back({r[0], r[1], a, r[3]});
+                    todo.push_back({a, r[1], r[2], r[3]});
+                } else {
+                    const double b = r[1] + db * cut;
+                    todo.push_back({r[0], r[1], r[2], b});
+                    todo.push_back({r[0], b, r[2], r[3]});
+                }
+            }
+        }
+        const Scene scene = test::make_scene(polys, 0.15);
+        HemicubeRowProvider provider(scene, options(64));
+        const CsrMatrix F = compute_all_rows(provider);
+        for (std::uint32_t i = 0; i < scene.size(); ++i)
+            EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i << " offset " << offset.x;
+        EXPECT_EQ(provider.stats().miss_weight, 0.0) << "offset " << offset.x;
+        EXPECT_EQ(provider.stats().back_face_weight, 0.0) << "offset " << offset.x;
+    }
+}
+
+// Many small pieces: a closed box of 24,000 bricks (50 courses of 80, brick bond), T-vertices on
+// almost every brick. From most eyes, bricks far along a wall are slivers far thinner than the
+// rasterizer's subpixel grid, which snapping can turn over: such a triangle must still show its
+// piece's front (the pass decides the side, not gl_FrontFacing, which gave back-face pixels here).
+TEST(HemicubeRows, ManyBricksShowNoBackFacesAndLeakNothing) {
+    std::vector<NamedPolygon> polys;
+    const int courses = 50, bricks = 80;
+    for (const WallFrame& f : kInwardWalls)
+        for (int c = 0; c < courses; ++c) {
+            const double b0 = double(c) / courses, b1 = double(c + 1) / courses;
+            std::vector<double> cuts = {0.0};
+            for (int k = 1; k <= bricks; ++k) {
+                const double a = (k - (c % 2 ? 0.5 : 0.0)) / bricks;
+                if (a < 1) cuts.push_back(a);
+            }
+            cuts.push_back(1.0);
+            for (std::size_t k = 0; k + 1 < cuts.size(); ++k) {
+                const double a0 = cuts[k], a1 = cuts[k + 1];
+                polys.push_back({"bricks", {f.o + f.u * a0 + f.v * b0, f.o + f.u * a1 + f.v * b0,
+                                            f.o + f.u * a1 + f.v * b1, f.o + f.u * a0 + f.v * b1}});
+            }
+        }
+    const Scene scene = test::make_scene(polys, 1.0);  // one patch per brick
+    HemicubeRowProvider provider(scene, options(64));
+    std::vector<std::uint32_t> rows;
+    for (std::size_t k = 0; k < 20; ++k) rows.push_back(static_cast<std::uint32_t>(k * scene.size() / 20));
+    provider.compute_rows(rows, [](std::uint32_t i, const SparseRow& row) {
+        double sum = 0;
+        for (const double v : row.val) sum += v;
+        EXPECT_NEAR(sum, 1.0, 1e-7) << "row " << i;
+    });
+    EXPECT_EQ(provider.stats().miss_weight, 0.0);
+    EXPECT_EQ(provider.stats().back_face_weight, 0.0);
 }
 
 TEST(HemicubeRows, SameRowsWithOneOrTwoThreads) {
