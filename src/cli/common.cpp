@@ -231,6 +231,7 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
+    r.set("sub_hemicube_rows", st.sampled_rows);
 }
 
 CsrMatrix apply_enforcement(const FormFactorOptions& o, CsrMatrix F, const Scene& scene, const RowSource& rows,

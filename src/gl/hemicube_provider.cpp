@@ -26,6 +26,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/hemicube/frame.hpp"
 #include "ffcube/hemicube/layout.hpp"
 #include "gl/gl_api.hpp"
@@ -447,13 +448,17 @@ public:
     }
 
     // Renders patch p's hemicube into ids_ (the atlas).
-    void render(std::uint32_t p, HemicubeStats& st) {
+    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, st); }
+
+    // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
+    // point for sub-hemicubes), raised by kEyeOffset of the patch size.
+    void render(std::uint32_t p, const Vec3& at, HemicubeStats& st) {
         const gl::Api& gl = gl_;
         const Patch& pa = scene_.patches[p];
         Stopwatch watch;
         const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
         const HemicubeFrame fr = make_frame(pa.normal, angle);
-        const Vec3 eye = pa.centroid + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
+        const Vec3 eye = at + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
         // Vertex slots (piece corners, T-vertices) relative to the eye in the local frame,
         // subtracted in double before they become floats: far-off coordinates (1e5) keep full
         // float precision near the eye. Equal world positions give bitwise equal vertices.
@@ -524,13 +529,41 @@ public:
         st.hemicubes += 1;
     }
 
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) {
-        render(p, st);
+    // Row p: one hemicube at the centroid, or (sampled) the average of sub-hemicubes at the
+    // patch's 2 × 2 quadrature points (geometry/quadrature.hpp, the points the near-field
+    // correction's sender quadrature uses), each with its own visibility.
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled = false) {
+        ++epoch_;
+        touched_.clear();
+        if (!sampled) {
+            render(p, st);
+            accumulate(p, 1.0, st);
+        } else {
+            const auto v = scene_.patch_vertices(p);
+            patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
+            for (std::size_t q = 0; q < points_.size(); ++q) {
+                render(p, points_[q], st);
+                accumulate(p, weights_[q], st);
+            }
+            ++st.sampled_rows;
+        }
+        Stopwatch watch;
+        std::sort(touched_.begin(), touched_.end());
+        out.clear();
+        out.col.reserve(touched_.size());
+        out.val.reserve(touched_.size());
+        for (std::uint32_t j : touched_) {
+            out.col.push_back(j);
+            out.val.push_back(acc_[j]);
+        }
+        st.accumulate_seconds += watch.seconds();
+    }
+
+    // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
+    void accumulate(std::uint32_t p, double weight, HemicubeStats& st) {
         Stopwatch watch;
         const std::vector<double>& w = layout_.delta_ff();
         const std::uint32_t self = p + 1;
-        ++epoch_;
-        touched_.clear();
         double back = 0.0, miss = 0.0;
         const std::size_t npix = ids_.size();
         for (std::size_t k = 0; k < npix; ++k) {
@@ -548,19 +581,11 @@ public:
                     acc_[j] = 0.0;
                     touched_.push_back(j);
                 }
-                acc_[j] += w[k];
+                acc_[j] += weight * w[k];
             }
         }
-        std::sort(touched_.begin(), touched_.end());
-        out.clear();
-        out.col.reserve(touched_.size());
-        out.val.reserve(touched_.size());
-        for (std::uint32_t j : touched_) {
-            out.col.push_back(j);
-            out.val.push_back(acc_[j]);
-        }
-        st.back_face_weight += back;
-        st.miss_weight += miss;
+        st.back_face_weight += weight * back;
+        st.miss_weight += weight * miss;
         st.accumulate_seconds += watch.seconds();
     }
 
@@ -649,6 +674,8 @@ private:
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;
+    std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row
+    std::vector<double> weights_;
 };
 
 }  // namespace
@@ -670,7 +697,7 @@ class Engine {
 public:
     virtual ~Engine() = default;
     virtual void start() = 0;  // on the worker thread, before the first request
-    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) = 0;
+    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) = 0;
     virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
     virtual void stop() = 0;  // on the worker thread, after the last request
 };
@@ -685,7 +712,9 @@ public:
         ctx_->make_current();
         worker_ = std::make_unique<Worker>(*ctx_, scene_, pieces_, layout_, opt_);
     }
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) override { worker_->row(p, out, st); }
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override {
+        worker_->row(p, out, st, sampled);
+    }
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override {
         HemicubeStats ignored;
         worker_->render(p, ignored);
@@ -707,7 +736,7 @@ private:
 
 // The wire protocol between a RemoteEngine and its child: fixed-size headers and raw arrays
 // over a Unix socket pair (both ends are the same binary).
-enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1 };
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2 };
 struct RequestMsg {
     Request kind;
     std::uint32_t patch;
@@ -773,8 +802,8 @@ void send_error(int fd, const std::string& what) {
         while (recv_all(fd, &req, sizeof req)) {
             try {
                 ReplyMsg r{1, 0, {}};
-                if (req.kind == Request::Row) {
-                    worker.row(req.patch, row, r.stats);
+                if (req.kind == Request::Row || req.kind == Request::SampledRow) {
+                    worker.row(req.patch, row, r.stats, req.kind == Request::SampledRow);
                     r.count = row.nnz();
                     send_all(fd, &r, sizeof r);
                     send_vector(fd, row.col);
@@ -848,8 +877,8 @@ public:
     }
     void start() override {}
     void stop() override {}
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st) override {
-        const ReplyMsg r = request(Request::Row, p);
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override {
+        const ReplyMsg r = request(sampled ? Request::SampledRow : Request::Row, p);
         out.col.resize(r.count);
         out.val.resize(r.count);
         if (r.count) {
@@ -935,6 +964,7 @@ struct HemicubeRowProvider::Impl {
     bool stopping = false;
     std::uint64_t generation = 0;  // bumped for each compute_rows call
     std::span<const std::uint32_t> rows;
+    const RowProvider::SampleQuery* query = nullptr;  // compute_rows_sampled's, during that call
     std::size_t next = 0, consumed = 0, window = 0;
     std::vector<SparseRow> slots;
     std::vector<char> ready;
@@ -1005,10 +1035,13 @@ struct HemicubeRowProvider::Impl {
             }
             const std::size_t k = next++;
             const std::uint32_t i = rows[k];
+            const RowProvider::SampleQuery* const ask = query;
             ++in_flight;
             lock.unlock();
             try {
-                w.row(i, row, local);
+                // The caller's query runs here, on this worker thread (it is thread-safe).
+                const bool sampled = ask && (*ask)(k);
+                w.row(i, row, local, sampled);
             } catch (...) {
                 lock.lock();
                 if (!error) error = std::current_exception();
@@ -1037,6 +1070,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.draw_seconds += b.draw_seconds;
     a.readback_seconds += b.readback_seconds;
     a.accumulate_seconds += b.accumulate_seconds;
+    a.sampled_rows += b.sampled_rows;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     for (std::size_t f = 0; f < 5; ++f) {
@@ -1136,6 +1170,24 @@ void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, cons
         throw;
     }
     finish();
+}
+
+void HemicubeRowProvider::compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
+                                               const RowSink& sink) {
+    Impl& im = *impl_;
+    {
+        std::lock_guard lock(im.mutex);
+        im.query = &sampled;
+    }
+    // compute_rows returns only when no worker is still on a row of this call.
+    struct Reset {
+        Impl& im;
+        ~Reset() {
+            std::lock_guard lock(im.mutex);
+            im.query = nullptr;
+        }
+    } reset{im};
+    compute_rows(rows, sink);
 }
 
 std::vector<std::uint32_t> HemicubeRowProvider::item_buffer(std::uint32_t i) {

@@ -45,6 +45,7 @@ struct HemicubeStats {
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
+    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_sampled)
 };
 
 class HemicubeRowProvider final : public RowProvider {
@@ -57,6 +58,11 @@ public:
     std::uint32_t size() const override;
     std::string name() const override { return "hemicube"; }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+    // Sub-hemicubes: a flagged row is the average of hemicubes at the patch's 2 × 2 quadrature
+    // points (3 on a triangle), weights by area, each with its own visibility; 4× the cost.
+    bool can_sample_sender() const override { return true; }
+    void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
+                              const RowSink& sink) override;
 
     // The item buffer of patch i's hemicube: the atlas (3N × N, row 0 at the bottom; see
     // hemicube/layout.hpp), each pixel 0 (nothing), 1 + patch index, or 0xFFFFFFFF (a back face).
