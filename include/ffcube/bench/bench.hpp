@@ -60,9 +60,9 @@ struct BenchOptions {
     unsigned threads = 0;                 // 0: every core (both methods)
     Backend backend = Backend::Auto;
     std::uint64_t seed = 0x5eed;
-    // Also measure each hemicube run with the near-field correction and sender quadrature
-    // (accuracy/near_field.hpp) as method "hemicube+near": the plain run's rows corrected, its
-    // seconds = the plain run's + the correction's (what `--correct near` costs).
+    // Also measure each hemicube setting with the default near-field correction
+    // (accuracy/near_field.hpp) as method "hemicube+near": a run of its own, timed whole, with
+    // sub-hemicubes where the correction asks for them (what `--correct near` costs).
     bool corrected = true;
     double near_k = 3.0;
 };
