@@ -12,6 +12,7 @@
 #include <cstdlib>
 #include <exception>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <thread>
 #include <tuple>
@@ -62,7 +63,39 @@ struct ScenePieces {
     // drawn as its corners say: (c0, c1, c2), and (c0, c2, c3) for a quad.
     std::vector<std::uint32_t> tri_first;
     std::vector<std::uint32_t> tris;   // vertex slot triples, CCW from the front
+    // Per piece: another piece has exactly its corners and faces the other way (one side of a
+    // two-sided plate made of two one-sided faces). When such a piece shows its back, its twin
+    // shows its front over exactly the same pixels: the back is not drawn at all, so the two
+    // can never z-fight, however steeply they are seen (a depth offset could not settle that
+    // without letting things behind edge-on back faces through).
+    std::vector<std::uint8_t> has_twin;
 };
+
+// Marks the pieces that have a twin (see ScenePieces::has_twin): same corner set, opposite side.
+void find_twins(const Scene& scene, ScenePieces& sp) {
+    using Key = std::array<double, 13>;  // count, then the corners sorted, 3 doubles each
+    std::map<Key, std::vector<std::uint32_t>> by_corners;
+    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
+        const PatchGrid& pg = scene.grids[g];
+        std::vector<Vec3> c(pg.corners.begin(), pg.corners.begin() + pg.count);
+        std::sort(c.begin(), c.end(),
+                  [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+        Key key{};
+        key[0] = pg.count;
+        for (std::uint32_t k = 0; k < pg.count; ++k)
+            for (int d = 0; d < 3; ++d) key[1 + 3 * k + static_cast<std::size_t>(d)] = c[k][d];
+        by_corners[key].push_back(g);
+    }
+    sp.has_twin.assign(scene.grids.size(), 0);
+    for (const auto& [key, gs] : by_corners)
+        for (std::size_t a = 0; a < gs.size(); ++a)
+            for (std::size_t b = a + 1; b < gs.size(); ++b) {
+                const PatchGrid &ga = scene.grids[gs[a]], &gb = scene.grids[gs[b]];
+                const Vec3 na = polygon_normal(std::span<const Vec3>(ga.corners.data(), ga.count));
+                const Vec3 nb = polygon_normal(std::span<const Vec3>(gb.corners.data(), gb.count));
+                if (glm::dot(na, nb) < 0) sp.has_twin[gs[a]] = sp.has_twin[gs[b]] = 1;
+            }
+}
 
 // A corner of another piece strictly inside edge k (corner k → k + 1) of piece g.
 struct EdgeVertex {
@@ -350,6 +383,7 @@ ScenePieces prepare_pieces(const Scene& scene) {
         sp.tri_first.push_back(static_cast<std::uint32_t>(sp.tris.size()));
     }
     sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
+    find_twins(scene, sp);
     return sp;
 }
 
@@ -638,6 +672,7 @@ private:
             const double e2[3] = {double(c2[0]) - c0[0], double(c2[1]) - c0[1], double(c2[2]) - c0[2]};
             const double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
             const bool back = nrm[0] * c0[0] + nrm[1] * c0[1] + nrm[2] * c0[2] > 0;
+            if (back && pieces_.has_twin[g]) continue;  // its twin's front covers it (find_twins)
             const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[g];
             const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[g + 1];
             for (std::size_t f = 0; f < 5; ++f) {
