@@ -392,8 +392,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         // hemicube value is kept as it is (the midpoint rule's error there reaches ~5%: the
         // issue's −4.7% on squares sharing an edge).
         if (d < k * size) {
-            // (A sampled row's value is the 2 × 2 rule's, with its own visibility: ~1%.)
-            systematic = quadrature ? 0.05 * f : sampled_row ? 0.01 * f : 0.0;
+            systematic = 0.05 * f;
             return f;
         }
         if (d >= kPointKernelK * size) {
