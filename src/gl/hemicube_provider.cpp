@@ -417,15 +417,20 @@ std::array<float, 16> face_matrix(const FaceSpec& f, double near) {
     return m;
 }
 
+// Resolution of sub-hemicubes: half the row's, when that is still a valid resolution (even, ≥ 8).
+int half_resolution(int n) { return n / 2 >= 8 && (n / 2) % 2 == 0 ? n / 2 : n; }
+
 // One worker: a GL context current on its own thread, its item buffer and its scratch space.
 class Worker {
 public:
     Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
            const HemicubeOptions& opt)
-        : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {
+        : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), half_layout_(half_resolution(layout.resolution())),
+          opt_(opt) {
         const gl::Api& gl = gl_;
         program_ = gl::make_program(gl, "item shader", shaders::item_vert, shaders::item_frag);
         target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
+        half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
         vao_ = gl::make_vertex_array(gl);
         vbo_ = gl::make_buffer(gl);
         static_vbo_ = gl::make_buffer(gl);
@@ -473,7 +478,11 @@ public:
         gl::check_gl(gl, "hemicube worker setup");
 
         local_.resize(slots * 3);
-        for (int f = 0; f < 5; ++f) face_m_[static_cast<std::size_t>(f)] = layout.faces()[static_cast<std::size_t>(f)];
+        for (std::size_t f = 0; f < 5; ++f) {
+            face_m_[f] = layout.faces()[f];
+            half_face_m_[f] = half_layout_.faces()[f];
+        }
+        half_ids_.resize(static_cast<std::size_t>(half_layout_.atlas_width()) * half_layout_.atlas_height());
         for (auto& l : lists_) l.reserve(slots);
         all_idx_.reserve(slots * 2);
         ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
@@ -482,11 +491,12 @@ public:
     }
 
     // Renders patch p's hemicube into ids_ (the atlas).
-    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, st); }
+    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, false, st); }
 
     // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
-    // point for sub-hemicubes), raised by kEyeOffset of the patch size.
-    void render(std::uint32_t p, const Vec3& at, HemicubeStats& st) {
+    // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
+    // (half) the half-resolution one of sub-hemicubes.
+    void render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st) {
         const gl::Api& gl = gl_;
         const Patch& pa = scene_.patches[p];
         Stopwatch watch;
@@ -517,6 +527,8 @@ public:
         gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
                       all_idx_.data(), GL_STREAM_DRAW);
 
+        gl.BindFramebuffer(GL_FRAMEBUFFER, (half ? half_target_ : target_).fbo.id());
+        const std::array<FaceSpec, 5>& faces = half ? half_face_m_ : face_m_;
         const GLuint zero_id[4] = {0, 0, 0, 0};
         const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
         gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
@@ -541,7 +553,7 @@ public:
             }
             gl.Uniform1ui(u_back_, static_cast<GLuint>(pass));
             for (int f = 0; f < 5; ++f) {
-                const FaceSpec& fs = face_m_[static_cast<std::size_t>(f)];
+                const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
                 const std::size_t count = lists_[pass * 5 + f].size();
                 if (count > 0) {
                     const auto m = face_matrix(fs, near);
@@ -557,7 +569,9 @@ public:
         gl.Finish();
         st.draw_seconds += watch.seconds();
         watch.restart();
-        gl.ReadPixels(0, 0, layout_.atlas_width(), layout_.atlas_height(), GL_RED_INTEGER, GL_UNSIGNED_INT, ids_.data());
+        const HemicubeLayout& lay = half ? half_layout_ : layout_;
+        gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                      (half ? half_ids_ : ids_).data());
         gl::check_gl(gl, "hemicube rendering");
         st.readback_seconds += watch.seconds();
         st.hemicubes += 1;
@@ -571,13 +585,15 @@ public:
         touched_.clear();
         if (!sampled) {
             render(p, st);
-            accumulate(p, 1.0, st);
+            accumulate(p, 1.0, false, st);
         } else {
             const auto v = scene_.patch_vertices(p);
             patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
+            // At half the resolution: four of them cost about one full hemicube, and their
+            // average has about the pixel noise of one (each has twice the relative noise).
             for (std::size_t q = 0; q < points_.size(); ++q) {
-                render(p, points_[q], st);
-                accumulate(p, weights_[q], st);
+                render(p, points_[q], true, st);
+                accumulate(p, weights_[q], true, st);
             }
             ++st.sampled_rows;
         }
@@ -594,14 +610,15 @@ public:
     }
 
     // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
-    void accumulate(std::uint32_t p, double weight, HemicubeStats& st) {
+    void accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st) {
         Stopwatch watch;
-        const std::vector<double>& w = layout_.delta_ff();
+        const std::vector<double>& w = (half ? half_layout_ : layout_).delta_ff();
+        const std::vector<std::uint32_t>& ids = half ? half_ids_ : ids_;
         const std::uint32_t self = p + 1;
         double back = 0.0, miss = 0.0;
-        const std::size_t npix = ids_.size();
+        const std::size_t npix = ids.size();
         for (std::size_t k = 0; k < npix; ++k) {
-            const std::uint32_t id = ids_[k];
+            const std::uint32_t id = ids[k];
             if (id == 0) {
                 miss += w[k];
             } else if (id == kBackFace) {
@@ -696,16 +713,17 @@ private:
     const Scene& scene_;
     const ScenePieces& pieces_;
     const HemicubeLayout& layout_;
+    const HemicubeLayout half_layout_;  // sub-hemicubes (half_resolution)
     const HemicubeOptions& opt_;
-    std::array<FaceSpec, 5> face_m_;
+    std::array<FaceSpec, 5> face_m_, half_face_m_;
     gl::Program program_;
-    gl::ItemTarget target_;
+    gl::ItemTarget target_, half_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, ebo_, ssbo_;
     GLint u_face_ = -1, u_back_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
-    std::vector<std::uint32_t> ids_;
+    std::vector<std::uint32_t> ids_, half_ids_;
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;

@@ -59,7 +59,8 @@ public:
     std::string name() const override { return "hemicube"; }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     // Sub-hemicubes: a flagged row is the average of hemicubes at the patch's 2 × 2 quadrature
-    // points (3 on a triangle), weights by area, each with its own visibility; 4× the cost.
+    // points (3 on a triangle), weights by area, each with its own visibility, rendered at half
+    // the resolution (when that is even and ≥ 8): about the cost and pixel noise of one hemicube.
     bool can_sample_sender() const override { return true; }
     void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
                               const RowSink& sink) override;
