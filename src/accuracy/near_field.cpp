@@ -342,6 +342,14 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         if (im.options.rays > 0) e += std::sqrt(f / im.options.rays);
         return e;
     };
+    // Detection only: receivers worth fewer than 4 of the largest hemicube pixels are found only
+    // by the few pixels they happen to cover (no correction for them yet; docs/accuracy.md).
+    if (im.options.pixel_delta_ff > 0) {
+        std::uint64_t small = 0;
+        for (const double f : row.val) small += f < 4 * im.options.pixel_delta_ff;
+        stats.small_receiver_entries += small;
+        stats.rows_with_small_receivers += small > 0;
+    }
     if (exact.empty() && !quadrature_needed) {
         ++stats.rows_untouched;
         if (error_estimate) {

@@ -174,6 +174,8 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.rows_closed_rebalanced", c.rows_closed);
         r.set("corrections.rows_capped_at_one", c.rows_capped);
         r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
+        r.set("corrections.small_receiver_entries", c.small_receiver_entries);
+        r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
         r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
         // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row,
         // then the largest, the mean and the row that has the largest.

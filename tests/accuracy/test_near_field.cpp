@@ -242,6 +242,30 @@ TEST(NearField, RowsThatNeedNothingAreUntouched) {
     EXPECT_EQ(corrected2.stats().rows_untouched, 0u);
 }
 
+// Receivers covering few pixels are detected per row: with pixel_delta_ff = 1e-4 (N ≈ 113), a
+// 0.5 × 0.5 patch 100 away is worth 0.25/(π·100²) ≈ 8e-6, under 4 pixels (4e-4); 5 away it is
+// worth about 3e-3: none is small.
+TEST(NearField, SmallReceiversAreCounted) {
+    for (const auto& [z, expect_small] : {std::pair{100.0, true}, std::pair{5.0, false}}) {
+        const std::vector<NamedPolygon> polys{test::square_z("low", 0, true), test::square_z("high", z, false)};
+        const Scene s = test::make_scene(polys, 0.5);
+        const CsrMatrix plain = midpoint_matrix(s);
+        MatrixRowProvider inner(plain);
+        NearFieldOptions o;
+        o.sender_quadrature = true;
+        o.pixel_delta_ff = 1e-4;
+        CorrectedRowProvider corrected(s, inner, o);
+        compute_all_rows(corrected);
+        if (expect_small) {
+            EXPECT_EQ(corrected.stats().small_receiver_entries, plain.nnz()) << z;
+            EXPECT_EQ(corrected.stats().rows_with_small_receivers, s.size()) << z;
+        } else {
+            EXPECT_EQ(corrected.stats().small_receiver_entries, 0u) << z;
+            EXPECT_EQ(corrected.stats().rows_with_small_receivers, 0u) << z;
+        }
+    }
+}
+
 TEST(NearField, RejectsBadOptions) {
     const Scene s = test::make_scene(perpendicular_squares(), 0.5);
     EXPECT_THROW(NearFieldCorrector(s, NearFieldOptions{0.0}), InputError);

@@ -77,6 +77,10 @@ struct NearFieldStats {
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
     std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
     std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (a near pair possibly occluded)
+    // Receivers worth fewer than 4 of the largest hemicube pixels (F_ij < 4 pixel_delta_ff), as
+    // the inner provider made them: detected and counted, not corrected.
+    std::uint64_t small_receiver_entries = 0;
+    std::uint64_t rows_with_small_receivers = 0;
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
