@@ -265,12 +265,11 @@ CsrMatrix apply_enforcement(const FormFactorOptions& o, CsrMatrix F, const Scene
     Stopwatch watch;
     const EnforcedMatrix E = enforce(F, areas, mode, st);
     report.set("enforce.mode", o.enforce);
-    report.set("enforce.before.row_sum_min", st.before.row_sum_min);
-    report.set("enforce.before.row_sum_max", st.before.row_sum_max);
-    report.set("enforce.before.reciprocity_max", st.before.reciprocity_max);
-    report.set("enforce.after.row_sum_min", st.after.row_sum_min);
-    report.set("enforce.after.row_sum_max", st.after.row_sum_max);
-    report.set("enforce.after.reciprocity_max", st.after.reciprocity_max);
+    for (const auto& [when, f] : {std::pair{"before", st.before}, std::pair{"after", st.after}}) {
+        report.set(fmt::format("enforce.{}.row_sum_min", when), f.row_sum_min);
+        report.set(fmt::format("enforce.{}.row_sum_max", when), f.row_sum_max);
+        report.set(fmt::format("enforce.{}.reciprocity_max", when), f.reciprocity_max);
+    }
     report.set("enforce.iterations", st.iterations);
     report.set("enforce.seconds", watch.seconds());
     info("--enforce {}: row sums {:.6f}..{:.6f} -> {:.6f}..{:.6f}, reciprocity {:.2e} -> {:.2e} (in double; stored as float)",
