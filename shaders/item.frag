@@ -1,19 +1,30 @@
 #version 450 core
+// HAS_TRIANGLES, HAS_BILINEAR: 0 when no piece of the scene is a triangle / a quad that is not a
+// parallelogram (defined by the program that loads this shader; llvmpipe pays for dead paths).
+#ifndef HAS_TRIANGLES
+#define HAS_TRIANGLES 1
+#endif
+#ifndef HAS_BILINEAR
+#define HAS_BILINEAR 1
+#endif
 // Writes the ID of the visible patch: 1 + patch index for a front face, 0xFFFFFFFF for a back
 // face (it blocks but receives nothing); the clear value 0 means nothing was hit. Front or back
 // is the draw pass's (u_back: the CPU's classification of the whole piece), not gl_FrontFacing,
 // which a sliver snapped to the subpixel grid can get wrong.
-// The patch comes from the fragment's position in its piece's plane (perspective-correct, so
-// exact up to float rounding): inverse bilinear for a quad grid, barycentric for a triangle.
+// The patch comes from the fragment's position in its piece (perspective-correct, so exact up to
+// float rounding): for affine pieces (triangles; quads that are parallelograms, kind 5) the vertex
+// parameter is already the cell coordinate, and the patch is its floor; other quads carry plane
+// coordinates and need the inverse bilinear map.
 struct Grid {
     vec2 q1, q2, q3;  // corners 1..3 in the piece's plane coordinates (corner 0 at the origin)
-    uint count;       // 4: quad grid of nu × nv cells; 3: triangle of nu² similar cells
+    uint count;       // 4: quad grid of nu × nv cells (5: a parallelogram); 3: triangle of nu² similar cells
     uint nu, nv;
     uint first;       // index of the first patch of the piece
 };
 layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
 in vec2 v_param;
 flat in uint v_grid;
+flat in uvec4 v_info;  // kind (3, 4 or 5), nu, nv, first patch
 uniform uint u_back;  // 1 while drawing back-facing pieces
 layout(location = 0) out uint o_id;
 
@@ -24,21 +35,26 @@ void main() {
         o_id = 0xFFFFFFFFu;
         return;
     }
-    Grid g = grids[v_grid];
+    uint kind = v_info.x, nu = v_info.y, nv = v_info.z;
     vec2 p = v_param;
     uint cell;
-    if (g.count == 3u) {
-        float det = cross2(g.q1, g.q2);
-        float b1 = cross2(p, g.q2) / det, b2 = cross2(g.q1, p) / det;
-        float k = float(g.nu);
-        float s = clamp(b1 * k, 0.0, k), t = clamp(b2 * k, 0.0, k);
-        int i = min(int(s), int(g.nu) - 1), j = min(int(t), int(g.nu) - 1);
-        if (i + j > int(g.nu) - 1) i = int(g.nu) - 1 - j;  // rounding past the hypotenuse
-        bool inverted = (s - float(i)) + (t - float(j)) > 1.0 && i + j + 1 < int(g.nu);
-        cell = uint(j * (2 * int(g.nu) - j) + 2 * i + (inverted ? 1 : 0));
+    if (HAS_TRIANGLES != 0 && kind == 3u) {
+        // p = (s, t): k × the barycentric coordinates of corners 1 and 2.
+        float k = float(nu);
+        float s = clamp(p.x, 0.0, k), t = clamp(p.y, 0.0, k);
+        int i = min(int(s), int(nu) - 1), j = min(int(t), int(nu) - 1);
+        if (i + j > int(nu) - 1) i = int(nu) - 1 - j;  // rounding past the hypotenuse
+        bool inverted = (s - float(i)) + (t - float(j)) > 1.0 && i + j + 1 < int(nu);
+        cell = uint(j * (2 * int(nu) - j) + 2 * i + (inverted ? 1 : 0));
+    } else if (HAS_BILINEAR == 0 || kind == 5u) {
+        // p = (u nu, v nv).
+        int i = clamp(int(floor(p.x)), 0, int(nu) - 1);
+        int j = clamp(int(floor(p.y)), 0, int(nv) - 1);
+        cell = uint(j) * nu + uint(i);
     } else {
         // p = u(1-v) q1 + uv q2 + (1-u)v q3: solve k2 v² + k1 v + k0 = 0 (Quilez's inverse
         // bilinear), with the cancellation-free root for near-parallelograms (k2 → 0).
+        Grid g = grids[v_grid];
         vec2 e = g.q1, f = g.q3, h = p, gg = g.q2 - g.q1 - g.q3;
         float k2 = cross2(gg, f), k1 = cross2(e, f) + cross2(h, gg), k0 = cross2(h, e);
         float disc = sqrt(max(k1 * k1 - 4.0 * k0 * k2, 0.0));
@@ -47,9 +63,9 @@ void main() {
         if ((v < -0.01 || v > 1.01) && k2 != 0.0) v = q / k2;
         vec2 den = e + gg * v;
         float u = abs(den.x) > abs(den.y) ? (h.x - f.x * v) / den.x : (h.y - f.y * v) / den.y;
-        int i = clamp(int(floor(u * float(g.nu))), 0, int(g.nu) - 1);
-        int j = clamp(int(floor(v * float(g.nv))), 0, int(g.nv) - 1);
-        cell = uint(j) * g.nu + uint(i);
+        int i = clamp(int(floor(u * float(nu))), 0, int(nu) - 1);
+        int j = clamp(int(floor(v * float(nv))), 0, int(nv) - 1);
+        cell = uint(j) * nu + uint(i);
     }
-    o_id = g.first + cell + 1u;
+    o_id = v_info.w + cell + 1u;
 }

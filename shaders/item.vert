@@ -4,13 +4,16 @@
 // Positions arrive already relative to the hemicube eye and in the hemicube's local frame
 // (subtracted in double on the CPU), so only the fixed face projection is applied here.
 layout(location = 0) in vec3 a_position;  // per hemicube
-layout(location = 1) in vec2 a_param;     // corner in the piece's own plane coordinates (static)
+layout(location = 1) in vec2 a_param;     // cell coordinates (affine pieces) or plane coordinates (static)
 layout(location = 2) in uint a_grid;      // index of the piece (static)
+layout(location = 3) in uvec4 a_info;     // the piece's kind, nu, nv, first patch (static)
 uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, infinite far plane)
 out vec2 v_param;
 flat out uint v_grid;
+flat out uvec4 v_info;
 void main() {
     v_param = a_param;
     v_grid = a_grid;
+    v_info = a_info;
     gl_Position = u_face * vec4(a_position, 1.0);
 }

@@ -6,8 +6,10 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <unordered_map>
 #include <vector>
 
@@ -174,7 +176,202 @@ struct NearFieldCorrector::Impl {
     }
 
     bool unoccluded(std::uint32_t i, std::uint32_t j) const;
+
+    // Far field (NearFieldOptions::far_field_max_patches): the planes of the scene's patches
+    // (unoriented; a two-sided plate's sides share one), per patch two bit sets over them
+    // (a vertex strictly in front of / behind the plane), and 2 × 2 quadrature points per patch.
+    struct Plane {
+        Vec3 n{0.0};
+        double d = 0;
+        double thickness = 0;  // largest distance of a member's vertex from the plane
+        Box box;               // of the members
+        std::vector<std::uint32_t> members;
+    };
+    static constexpr std::size_t kMaxPlanes = 256;
+    std::vector<Plane> planes;
+    std::size_t words = 0;  // 64-bit words per patch in plus_bits / minus_bits
+    std::vector<std::uint64_t> plus_bits, minus_bits;
+    double far_tol = 0;
+    std::vector<std::array<Vec3, 4>> quad_points;
+    std::vector<std::array<double, 4>> quad_weights;
+    std::vector<std::uint8_t> quad_count;
+
+    void build_far_field();
+    bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const;
+    bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
+    bool facing(std::uint32_t i, std::uint32_t j) const;
+    double far_value(std::uint32_t i, std::uint32_t j, double d, std::span<const Vec3> sender_points,
+                     std::span<const double> sender_weights) const;
 };
+
+// Receivers at this many sizes (max of the pair's) or more get the point kernel with 2 × 2 points
+// on both patches: the tensor Gauss rule's relative error is about 0.2 (h/d)⁴ per patch, below
+// 2e-5 here; nearer ones get the exact receiver (Lambert's contour) and a 3 × 3 sender rule,
+// relative error about 0.03 (h/d)⁶ ≤ 4e-5 at the near range's 3 sizes.
+constexpr double kFarPointK = 12.0;
+
+void NearFieldCorrector::Impl::build_far_field() {
+    const std::size_t n = scene.size();
+    if (options.far_field_max_patches == 0 || n == 0 || n > options.far_field_max_patches) return;
+    const double coord = std::max({std::abs(scene.bbox_min.x), std::abs(scene.bbox_min.y), std::abs(scene.bbox_min.z),
+                                   std::abs(scene.bbox_max.x), std::abs(scene.bbox_max.y), std::abs(scene.bbox_max.z)});
+    // In a plane: within 1e-9 of the scene's extent, plus the rounding of far-off coordinates (as
+    // plane_tolerance above).
+    far_tol = 1e-9 * scene.extent() + 16 * std::numeric_limits<double>::epsilon() * coord;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const Patch& p = scene.patches[i];
+        Vec3 nc = p.normal;  // unoriented: the largest component positive
+        const Vec3 a = glm::abs(nc);
+        const int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
+        if (nc[axis] < 0) nc = -nc;
+        std::size_t found = planes.size();
+        for (std::size_t g = 0; g < planes.size() && found == planes.size(); ++g) {
+            if (!(glm::dot(nc, planes[g].n) > 1.0 - 1e-9)) continue;
+            bool in = true;
+            for (std::size_t k = 0; k < polys[i].n && in; ++k)
+                in = std::abs(glm::dot(planes[g].n, polys[i].v[k]) - planes[g].d) <= far_tol;
+            if (in) found = g;
+        }
+        if (found == planes.size()) {
+            if (planes.size() == kMaxPlanes) {  // curved or cluttered: the far field stays off
+                planes.clear();
+                return;
+            }
+            planes.push_back(Plane{nc, glm::dot(nc, p.centroid), 0, boxes[i], {}});
+        }
+        Plane& g = planes[found];
+        g.box.lo = glm::min(g.box.lo, boxes[i].lo);
+        g.box.hi = glm::max(g.box.hi, boxes[i].hi);
+        g.members.push_back(i);
+        for (std::size_t k = 0; k < polys[i].n; ++k)
+            g.thickness = std::max(g.thickness, std::abs(glm::dot(g.n, polys[i].v[k]) - g.d));
+    }
+    words = (planes.size() + 63) / 64;
+    plus_bits.assign(n * words, 0);
+    minus_bits.assign(n * words, 0);
+    for (std::uint32_t i = 0; i < n; ++i)
+        for (std::size_t g = 0; g < planes.size(); ++g) {
+            const Plane& P = planes[g];
+            // A plane whose members are not flat to far_tol (a warped quad) is a slab: a vertex
+            // inside it counts as on both sides, so any pair near it is tested (and refused).
+            const double lim = P.thickness > far_tol ? P.thickness + far_tol : far_tol;
+            const bool thick = P.thickness > far_tol;
+            for (std::size_t k = 0; k < polys[i].n; ++k) {
+                const double s = glm::dot(P.n, polys[i].v[k]) - P.d;
+                const bool above = s > lim || (thick && s >= -lim);
+                const bool below = s < -lim || (thick && s <= lim);
+                if (above) plus_bits[i * words + g / 64] |= std::uint64_t{1} << (g % 64);
+                if (below) minus_bits[i * words + g / 64] |= std::uint64_t{1} << (g % 64);
+            }
+        }
+    quad_points.resize(n);
+    quad_weights.resize(n);
+    quad_count.resize(n);
+    std::vector<Vec3> pts;
+    std::vector<double> wts;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        patch_quadrature(polys[i].span(), 2, pts, wts);
+        quad_count[i] = static_cast<std::uint8_t>(pts.size());
+        for (std::size_t k = 0; k < pts.size(); ++k) {
+            quad_points[i][k] = pts[k];
+            quad_weights[i][k] = wts[k];
+        }
+    }
+}
+
+// Whether some patch of plane g other than i and j may meet the section of hull(i ∪ j) by that
+// plane (conservatively: bounding boxes). The section of a convex hull by a plane is the convex
+// hull of the hull's vertices in the plane and of the points where segments between vertices on
+// opposite sides cross it.
+bool NearFieldCorrector::Impl::section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const {
+    const Plane& P = planes[g];
+    if (P.thickness > far_tol) return true;
+    std::array<Vec3, 8> v{};
+    std::array<double, 8> s{};
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < polys[i].n; ++k) v[m++] = polys[i].v[k];
+    for (std::size_t k = 0; k < polys[j].n; ++k) v[m++] = polys[j].v[k];
+    for (std::size_t k = 0; k < m; ++k) s[k] = glm::dot(P.n, v[k]) - P.d;
+    Box sec{Vec3(INFINITY), Vec3(-INFINITY)};
+    const auto add = [&](const Vec3& x) {
+        sec.lo = glm::min(sec.lo, x);
+        sec.hi = glm::max(sec.hi, x);
+    };
+    for (std::size_t a = 0; a < m; ++a) {
+        if (std::abs(s[a]) <= far_tol) add(v[a]);
+        for (std::size_t b = 0; b < m; ++b)
+            if (s[a] > far_tol && s[b] < -far_tol) add(v[a] + (v[b] - v[a]) * (s[a] / (s[a] - s[b])));
+    }
+    sec.lo -= Vec3(2 * far_tol);
+    sec.hi += Vec3(2 * far_tol);
+    if (!sec.overlaps(P.box)) return false;
+    for (std::uint32_t q : P.members)
+        if (q != i && q != j && boxes[q].overlaps(sec)) return true;
+    return false;
+}
+
+// A segment from a point of i to a point of j meets a plane only where the two lie on opposite
+// sides of it (or in it: touching, measure zero, as for the shaft test). So patches of a plane
+// that no segment crosses block nothing, and where segments cross it, only members that meet the
+// crossing region can.
+bool NearFieldCorrector::Impl::far_unoccluded(std::uint32_t i, std::uint32_t j) const {
+    if (planes.empty()) return false;
+    const std::uint64_t* pi = &plus_bits[i * words];
+    const std::uint64_t* pj = &plus_bits[j * words];
+    const std::uint64_t* mi = &minus_bits[i * words];
+    const std::uint64_t* mj = &minus_bits[j * words];
+    for (std::size_t w = 0; w < words; ++w) {
+        std::uint64_t c = (pi[w] | pj[w]) & (mi[w] | mj[w]);
+        while (c) {
+            const std::size_t g = w * 64 + static_cast<std::size_t>(std::countr_zero(c));
+            c &= c - 1;
+            if (section_meets(i, j, g)) return false;
+        }
+    }
+    return true;
+}
+
+// Facing: some vertex of each farther than plane_tolerance in front of the other's plane (a
+// polygon within it is seen edge-on; coplanar neighbours must not count as facing).
+bool NearFieldCorrector::Impl::facing(std::uint32_t i, std::uint32_t j) const {
+    const Patch& pi = scene.patches[i];
+    const Patch& pj = scene.patches[j];
+    const double tol = 2 * plane_tolerance(pi, pj);
+    const Poly& qi = polys[i];
+    const Poly& qj = polys[j];
+    double front_j = -INFINITY, front_i = -INFINITY;
+    for (std::size_t v = 0; v < qj.n; ++v) front_j = std::max(front_j, glm::dot(pi.normal, qj.v[v] - pi.centroid));
+    for (std::size_t v = 0; v < qi.n; ++v) front_i = std::max(front_i, glm::dot(pj.normal, qi.v[v] - pj.centroid));
+    return front_j > tol && front_i > tol;
+}
+
+// F_ij of an unoccluded pair beyond the near range (see kFarPointK).
+double NearFieldCorrector::Impl::far_value(std::uint32_t i, std::uint32_t j, double d, std::span<const Vec3> sender_points,
+                                           std::span<const double> sender_weights) const {
+    const Patch& pi = scene.patches[i];
+    const Patch& pj = scene.patches[j];
+    if (d >= kFarPointK * std::max(pi.size, pj.size)) {
+        double f = 0;
+        for (std::size_t a = 0; a < quad_count[i]; ++a)
+            for (std::size_t b = 0; b < quad_count[j]; ++b) {
+                const Vec3 r = quad_points[j][b] - quad_points[i][a];
+                const double r2 = glm::dot(r, r);
+                f += quad_weights[i][a] * quad_weights[j][b] * std::max(0.0, glm::dot(pi.normal, r)) *
+                     std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2);
+            }
+        return f * pj.area / std::numbers::pi;
+    }
+    const auto poly = polys[j].span();
+    double f = 0;
+    for (std::size_t a = 0; a < sender_points.size(); ++a) {
+        const Vec3& x = sender_points[a];
+        if (!(glm::dot(x - pj.centroid, pj.normal) > 0)) continue;  // behind j: sees its back
+        bool whole = true;
+        for (const Vec3& v : poly) whole = whole && glm::dot(v - x, pi.normal) > 0;
+        f += sender_weights[a] * (whole ? ff_point_polygon_unclipped(x, pi.normal, poly) : ff_point_polygon(x, pi.normal, poly));
+    }
+    return f;
+}
 
 // Separating-axis test between the convex hull of patches i ∪ j and each other patch q whose
 // bounding box meets the pair's. Candidate axes: the normals of q, i and j; the cross products of
@@ -246,7 +443,24 @@ NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOption
     if (!(options.k > 0) || !std::isfinite(options.k))
         throw InputError(fmt::format("near-field correction: k = {} must be a positive number", options.k));
     impl_ = std::make_unique<Impl>(scene, options);
+    impl_->build_far_field();
 }
+
+NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
+    NearFieldOptions o;
+    o.k = k;
+    o.sender_quadrature = true;
+    const double n = resolution;
+    o.pixel_delta_ff = 4.0 / (std::numbers::pi * n * n);
+    // The far field costs ~0.1 µs per patch per row against ~5 ns per pixel of the hemicube's
+    // 3N²: at 3N²/64 patches it adds about a tenth of the row's time (docs/benchmarks.md).
+    o.far_field_max_patches = static_cast<std::size_t>(3.0 * n * n / 64.0);
+    return o;
+}
+
+bool NearFieldCorrector::far_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->far_unoccluded(i, j); }
+
+std::size_t NearFieldCorrector::far_field_planes() const { return impl_->planes.size(); }
 
 NearFieldCorrector::~NearFieldCorrector() = default;
 
@@ -266,21 +480,47 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
         const Patch& pj = im.scene.patches[j];
         const double d = glm::length(pj.centroid - pi.centroid);
         if (d >= k * std::max(pi.size, pj.size)) continue;
-        // Facing: some vertex farther than plane_tolerance in front of the other's plane (a
-        // polygon within it is seen edge-on; coplanar neighbours must not count as facing).
-        const double tol = 2 * plane_tolerance(pi, pj);
-        const Poly& qi = im.polys[i];
-        const Poly& qj = im.polys[j];
-        double front_j = -INFINITY, front_i = -INFINITY;
-        for (std::size_t v = 0; v < qj.n; ++v) front_j = std::max(front_j, glm::dot(pi.normal, qj.v[v] - pi.centroid));
-        for (std::size_t v = 0; v < qi.n; ++v) front_i = std::max(front_i, glm::dot(pj.normal, qi.v[v] - pj.centroid));
-        if (front_j <= tol || front_i <= tol) continue;
+        if (!im.facing(i, j)) continue;
         ++out.near_pairs;
         if (!im.unoccluded(i, j)) {
             ++out.refused;
             continue;
         }
-        out.exact.emplace_back(j, exact_ff(qi, pi, qj, pj));
+        out.exact.emplace_back(j, exact_ff(im.polys[i], pi, im.polys[j], pj));
+    }
+    if (!im.planes.empty()) {
+        // Far field: every other facing pair the plane test proves unoccluded.
+        out.far = true;
+        std::vector<Vec3> sp;
+        std::vector<double> sw;
+        patch_quadrature(im.polys[i].span(), 3, sp, sw);
+        std::vector<std::pair<std::uint32_t, double>> far;
+        const auto n = static_cast<std::uint32_t>(im.scene.size());
+        for (std::uint32_t j = 0; j < n; ++j) {
+            if (j == i) continue;
+            const Patch& pj = im.scene.patches[j];
+            const double d = glm::length(pj.centroid - pi.centroid);
+            if (d < k * std::max(pi.size, pj.size) || !im.facing(i, j)) continue;
+            if (!im.far_unoccluded(i, j)) {
+                ++out.far_unproven;
+                continue;
+            }
+            const double f = im.far_value(i, j, d, sp, sw);
+            far.emplace_back(j, f);
+            // The rules' error (see kFarPointK), bounded a little generously.
+            const double size = std::max(pi.size, pj.size);
+            if (d >= kFarPointK * size) {
+                const double r = size / d;
+                out.far_error += f * 0.4 * r * r * r * r;
+            } else {
+                const double r = pi.size / d;
+                out.far_error += f * 0.03 * r * r * r * r * r * r;
+            }
+        }
+        out.far_entries = far.size();
+        std::vector<std::pair<std::uint32_t, double>> merged(out.exact.size() + far.size());
+        std::merge(out.exact.begin(), out.exact.end(), far.begin(), far.end(), merged.begin());
+        out.exact = std::move(merged);
     }
     out.seconds = watch.seconds();
     out.done = true;
@@ -300,6 +540,9 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     const auto& exact = analysis->exact;  // (j, exact F_ij), j increasing
     stats.near_pairs += analysis->near_pairs;
     stats.refused += analysis->refused;
+    stats.far_rows += analysis->far;
+    stats.far_entries += analysis->far_entries;
+    stats.far_unproven += analysis->far_unproven;
     stats.near_seconds += analysis->seconds;
     Stopwatch quadrature_watch;
     if (sampled_row) ++stats.rows_sampled;
@@ -350,12 +593,12 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
         stats.small_receiver_entries += small;
         stats.rows_with_small_receivers += small > 0;
     }
+    double estimate = analysis->far_error;
     if (exact.empty() && !quadrature_needed) {
         ++stats.rows_untouched;
         if (error_estimate) {
-            double e = 0;
-            for (std::size_t a = 0; a < row.nnz(); ++a) e += midpoint_error(row.col[a], row.val[a]) + noise(row.val[a]);
-            *error_estimate = e;
+            for (std::size_t a = 0; a < row.nnz(); ++a) estimate += midpoint_error(row.col[a], row.val[a]) + noise(row.val[a]);
+            *error_estimate = estimate;
         }
         stats.quadrature_seconds += quadrature_watch.seconds();
         return;
@@ -441,7 +684,6 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     out.val.reserve(row.nnz() + exact.size());
     std::vector<std::uint8_t> is_exact;
     is_exact.reserve(row.nnz() + exact.size());
-    double estimate = 0;
     std::size_t a = 0, b = 0;
     while (a < row.nnz() || b < exact.size()) {
         if (b == exact.size() || (a < row.nnz() && row.col[a] < exact[b].first)) {
@@ -475,13 +717,20 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     for (std::size_t e = 0; e < out.nnz(); ++e) (is_exact[e] ? fixed : rest) += out.val[e];
     const bool closed = std::abs(inner_sum - 1.0) <= kClosedRowTolerance;
     if (im.options.keep_closed_rows && (closed || fixed + rest > 1.0)) {
+        // Normally the non-exact entries take the whole change. Where they are too few for that
+        // (the far field made nearly all of the row exact: a factor beyond 1 ± 0.1 would be
+        // pixel noise amplified), every entry shares it instead: the exact ones are then moved
+        // by their own quadrature error's order (about 1e-5 relative).
         const double scale = (1.0 - fixed) / rest;
-        if (rest > 0 && scale > 0 && std::isfinite(scale)) {
+        const double all = 1.0 / (fixed + rest);
+        const bool rest_only = rest > 0 && std::abs(scale - 1.0) <= 0.1;
+        const double factor = rest_only ? scale : all;
+        if (std::isfinite(factor) && std::abs(factor - 1.0) <= 0.1) {
             for (std::size_t e = 0; e < out.nnz(); ++e)
-                if (!is_exact[e]) out.val[e] *= scale;
+                if (!rest_only || !is_exact[e]) out.val[e] *= factor;
             ++(closed ? stats.rows_closed : stats.rows_capped);
-            stats.closed_scale_max_change = std::max(stats.closed_scale_max_change, std::abs(scale - 1.0));
-            estimate += std::abs(1.0 - scale) * rest;  // the factor moved them by this much
+            stats.closed_scale_max_change = std::max(stats.closed_scale_max_change, std::abs(factor - 1.0));
+            estimate += std::abs(1.0 - factor) * (rest_only ? rest : fixed + rest);  // moved by this much
         }
     }
     if (error_estimate) *error_estimate = estimate;

@@ -119,10 +119,7 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             // fresh provider, so rows it flags are measured by sub-hemicubes, and the time is the
             // whole run's (rendering, sub-hemicubes, correction).
             HemicubeRowProvider inner(scenes[k], h);
-            NearFieldOptions nf;
-            nf.k = options.near_k;
-            nf.sender_quadrature = true;
-            nf.pixel_delta_ff = 4.0 / (std::numbers::pi * h.resolution * h.resolution);
+            const NearFieldOptions nf = near_field_options_for_hemicube(h.resolution, options.near_k);
             CorrectedRowProvider corrected(scenes[k], inner, nf);
             Stopwatch corrected_watch;
             const CsrMatrix C = compute_all_rows(corrected);

@@ -46,6 +46,10 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
     app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
         ->default_val(3.0);
+    app.add_option("--far-field-max-patches", o.far_field_max_patches,
+                   "--correct near on hemicube rows: analytic values for every pair the plane test proves "
+                   "unoccluded in scenes of at most this many patches (default: 3N^2/64 at resolution N; 0: off)")
+        ->check(CLI::NonNegativeNumber);
 }
 
 void add_enforce_option(CLI::App& app, FormFactorOptions& o) {
@@ -123,6 +127,8 @@ FfmMetadata row_metadata(const FormFactorOptions& o) {
     }
     // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
     if (o.correct == "near") meta.settings += fmt::format(" correct=near k={}", o.near_k);
+    if (o.correct == "near" && o.far_field_max_patches >= 0)
+        meta.settings += fmt::format(" far_field_max_patches={}", o.far_field_max_patches);
     return meta;
 }
 
@@ -145,14 +151,20 @@ RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report
     if (o.correct == "near") {
         NearFieldOptions nf;
         nf.k = o.near_k;
-        // The hemicube samples the sender at its centre; the ray caster samples all of it.
-        nf.sender_quadrature = !rows.raycast;
-        // The inner provider's noise, for the per-row error estimate.
-        if (rows.hemicube) nf.pixel_delta_ff = 4.0 / (std::numbers::pi * o.resolution * o.resolution);
-        if (rows.raycast) nf.rays = static_cast<double>(o.rays);
+        if (rows.hemicube) {
+            nf = near_field_options_for_hemicube(o.resolution, o.near_k);
+            if (o.far_field_max_patches >= 0) nf.far_field_max_patches = static_cast<std::size_t>(o.far_field_max_patches);
+        } else {
+            // The ray caster samples the whole sender (no sender quadrature); its noise, for the
+            // per-row error estimate.
+            nf.rays = static_cast<double>(o.rays);
+        }
         RowProvider& inner = rows.hemicube ? static_cast<RowProvider&>(*rows.hemicube) : *rows.raycast;
         rows.corrected = std::make_unique<CorrectedRowProvider>(scene, inner, nf);
-        info("near-field correction: k = {}{}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "");
+        info("near-field correction: k = {}{}{}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "",
+             rows.corrected->far_field_planes() > 0
+                 ? fmt::format(", far field ({} planes)", rows.corrected->far_field_planes())
+                 : "");
     }
     report.set("method", rows.provider().name());
     report.set("time.setup", watch.seconds());
@@ -175,6 +187,10 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.rows_capped_at_one", c.rows_capped);
         r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
         r.set("corrections.small_receiver_entries", c.small_receiver_entries);
+        r.set("corrections.far_field_planes", rows.corrected->far_field_planes());
+        r.set("corrections.far_field_rows", c.far_rows);
+        r.set("corrections.far_field_entries", c.far_entries);
+        r.set("corrections.far_field_pairs_unproven", c.far_unproven);
         r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
         r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
         // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row,

@@ -58,6 +58,8 @@ struct ScenePieces {
     std::vector<Vec3> pos;             // 1 per vertex slot: world position
     std::vector<float> param;          // 2 per vertex slot
     std::vector<std::uint32_t> grid;   // 1 per vertex slot
+    std::vector<std::uint32_t> info;   // 4 per vertex slot: its piece's kind, nu, nv, first patch
+    std::array<bool, 6> has_kind{};    // some piece is of this kind (3, 4 or 5)
     std::vector<std::uint32_t> first;  // per piece, plus one at the end: its first vertex slot
     // Per piece, plus one at the end: its range in 'tris'. An empty range means the piece is
     // drawn as its corners say: (c0, c1, c2), and (c0, c2, c3) for a quad.
@@ -346,21 +348,61 @@ ScenePieces prepare_pieces(const Scene& scene) {
         const Vec3 n = polygon_normal(std::span<const Vec3>(pg.corners.data(), pg.count));
         const Vec3 e1 = glm::normalize(pg.corners[1] - pg.corners[0]);
         const Vec3 e2 = glm::cross(n, e1);
-        const auto add_slot = [&](const Vec3& p) {
-            const Vec3 d = p - pg.corners[0];
-            sp.pos.push_back(p);
-            sp.param.push_back(static_cast<float>(glm::dot(d, e1)));
-            sp.param.push_back(static_cast<float>(glm::dot(d, e2)));
-            sp.grid.push_back(g);
-            return static_cast<std::uint32_t>(sp.pos.size() - 1);
-        };
+        double qd[4][2];
         float q[4][2];
         for (int k = 0; k < 4; ++k) {
             const Vec3 d = pg.corners[static_cast<std::size_t>(k)] - pg.corners[0];
-            q[k][0] = static_cast<float>(glm::dot(d, e1));
-            q[k][1] = static_cast<float>(glm::dot(d, e2));
+            qd[k][0] = glm::dot(d, e1);
+            qd[k][1] = glm::dot(d, e2);
+            q[k][0] = static_cast<float>(qd[k][0]);
+            q[k][1] = static_cast<float>(qd[k][1]);
         }
-        sp.gpu.push_back(GpuGrid{{q[1][0], q[1][1]}, {q[2][0], q[2][1]}, {q[3][0], q[3][1]}, pg.count, pg.nu, pg.nv,
+        // Affine pieces carry their cell coordinates as the vertex parameter, so the fragment
+        // shader only takes their floor (a perspective-correct interpolation of an affine
+        // function of the plane is exact up to float rounding, as the plane coordinates it
+        // replaces are): triangles (s, t) = k × barycentric, and quads that are parallelograms
+        // (count 5 on the GPU side) (u nu, v nv). Other quads keep plane coordinates and the
+        // shader's inverse bilinear. The drawing time at N = 256 was 80% this per-pixel solve
+        // (docs/benchmarks.md).
+        std::uint32_t kind = pg.count;
+        double inv[2][2] = {};  // plane coordinates → cell coordinates, affine pieces
+        {
+            const double size = std::max(std::abs(qd[1][0]) + std::abs(qd[1][1]), std::abs(qd[3][0]) + std::abs(qd[3][1]));
+            const double gx = qd[2][0] - qd[1][0] - qd[3][0], gy = qd[2][1] - qd[1][1] - qd[3][1];
+            // Columns: the cell axes' plane vectors (c1 − c0 and c2 − c0 or c3 − c0) over nu, nv.
+            double a[2][2];
+            if (pg.count == 3) {
+                a[0][0] = qd[1][0] / pg.nu; a[1][0] = qd[1][1] / pg.nu;
+                a[0][1] = qd[2][0] / pg.nu; a[1][1] = qd[2][1] / pg.nu;
+            } else {
+                a[0][0] = qd[1][0] / pg.nu; a[1][0] = qd[1][1] / pg.nu;
+                a[0][1] = qd[3][0] / pg.nv; a[1][1] = qd[3][1] / pg.nv;
+                // A parallelogram to 1e-9 of its size: the bilinear map is then affine to well
+                // below float rounding of the cell coordinates (≤ 1e-9 × nu of a cell).
+                if (std::abs(gx) + std::abs(gy) <= 1e-9 * size) kind = 5;
+            }
+            const double det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+            inv[0][0] = a[1][1] / det; inv[0][1] = -a[0][1] / det;
+            inv[1][0] = -a[1][0] / det; inv[1][1] = a[0][0] / det;
+        }
+        const bool affine = kind != 4;
+        sp.has_kind[kind] = true;
+        const auto add_slot = [&](const Vec3& p) {
+            const Vec3 d = p - pg.corners[0];
+            const double x = glm::dot(d, e1), y = glm::dot(d, e2);
+            sp.pos.push_back(p);
+            if (affine) {
+                sp.param.push_back(static_cast<float>(inv[0][0] * x + inv[0][1] * y));
+                sp.param.push_back(static_cast<float>(inv[1][0] * x + inv[1][1] * y));
+            } else {
+                sp.param.push_back(static_cast<float>(x));
+                sp.param.push_back(static_cast<float>(y));
+            }
+            sp.grid.push_back(g);
+            sp.info.insert(sp.info.end(), {kind, pg.nu, pg.nv, pg.first_patch});
+            return static_cast<std::uint32_t>(sp.pos.size() - 1);
+        };
+        sp.gpu.push_back(GpuGrid{{q[1][0], q[1][1]}, {q[2][0], q[2][1]}, {q[3][0], q[3][1]}, kind, pg.nu, pg.nv,
                                  pg.first_patch});
         const auto base = static_cast<std::uint32_t>(sp.pos.size());
         sp.first.push_back(base);
@@ -428,13 +470,20 @@ public:
         : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), half_layout_(half_resolution(layout.resolution())),
           opt_(opt) {
         const gl::Api& gl = gl_;
-        program_ = gl::make_program(gl, "item shader", shaders::item_vert, shaders::item_frag);
+        // The fragment shader specialised to the piece kinds of the scene: llvmpipe runs both
+        // sides of a branch under a mask, so a path no piece takes still costs every pixel.
+        std::string frag(shaders::item_frag);
+        const std::size_t eol = frag.find('\n') + 1;
+        frag.insert(eol, fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
+                                     pieces.has_kind[4] ? 1 : 0));
+        program_ = gl::make_program(gl, "item shader", shaders::item_vert, frag);
         target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
         half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
         vao_ = gl::make_vertex_array(gl);
         vbo_ = gl::make_buffer(gl);
         static_vbo_ = gl::make_buffer(gl);
         grid_vbo_ = gl::make_buffer(gl);
+        info_vbo_ = gl::make_buffer(gl);
         ebo_ = gl::make_buffer(gl);
         ssbo_ = gl::make_buffer(gl);
         const std::size_t slots = pieces.pos.size();
@@ -454,6 +503,11 @@ public:
                       pieces.grid.data(), GL_STATIC_DRAW);
         gl.EnableVertexAttribArray(2);
         gl.VertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(std::uint32_t), nullptr);
+        gl.BindBuffer(GL_ARRAY_BUFFER, info_vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.info.size() * sizeof(std::uint32_t)),
+                      pieces.info.data(), GL_STATIC_DRAW);
+        gl.EnableVertexAttribArray(3);
+        gl.VertexAttribIPointer(3, 4, GL_UNSIGNED_INT, 4 * sizeof(std::uint32_t), nullptr);
         gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
         gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo_.id());
         gl.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(pieces.gpu.size() * sizeof(GpuGrid)),
@@ -719,7 +773,7 @@ private:
     gl::Program program_;
     gl::ItemTarget target_, half_target_;
     gl::VertexArray vao_;
-    gl::Buffer vbo_, static_vbo_, grid_vbo_, ebo_, ssbo_;
+    gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
     GLint u_face_ = -1, u_back_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)

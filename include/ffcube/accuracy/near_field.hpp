@@ -63,7 +63,18 @@ struct NearFieldOptions {
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
     // rows (RowProvider::compute_rows_sampled), when it can make them.
     bool sub_hemicubes = true;
+    // Far field: in scenes of at most far_field_max_patches patches, every facing pair beyond the
+    // near range whose visibility the plane test proves (NearFieldCorrector::far_unoccluded) gets
+    // its analytic value too (docs/accuracy.md, "Far field"): exact receiver, 3 × 3 sender
+    // quadrature within kFarPointK sizes, 2 × 2 points on both sides beyond. It costs O(patches)
+    // per row, so it is on only where that is small next to the inner provider's own work per row
+    // (near_field_options: 1/64 of a hemicube's 3N² pixels). 0: off.
+    std::size_t far_field_max_patches = 0;
 };
+
+// The options `--correct near` uses on rows of a hemicube at resolution N (sender quadrature,
+// pixel noise, far field within its budget).
+NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0);
 
 struct NearFieldStats {
     std::uint64_t rows = 0;          // rows passed through
@@ -81,6 +92,12 @@ struct NearFieldStats {
     // the inner provider made them: detected and counted, not corrected.
     std::uint64_t small_receiver_entries = 0;
     std::uint64_t rows_with_small_receivers = 0;
+    // Far field (NearFieldOptions::far_field_max_patches): rows given analytic values beyond the
+    // near range, entries so replaced (or added: the hemicube had no pixel for them), and facing
+    // pairs beyond the near range whose visibility the plane test could not prove (kept as made).
+    std::uint64_t far_rows = 0;
+    std::uint64_t far_entries = 0;
+    std::uint64_t far_unproven = 0;
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
@@ -96,6 +113,10 @@ struct NearAnalysis {
     std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     std::uint64_t near_pairs = 0;                         // near, facing pairs examined
     std::uint64_t refused = 0;                            // of which possibly occluded
+    std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
+    std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
+    bool far = false;                                     // the far field was computed
+    double far_error = 0;                                 // Σ of its entries' quadrature error bounds
     double seconds = 0;                                   // spent making it
     bool done = false;
 };
@@ -120,6 +141,14 @@ public:
                  const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
+    // The far field's visibility proof, O(1) per pair for scenes of few planes: no plane that
+    // holds patches separates a point of i from a point of j, except where the pair's hull
+    // crosses it outside the bounding box of that plane's patches. False when the far field is
+    // off for this scene (see far_field_planes).
+    bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
+    // Distinct planes of the scene's patches when the far field is on (0: off, because of
+    // far_field_max_patches or because the scene has more than 256 planes).
+    std::size_t far_field_planes() const;
 
 private:
     struct Impl;
@@ -138,6 +167,7 @@ public:
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }
+    std::size_t far_field_planes() const { return corrector_.far_field_planes(); }
 
 private:
     RowProvider& inner_;
