@@ -177,7 +177,7 @@ struct NearFieldCorrector::Impl {
 
     bool unoccluded(std::uint32_t i, std::uint32_t j) const;
 
-    // Far field (NearFieldOptions::far_field_max_patches): the planes of the scene's patches
+    // Far field (NearFieldOptions::far_field): the planes of the scene's patches
     // (unoriented; a two-sided plate's sides share one), per patch two bit sets over them
     // (a vertex strictly in front of / behind the plane), and 2 × 2 quadrature points per patch.
     struct Plane {
@@ -192,27 +192,100 @@ struct NearFieldCorrector::Impl {
     std::size_t words = 0;  // 64-bit words per patch in plus_bits / minus_bits
     std::vector<std::uint64_t> plus_bits, minus_bits;
     double far_tol = 0;
-    std::vector<std::array<Vec3, 4>> quad_points;
-    std::vector<std::array<double, 4>> quad_weights;
-    std::vector<std::uint8_t> quad_count;
+    // Per patch, its 2 × 2 (index 0) and 3 × 3 (index 1) quadrature rule (3 and 9 points on a
+    // triangle: geometry/quadrature.hpp).
+    struct Rule {
+        std::array<Vec3, 9> p{};
+        std::array<double, 9> w{};
+        std::uint8_t n = 0;
+    };
+    std::vector<std::array<Rule, 2>> rules;
 
+    std::string far_status;
+    double far_cost = NAN;
     void build_far_field();
+    double estimate_far_cost() const;
     bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const;
     bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
     bool facing(std::uint32_t i, std::uint32_t j) const;
-    double far_value(std::uint32_t i, std::uint32_t j, double d, std::span<const Vec3> sender_points,
-                     std::span<const double> sender_weights) const;
+    std::pair<double, double> far_value(std::uint32_t i, std::uint32_t j, double d) const;
 };
 
-// Receivers at this many sizes (max of the pair's) or more get the point kernel with 2 × 2 points
-// on both patches: the tensor Gauss rule's relative error is about 0.2 (h/d)⁴ per patch, below
-// 2e-5 here; nearer ones get the exact receiver (Lambert's contour) and a 3 × 3 sender rule,
-// relative error about 0.03 (h/d)⁶ ≤ 4e-5 at the near range's 3 sizes.
-constexpr double kFarPointK = 12.0;
+// How a far pair's value is integrated, by centroid distance d in sizes (the larger of the
+// pair's longest edges): the exact receiver (Lambert's contour) and a 3 × 3 sender rule below
+// kFarPoint3K, the point kernel cosθ_i cosθ_j / (π r²) on 3 × 3 points of each patch below
+// kFarPoint2K, on 2 × 2 points of each beyond. Relative errors measured against the contour
+// integral (unit squares parallel, perpendicular on a common plane, tilted): Lambert 3 × 3 ≤ 7e-6
+// at 3 sizes; point 3 × 3 ≤ 3.5e-6 at 4 sizes, 1.7e-7 at 6; point 2 × 2 ≤ 1.1e-5 at 12 sizes,
+// 1.4e-6 at 20. Errors fall as (h/d)⁶ and (h/d)⁴: the bounds below are those, with margin.
+// Lambert's contour costs an atan2 per edge per point; the point kernel a few flops per pair of
+// points: 9 contours cost about as much as 300 kernel evaluations. At kFarPoint1K sizes and
+// beyond, one point per patch (the centroids) is enough: the midpoint rule's relative error is
+// (2/3)(h/d)² for squares face to face (the offset ρ between a point of each has ⟨ρ²⟩ = h²/3 and
+// the kernel falls as 1 − 2ρ²/d²; tests/accuracy/test_far_field.cpp), 1.6e-6 there; bounded by
+// (h/d)².
+constexpr double kFarPoint3K = 5.0;
+constexpr double kFarPoint2K = 16.0;
+constexpr double kFarPoint1K = 640.0;
+
+// Cost model of the far field on one core (ns), calibrated with tools/bench_far_field on these
+// machines (docs/benchmarks.md): per candidate patch (distance, facing and plane tests), and per
+// entry by its rule: 9 Lambert contours, 81, 16 or 1 kernel evaluations; per plane whose section
+// by the pair's hull must be examined.
+constexpr double kCostCandidate = 12, kCostLambert3 = 1000, kCostPoint3 = 250, kCostPoint2 = 50, kCostPoint1 = 7,
+                 kCostSection = 100;
+constexpr std::size_t kCostSampleRows = 64;
+
+// The far field's cost per row, estimated from up to kCostSampleRows rows spread over the scene:
+// for each, the facing pairs beyond the near range by rule (visibility assumed proven: an upper
+// bound). Deterministic: a function of the geometry only.
+double NearFieldCorrector::Impl::estimate_far_cost() const {
+    const std::size_t n = scene.size();
+    const std::size_t rows = std::min(n, kCostSampleRows);
+    double total = 0;
+    for (std::size_t r = 0; r < rows; ++r) {
+        const auto i = static_cast<std::uint32_t>(r * n / rows);
+        const Patch& pi = scene.patches[i];
+        double cost = kCostCandidate * static_cast<double>(n);
+        for (std::uint32_t j = 0; j < n; ++j) {
+            if (j == i) continue;
+            const Patch& pj = scene.patches[j];
+            const double size = std::max(pi.size, pj.size);
+            const double d = glm::length(pj.centroid - pi.centroid);
+            if (d < options.k * size || !facing(i, j)) continue;
+            for (std::size_t w = 0; w < words; ++w)
+                cost += kCostSection * std::popcount((plus_bits[i * words + w] | plus_bits[j * words + w]) &
+                                                     (minus_bits[i * words + w] | minus_bits[j * words + w]));
+            cost += d < kFarPoint3K * size   ? kCostLambert3
+                    : d < kFarPoint2K * size ? kCostPoint3
+                    : d < kFarPoint1K * size ? kCostPoint2
+                                             : kCostPoint1;
+        }
+        total += cost;
+    }
+    return total / static_cast<double>(rows);
+}
 
 void NearFieldCorrector::Impl::build_far_field() {
+    using FarField = NearFieldOptions::FarField;
     const std::size_t n = scene.size();
-    if (options.far_field_max_patches == 0 || n == 0 || n > options.far_field_max_patches) return;
+    if (options.far_field == FarField::off) {
+        far_status = "off";
+        return;
+    }
+    if (n == 0) {
+        far_status = "off: no patches";
+        return;
+    }
+    if (options.far_field == FarField::automatic) {
+        // Every row examines every patch: a scene too large for even that is off unmeasured.
+        const double floor = kCostCandidate * static_cast<double>(n);
+        if (floor > options.far_field_budget_ns) {
+            far_status = fmt::format("off: {} patches, at least {:.3g} ms per row, over the budget of {:.3g} ms", n,
+                                     floor * 1e-6, options.far_field_budget_ns * 1e-6);
+            return;
+        }
+    }
     const double coord = std::max({std::abs(scene.bbox_min.x), std::abs(scene.bbox_min.y), std::abs(scene.bbox_min.z),
                                    std::abs(scene.bbox_max.x), std::abs(scene.bbox_max.y), std::abs(scene.bbox_max.z)});
     // In a plane: within 1e-9 of the scene's extent, plus the rounding of far-off coordinates (as
@@ -235,6 +308,7 @@ void NearFieldCorrector::Impl::build_far_field() {
         if (found == planes.size()) {
             if (planes.size() == kMaxPlanes) {  // curved or cluttered: the far field stays off
                 planes.clear();
+                far_status = fmt::format("off: more than {} planes", kMaxPlanes);
                 return;
             }
             planes.push_back(Plane{nc, glm::dot(nc, p.centroid), 0, boxes[i], {}});
@@ -264,19 +338,33 @@ void NearFieldCorrector::Impl::build_far_field() {
                 if (below) minus_bits[i * words + g / 64] |= std::uint64_t{1} << (g % 64);
             }
         }
-    quad_points.resize(n);
-    quad_weights.resize(n);
-    quad_count.resize(n);
-    std::vector<Vec3> pts;
-    std::vector<double> wts;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        patch_quadrature(polys[i].span(), 2, pts, wts);
-        quad_count[i] = static_cast<std::uint8_t>(pts.size());
-        for (std::size_t k = 0; k < pts.size(); ++k) {
-            quad_points[i][k] = pts[k];
-            quad_weights[i][k] = wts[k];
+    if (options.far_field == FarField::automatic) {
+        far_cost = estimate_far_cost();
+        if (far_cost > options.far_field_budget_ns) {
+            far_status = fmt::format("off: estimated {:.3g} ms per row, over the budget of {:.3g} ms", far_cost * 1e-6,
+                                     options.far_field_budget_ns * 1e-6);
+            planes.clear();
+            plus_bits.clear();
+            minus_bits.clear();
+            return;
         }
     }
+    rules.resize(n);
+    std::vector<Vec3> pts;
+    std::vector<double> wts;
+    for (std::uint32_t i = 0; i < n; ++i)
+        for (int r = 0; r < 2; ++r) {
+            patch_quadrature(polys[i].span(), 2 + r, pts, wts);
+            Rule& rule = rules[i][static_cast<std::size_t>(r)];
+            rule.n = static_cast<std::uint8_t>(pts.size());
+            for (std::size_t k = 0; k < pts.size(); ++k) {
+                rule.p[k] = pts[k];
+                rule.w[k] = wts[k];
+            }
+        }
+    far_status = std::isnan(far_cost) ? fmt::format("on: {} planes", planes.size())
+                                      : fmt::format("on: {} planes, estimated {:.3g} ms per row, budget {:.3g} ms",
+                                                    planes.size(), far_cost * 1e-6, options.far_field_budget_ns * 1e-6);
 }
 
 // Whether some patch of plane g other than i and j may meet the section of hull(i ∪ j) by that
@@ -345,32 +433,48 @@ bool NearFieldCorrector::Impl::facing(std::uint32_t i, std::uint32_t j) const {
     return front_j > tol && front_i > tol;
 }
 
-// F_ij of an unoccluded pair beyond the near range (see kFarPointK).
-double NearFieldCorrector::Impl::far_value(std::uint32_t i, std::uint32_t j, double d, std::span<const Vec3> sender_points,
-                                           std::span<const double> sender_weights) const {
+// F_ij of an unoccluded pair beyond the near range (see kFarPoint3K) and a bound on its error.
+std::pair<double, double> NearFieldCorrector::Impl::far_value(std::uint32_t i, std::uint32_t j, double d) const {
     const Patch& pi = scene.patches[i];
     const Patch& pj = scene.patches[j];
-    if (d >= kFarPointK * std::max(pi.size, pj.size)) {
+    const double size = std::max(pi.size, pj.size);
+    const double h2 = (size / d) * (size / d);
+    if (d >= kFarPoint1K * size) {
+        const Vec3 r = pj.centroid - pi.centroid;
+        const double r2 = glm::dot(r, r);
+        const double f = std::max(0.0, glm::dot(pi.normal, r)) * std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2) *
+                         pj.area / std::numbers::pi;
+        return {f, f * h2};
+    }
+    if (d >= kFarPoint3K * size) {
+        const bool fine = d < kFarPoint2K * size;
+        const Rule& a = rules[i][fine];
+        const Rule& b = rules[j][fine];
         double f = 0;
-        for (std::size_t a = 0; a < quad_count[i]; ++a)
-            for (std::size_t b = 0; b < quad_count[j]; ++b) {
-                const Vec3 r = quad_points[j][b] - quad_points[i][a];
+        for (std::size_t s = 0; s < a.n; ++s) {
+            double g = 0;
+            for (std::size_t t = 0; t < b.n; ++t) {
+                const Vec3 r = b.p[t] - a.p[s];
                 const double r2 = glm::dot(r, r);
-                f += quad_weights[i][a] * quad_weights[j][b] * std::max(0.0, glm::dot(pi.normal, r)) *
-                     std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2);
+                g += b.w[t] * std::max(0.0, glm::dot(pi.normal, r)) * std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2);
             }
-        return f * pj.area / std::numbers::pi;
+            f += a.w[s] * g;
+        }
+        f *= pj.area / std::numbers::pi;
+        // 1.1e-5 = 0.23 h⁴ at 12 sizes; 3.5e-6 = 0.015 h⁶ at 4 sizes.
+        return {f, f * (fine ? 0.05 * h2 * h2 * h2 : 0.5 * h2 * h2)};
     }
     const auto poly = polys[j].span();
+    const Rule& a = rules[i][1];
     double f = 0;
-    for (std::size_t a = 0; a < sender_points.size(); ++a) {
-        const Vec3& x = sender_points[a];
+    for (std::size_t s = 0; s < a.n; ++s) {
+        const Vec3& x = a.p[s];
         if (!(glm::dot(x - pj.centroid, pj.normal) > 0)) continue;  // behind j: sees its back
         bool whole = true;
         for (const Vec3& v : poly) whole = whole && glm::dot(v - x, pi.normal) > 0;
-        f += sender_weights[a] * (whole ? ff_point_polygon_unclipped(x, pi.normal, poly) : ff_point_polygon(x, pi.normal, poly));
+        f += a.w[s] * (whole ? ff_point_polygon_unclipped(x, pi.normal, poly) : ff_point_polygon(x, pi.normal, poly));
     }
-    return f;
+    return {f, f * 0.05 * h2 * h2 * h2};  // 7e-6 = 0.005 h⁶ at 3 sizes
 }
 
 // Separating-axis test between the convex hull of patches i ∪ j and each other patch q whose
@@ -452,15 +556,18 @@ NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
     o.sender_quadrature = true;
     const double n = resolution;
     o.pixel_delta_ff = 4.0 / (std::numbers::pi * n * n);
-    // The far field costs ~0.1 µs per patch per row against ~5 ns per pixel of the hemicube's
-    // 3N²: at 3N²/64 patches it adds about a tenth of the row's time (docs/benchmarks.md).
-    o.far_field_max_patches = static_cast<std::size_t>(3.0 * n * n / 64.0);
+    // 30% of a hemicube row: 3N² pixels at about 5 ns each on one core of llvmpipe
+    // (tools/bench_far_field prints both per row; docs/benchmarks.md).
+    o.far_field = NearFieldOptions::FarField::automatic;
+    o.far_field_budget_ns = 0.3 * 3.0 * n * n * 5.0;
     return o;
 }
 
 bool NearFieldCorrector::far_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->far_unoccluded(i, j); }
 
 std::size_t NearFieldCorrector::far_field_planes() const { return impl_->planes.size(); }
+const std::string& NearFieldCorrector::far_field_status() const { return impl_->far_status; }
+double NearFieldCorrector::far_field_cost_ns() const { return impl_->far_cost; }
 
 NearFieldCorrector::~NearFieldCorrector() = default;
 
@@ -491,9 +598,6 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
     if (!im.planes.empty()) {
         // Far field: every other facing pair the plane test proves unoccluded.
         out.far = true;
-        std::vector<Vec3> sp;
-        std::vector<double> sw;
-        patch_quadrature(im.polys[i].span(), 3, sp, sw);
         std::vector<std::pair<std::uint32_t, double>> far;
         const auto n = static_cast<std::uint32_t>(im.scene.size());
         for (std::uint32_t j = 0; j < n; ++j) {
@@ -505,17 +609,9 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out) const {
                 ++out.far_unproven;
                 continue;
             }
-            const double f = im.far_value(i, j, d, sp, sw);
+            const auto [f, error] = im.far_value(i, j, d);
             far.emplace_back(j, f);
-            // The rules' error (see kFarPointK), bounded a little generously.
-            const double size = std::max(pi.size, pj.size);
-            if (d >= kFarPointK * size) {
-                const double r = size / d;
-                out.far_error += f * 0.4 * r * r * r * r;
-            } else {
-                const double r = pi.size / d;
-                out.far_error += f * 0.03 * r * r * r * r * r * r;
-            }
+            out.far_error += error;
         }
         out.far_entries = far.size();
         std::vector<std::pair<std::uint32_t, double>> merged(out.exact.size() + far.size());

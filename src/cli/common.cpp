@@ -46,10 +46,12 @@ void add_formfactor_options(CLI::App& app, FormFactorOptions& o) {
     app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
         ->default_val(3.0);
-    app.add_option("--far-field-max-patches", o.far_field_max_patches,
-                   "--correct near on hemicube rows: analytic values for every pair the plane test proves "
-                   "unoccluded in scenes of at most this many patches (default: 3N^2/64 at resolution N; 0: off)")
-        ->check(CLI::NonNegativeNumber);
+    app.add_option("--far-field", o.far_field,
+                   "--correct near: analytic values for every pair beyond the near range that a plane test proves "
+                   "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "
+                   "row's; on: wherever the scene has at most 256 planes; off")
+        ->check(CLI::IsMember({"auto", "on", "off"}))
+        ->default_val("auto");
 }
 
 void add_enforce_option(CLI::App& app, FormFactorOptions& o) {
@@ -127,8 +129,7 @@ FfmMetadata row_metadata(const FormFactorOptions& o) {
     }
     // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
     if (o.correct == "near") meta.settings += fmt::format(" correct=near k={}", o.near_k);
-    if (o.correct == "near" && o.far_field_max_patches >= 0)
-        meta.settings += fmt::format(" far_field_max_patches={}", o.far_field_max_patches);
+    if (o.correct == "near" && o.far_field != "auto") meta.settings += fmt::format(" far_field={}", o.far_field);
     return meta;
 }
 
@@ -153,7 +154,8 @@ RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report
         nf.k = o.near_k;
         if (rows.hemicube) {
             nf = near_field_options_for_hemicube(o.resolution, o.near_k);
-            if (o.far_field_max_patches >= 0) nf.far_field_max_patches = static_cast<std::size_t>(o.far_field_max_patches);
+            if (o.far_field == "on") nf.far_field = NearFieldOptions::FarField::on;
+            if (o.far_field == "off") nf.far_field = NearFieldOptions::FarField::off;
         } else {
             // The ray caster samples the whole sender (no sender quadrature); its noise, for the
             // per-row error estimate.
@@ -161,10 +163,8 @@ RowSource make_row_source(const Scene& scene, const FormFactorOptions& o, Report
         }
         RowProvider& inner = rows.hemicube ? static_cast<RowProvider&>(*rows.hemicube) : *rows.raycast;
         rows.corrected = std::make_unique<CorrectedRowProvider>(scene, inner, nf);
-        info("near-field correction: k = {}{}{}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "",
-             rows.corrected->far_field_planes() > 0
-                 ? fmt::format(", far field ({} planes)", rows.corrected->far_field_planes())
-                 : "");
+        info("near-field correction: k = {}{}, far field {}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "",
+             rows.corrected->corrector().far_field_status());
     }
     report.set("method", rows.provider().name());
     report.set("time.setup", watch.seconds());
@@ -187,7 +187,10 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.rows_capped_at_one", c.rows_capped);
         r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
         r.set("corrections.small_receiver_entries", c.small_receiver_entries);
-        r.set("corrections.far_field_planes", rows.corrected->far_field_planes());
+        r.set("corrections.far_field", rows.corrected->corrector().far_field_status());
+        r.set("corrections.far_field_planes", rows.corrected->corrector().far_field_planes());
+        if (const double ns = rows.corrected->corrector().far_field_cost_ns(); std::isfinite(ns))
+            r.set("corrections.far_field_estimated_ms_per_row", ns * 1e-6);
         r.set("corrections.far_field_rows", c.far_rows);
         r.set("corrections.far_field_entries", c.far_entries);
         r.set("corrections.far_field_pairs_unproven", c.far_unproven);

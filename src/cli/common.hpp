@@ -39,7 +39,7 @@ struct FormFactorOptions {
     // quadrature for the hemicube's other entries.
     std::string correct = "near";
     double near_k = 3.0;
-    long far_field_max_patches = -1;  // -1: the hemicube's budget (near_field_options_for_hemicube)
+    std::string far_field = "auto";  // auto, on or off
     std::string enforce;  // formfactors only: "", reciprocity, closure or both
 };
 

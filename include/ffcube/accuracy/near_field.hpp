@@ -29,6 +29,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "ffcube/formfactor/row_provider.hpp"
@@ -63,17 +64,20 @@ struct NearFieldOptions {
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
     // rows (RowProvider::compute_rows_sampled), when it can make them.
     bool sub_hemicubes = true;
-    // Far field: in scenes of at most far_field_max_patches patches, every facing pair beyond the
-    // near range whose visibility the plane test proves (NearFieldCorrector::far_unoccluded) gets
-    // its analytic value too (docs/accuracy.md, "Far field"): exact receiver, 3 × 3 sender
-    // quadrature within kFarPointK sizes, 2 × 2 points on both sides beyond. It costs O(patches)
-    // per row, so it is on only where that is small next to the inner provider's own work per row
-    // (near_field_options: 1/64 of a hemicube's 3N² pixels). 0: off.
-    std::size_t far_field_max_patches = 0;
+    // Far field: every facing pair beyond the near range whose visibility the plane test proves
+    // (NearFieldCorrector::far_unoccluded) gets its analytic value too (docs/accuracy.md, "Far
+    // field"): exact receiver and 3 × 3 sender rule within 5 sizes, the point kernel on 3 × 3,
+    // 2 × 2 or 1 points per patch beyond. It costs O(patches) per row. off; on (wherever the
+    // scene has at most 256 planes); automatic: on where the cost per row, estimated from the
+    // geometry of a sample of rows (far_field_cost), is at most far_field_budget_ns.
+    enum class FarField { off, automatic, on };
+    FarField far_field = FarField::off;
+    double far_field_budget_ns = 0;
 };
 
-// The options `--correct near` uses on rows of a hemicube at resolution N (sender quadrature,
-// pixel noise, far field within its budget).
+// The options `--correct near` uses on rows of a hemicube at resolution N: sender quadrature,
+// pixel noise, and the far field in automatic mode with a budget of 30% of a hemicube row's
+// cost on llvmpipe (3N² pixels at about 5 ns each, docs/benchmarks.md).
 NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0);
 
 struct NearFieldStats {
@@ -92,7 +96,7 @@ struct NearFieldStats {
     // the inner provider made them: detected and counted, not corrected.
     std::uint64_t small_receiver_entries = 0;
     std::uint64_t rows_with_small_receivers = 0;
-    // Far field (NearFieldOptions::far_field_max_patches): rows given analytic values beyond the
+    // Far field (NearFieldOptions::far_field): rows given analytic values beyond the
     // near range, entries so replaced (or added: the hemicube had no pixel for them), and facing
     // pairs beyond the near range whose visibility the plane test could not prove (kept as made).
     std::uint64_t far_rows = 0;
@@ -146,9 +150,12 @@ public:
     // crosses it outside the bounding box of that plane's patches. False when the far field is
     // off for this scene (see far_field_planes).
     bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
-    // Distinct planes of the scene's patches when the far field is on (0: off, because of
-    // far_field_max_patches or because the scene has more than 256 planes).
+    // Distinct planes of the scene's patches when the far field is on (0: off).
     std::size_t far_field_planes() const;
+    // Whether the far field is on and why, in words, for the run's report and log.
+    const std::string& far_field_status() const;
+    // Estimated far-field cost of a row (ns on one core of these machines; NAN when not estimated).
+    double far_field_cost_ns() const;
 
 private:
     struct Impl;
@@ -167,7 +174,7 @@ public:
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }
-    std::size_t far_field_planes() const { return corrector_.far_field_planes(); }
+    const NearFieldCorrector& corrector() const { return corrector_; }
 
 private:
     RowProvider& inner_;
