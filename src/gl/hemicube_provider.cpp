@@ -681,6 +681,11 @@ public:
                 ++st.self_hits;
             } else {
                 const std::uint32_t j = id - 1;
+                // An id past the last patch means a broken patch lookup (shader or pieces): a
+                // clean error instead of writing past the row's arrays.
+                if (j >= stamp_.size())
+                    throw GlError(fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}", p, k,
+                                              id, stamp_.size()));
                 if (stamp_[j] != epoch_) {
                     stamp_[j] = epoch_;
                     acc_[j] = 0.0;
