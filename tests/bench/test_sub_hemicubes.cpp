@@ -109,5 +109,27 @@ TEST(SubHemicubes, PartlyOccludedNearPairsAreSampledAndCloser) {
     EXPECT_LT(std::abs(value[1] - reference), 5 * 2e-4);  // within 5σ of the rays' noise
 }
 
+// With sub-hemicubes possible, the near analysis of each row is made on the provider's threads
+// before the row is rendered and kept until the row is corrected. With the far field an analysis
+// holds up to a whole row: kept for every row of a call, they grew to n² entries (225 MB for
+// 3,744 patches, the boxed blocker of docs/benchmarks.md). Each must be freed with its row.
+TEST(SubHemicubes, FarFieldAnalysesAreFreedWithTheirRows) {
+    const std::vector<NamedPolygon> polys = {{"low", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+                                             {"high", {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}}}};
+    const Scene s = make(polys, 0.17);  // 6 × 6 per plate
+    HemicubeOptions o;
+    o.resolution = 32;
+    o.threads = 2;
+    HemicubeRowProvider hemi(s, o);
+    NearFieldOptions nf = near_field_options_for_hemicube(32);
+    nf.far_field = NearFieldOptions::FarField::on;
+    CorrectedRowProvider corrected(s, hemi, nf);
+    ASSERT_TRUE(hemi.can_sample_sender());
+    const CsrMatrix F = compute_all_rows(corrected);
+    EXPECT_EQ(corrected.stats().far_rows, s.size());
+    EXPECT_GT(corrected.stats().far_entries, s.size() * 20);  // most of each row's 36 facing patches
+    EXPECT_EQ(corrected.retained_analysis_entries(), 0u);
+}
+
 }  // namespace
 }  // namespace ffcube

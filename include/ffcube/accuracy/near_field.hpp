@@ -175,6 +175,13 @@ public:
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }
     const NearFieldCorrector& corrector() const { return corrector_; }
+    // Entries still held by the analyses of rows already handed on (0 after compute_rows: each
+    // row's analysis, up to a whole row with the far field, is freed once the row is corrected).
+    std::size_t retained_analysis_entries() const {
+        std::size_t n = 0;
+        for (const NearAnalysis& a : analyses_) n += a.exact.size();
+        return n;
+    }
 
 private:
     RowProvider& inner_;
