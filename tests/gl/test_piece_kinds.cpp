@@ -208,8 +208,8 @@ PixelCheck check_pixels(const Scene& s, const HemicubeOptions& o, std::uint32_t 
 // id: about twice the cut pixels, so conservative. Errors are not independent pixel by pixel: a
 // straight outline crosses a run of pixel rows (or columns) at slowly drifting offsets, and an
 // outline nearly parallel to the pixel grid crosses all of them at one offset (edges parallel to
-// the sender's normal are vertical in the side faces whatever the rotation; the seeded rotation
-// of a hemicube can itself fall near a multiple of 90°: 180.09° for one sender below). So the
+// the sender's normal are vertical in the side faces whatever the rotation; and at 5° from a
+// multiple of 90°, the closest the seeded rotation comes, an edge drifts one pixel in 11). So the
 // pairs are grouped into runs: consecutive rows (columns) where j's boundary sits between the
 // same two columns (rows). Each run is one error uniform in ±(its ΔF sum)/2 on each side of the
 // boundary (variance (ΣΔF)²/12 for the pixels of j, the same for those beside them), runs

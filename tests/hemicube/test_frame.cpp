@@ -78,13 +78,18 @@ TEST(HemicubeAngle, DeterministicInRangeAndSpread) {
     EXPECT_EQ(hemicube_angle(42, 7), hemicube_angle(42, 7));
     EXPECT_NE(hemicube_angle(42, 7), hemicube_angle(43, 7));
     EXPECT_NE(hemicube_angle(42, 7), hemicube_angle(42, 8));
-    // Uniform on [0, 2π): the mean of n angles has standard deviation (2π/√12)/√n; 5σ.
+    // Symmetric about π (each quadrant's range is symmetric about its middle), spread over
+    // [0, 2π) about as a uniform angle: the mean of n has standard deviation ≈ (2π/√12)/√n; 5σ.
     const int n = 100000;
     double sum = 0.0;
     for (std::uint32_t p = 0; p < static_cast<std::uint32_t>(n); ++p) {
         const double a = hemicube_angle(1, p);
         ASSERT_GE(a, 0.0);
         ASSERT_LT(a, 2.0 * kPi);
+        // Never within 5° of a multiple of 90° (rounding of the quadrant arithmetic: 1e-15).
+        const double q = std::fmod(a, kPi / 2);
+        ASSERT_GE(q, kPi / 36 - 1e-12) << a;
+        ASSERT_LE(q, kPi / 2 - kPi / 36 + 1e-12) << a;
         sum += a;
     }
     const double sigma = 2.0 * kPi / std::sqrt(12.0) / std::sqrt(static_cast<double>(n));

@@ -33,7 +33,8 @@ HemicubeFrame make_frame(const Vec3& normal, double angle);
 std::uint64_t splitmix64(std::uint64_t x);
 
 // Deterministic pseudo-random rotation of patch `patch`'s hemicube for run seed `seed`, in
-// [0, 2π). Same (seed, patch) → same angle on every machine and thread count.
+// [0, 2π), never within 5° of a multiple of 90° (where the pixel grid lines up with axis-aligned
+// edges). Same (seed, patch) → same angle on every machine and thread count.
 double hemicube_angle(std::uint64_t seed, std::uint32_t patch);
 
 }  // namespace ffcube
