@@ -120,7 +120,7 @@ struct NearAnalysis {
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
     bool far = false;                                     // the far field was computed
-    double far_error = 0;                                 // Σ of its entries' quadrature error bounds
+    double far_error = 0;  // Σ of the error bounds of its integrated values (far and separated near)
     double seconds = 0;                                   // spent making it
     bool done = false;
 };
