@@ -247,7 +247,11 @@ std::vector<EdgeVertex> find_edge_vertices(const Scene& scene, std::vector<Vec3>
             const Vec3 d = b - a;
             const double len2 = glm::dot(d, d), len = std::sqrt(len2);
             const Vec3 m = glm::max(glm::abs(a), glm::abs(b));
-            const double tol = 1e-9 * len + 4 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
+            // 1e-6 of the edge: OBJ files written with 6 significant digits put a corner meant to
+            // lie inside an oblique edge up to ~1e-7 of the edge off it, and missed it cracked
+            // (test TJunctionsWithSixDigitCoordinatesLeakNothing; 1e-9 was too tight). Moving
+            // the piece's outline through such a corner changes it by that much, far below a pixel.
+            const double tol = 1e-6 * len + 4 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
             on_edge.clear();
             grid.near_segment(a, b, tol, [&](std::uint32_t at) {
                 const Vec3 w = corners[at] - a;
@@ -319,7 +323,7 @@ void triangulate_boundary(const std::vector<std::uint32_t>& b, const std::vector
 // different endpoints, the long edge and the short ones beside it do not cover the same pixels:
 // pixel-size cracks open between them, and hemicubes see through closed walls. So each piece is
 // drawn as the polygon of its corners and of the other pieces' corners that lie strictly inside
-// its edges (within 1e-9 of the edge length, plus a few ulps of the coordinates): those
+// its edges (within 1e-6 of the edge length, plus a few ulps of the coordinates): those
 // T-vertices take the other piece's corner position bit for bit, so after the shared
 // double → float transform in Worker::render both pieces' edges end at the very same vertices,
 // and the rasterizer's rules for shared edges leave no gap and no overlap.
