@@ -194,6 +194,7 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("corrections.far_field_rows", c.far_rows);
         r.set("corrections.far_field_entries", c.far_entries);
         r.set("corrections.far_field_pairs_unproven", c.far_unproven);
+        r.set("corrections.rows_analytic", c.rows_analytic);
         r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
         r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
         // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row,
@@ -253,6 +254,7 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
     r.set("sub_hemicube_rows", st.sampled_rows);
+    r.set("rows_not_rendered", st.skipped_rows);
 }
 
 CsrMatrix apply_enforcement(const FormFactorOptions& o, CsrMatrix F, const Scene& scene, const RowSource& rows,

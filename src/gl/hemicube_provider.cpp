@@ -1156,8 +1156,14 @@ struct HemicubeRowProvider::Impl {
             lock.unlock();
             try {
                 // The caller's query runs here, on this worker thread (it is thread-safe).
-                const bool sampled = ask && (*ask)(k);
-                w.row(i, row, local, sampled);
+                using RowPlan = RowProvider::RowPlan;
+                const RowPlan plan = ask ? (*ask)(k) : RowPlan::centre;
+                if (plan == RowPlan::skip) {
+                    row.clear();
+                    ++local.skipped_rows;
+                } else {
+                    w.row(i, row, local, plan == RowPlan::sampled);
+                }
             } catch (...) {
                 lock.lock();
                 if (!error) error = std::current_exception();
@@ -1187,6 +1193,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.readback_seconds += b.readback_seconds;
     a.accumulate_seconds += b.accumulate_seconds;
     a.sampled_rows += b.sampled_rows;
+    a.skipped_rows += b.skipped_rows;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     for (std::size_t f = 0; f < 5; ++f) {

@@ -53,7 +53,8 @@ TEST(SubHemicubes, SampledRowMeasuresTheSenderQuadrature) {
     const std::vector<std::uint32_t> rows = {0, 1, 0};
     std::vector<double> got;
     provider.compute_rows_sampled(
-        rows, [](std::size_t pos) { return pos != 1; },
+        rows,
+        [](std::size_t pos) { return pos != 1 ? RowProvider::RowPlan::sampled : RowProvider::RowPlan::centre; },
         [&](std::uint32_t, const SparseRow& r) { got.push_back(r.nnz() ? r.val[0] : 0.0); });
     ASSERT_EQ(got.size(), 3u);
     EXPECT_NEAR(got[0], Q, 2e-3 * Q);
@@ -129,6 +130,45 @@ TEST(SubHemicubes, FarFieldAnalysesAreFreedWithTheirRows) {
     EXPECT_EQ(corrected.stats().far_rows, s.size());
     EXPECT_GT(corrected.stats().far_entries, s.size() * 20);  // most of each row's 36 facing patches
     EXPECT_EQ(corrected.retained_analysis_entries(), 0u);
+}
+
+// A row whose every facing pair has an analytic value (far field on, nothing refused or
+// unproven) is not rendered at all. In a closed unit box every pair of wall patches sees each
+// other unblocked, so no hemicube is drawn; rows must still come out closed (the analytic sum is
+// 1 within its rules' error bounds, then rebalanced: to float storage, 6e-8) and the wall-to-wall
+// values exact (opposite walls C-11 0.199825, adjacent C-14 0.200044; the rules' bounds give
+// ≤ 1e-6 relative; the worst seen was 1.7e-8).
+TEST(SubHemicubes, CompleteRowsAreNotRendered) {
+    std::vector<NamedPolygon> polys;
+    const auto wall = [&](const char* name, Vec3 o, Vec3 u, Vec3 v) { polys.push_back({name, {o, o + u, o + u + v, o + v}}); };
+    wall("z0", {0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+    wall("z1", {0, 0, 1}, {0, 1, 0}, {1, 0, 0});
+    wall("x0", {0, 0, 0}, {0, 1, 0}, {0, 0, 1});
+    wall("x1", {1, 0, 0}, {0, 0, 1}, {0, 1, 0});
+    wall("y0", {0, 0, 0}, {0, 0, 1}, {1, 0, 0});
+    wall("y1", {0, 1, 0}, {1, 0, 0}, {0, 0, 1});
+    const Scene s = make(polys, 0.2);  // 5 × 5 per wall
+    HemicubeOptions o;
+    o.resolution = 64;
+    o.threads = 2;
+    HemicubeRowProvider hemi(s, o);
+    NearFieldOptions nf = near_field_options_for_hemicube(64);
+    nf.far_field = NearFieldOptions::FarField::on;
+    CorrectedRowProvider corrected(s, hemi, nf);
+    const CsrMatrix F = compute_all_rows(corrected);
+    EXPECT_EQ(corrected.stats().rows_analytic, s.size());
+    EXPECT_EQ(hemi.stats().hemicubes, 0u);
+    EXPECT_EQ(hemi.stats().skipped_rows, s.size());
+    EXPECT_GE(corrected.stats().inner_row_sum_min, 1.0 - 1e-6);  // closed, as measured analytically
+    for (std::uint32_t i = 0; i < s.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 6e-8) << i;
+    const auto G = object_form_factors(F, s);
+    const double opposite = ff_parallel_rectangles(1, 1, 1), adjacent = ff_perpendicular_rectangles_common_edge(1, 1, 1);
+    for (std::size_t a = 0; a < 6; ++a)
+        for (std::size_t b = 0; b < 6; ++b) {
+            if (a == b) continue;
+            const double exact = (a / 2 == b / 2) ? opposite : adjacent;
+            EXPECT_NEAR(G[a][b], exact, 1e-6 * exact) << a << " " << b;
+        }
 }
 
 }  // namespace

@@ -91,6 +91,12 @@ TEST(AccuracyCli, FarFieldIsAutomaticReportedAndRecorded) {
     EXPECT_EQ(ra["far_field_rows"], 32);
     EXPECT_GT(ra["far_field_entries"].get<int>(), 0);
     EXPECT_EQ(ra["far_field_pairs_unproven"], 0);  // two plates: nothing can block
+    // So every row is known without a hemicube: none is rendered.
+    EXPECT_EQ(ra["rows_analytic"], 32);
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "a.json"))["hemicubes"], 0);
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "a.json"))["rows_not_rendered"], 32);
+    EXPECT_EQ(ro["rows_analytic"], 0);
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "o.json"))["hemicubes"], 32);
     EXPECT_EQ(ro["far_field"], "off");
     EXPECT_EQ(ro["far_field_entries"], 0);
     EXPECT_EQ(rt["far_field"].get<std::string>().rfind("off: 32 patches", 0), 0u) << rt["far_field"];

@@ -73,6 +73,10 @@ struct NearFieldOptions {
     enum class FarField { off, automatic, on };
     FarField far_field = FarField::off;
     double far_field_budget_ns = 0;
+    // A row whose every facing pair has an analytic value (near pairs exact, far pairs proven:
+    // NearAnalysis::complete) needs no measurement: it is not asked of the inner provider at
+    // all (RowPlan::skip), when the provider can be asked (sub_hemicubes and can_sample_sender).
+    bool skip_complete_rows = true;
 };
 
 // The options `--correct near` uses on rows of a hemicube at resolution N: sender quadrature,
@@ -102,6 +106,7 @@ struct NearFieldStats {
     std::uint64_t far_rows = 0;
     std::uint64_t far_entries = 0;
     std::uint64_t far_unproven = 0;
+    std::uint64_t rows_analytic = 0;  // rows made wholly of analytic values, not measured at all
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
@@ -120,6 +125,10 @@ struct NearAnalysis {
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
     bool far = false;                                     // the far field was computed
+    // Every facing pair of the row has its value here (far field on, nothing refused or
+    // unproven): the row is known without measuring it.
+    bool complete = false;
+    bool skipped = false;  // and the inner provider was told not to measure it
     double far_error = 0;  // Σ of the error bounds of its integrated values (far and separated near)
     double seconds = 0;                                   // spent making it
     bool done = false;
@@ -140,7 +149,8 @@ public:
     // (all but seconds). With error_estimate: the row's estimated error Σ_j |F_ij − exact_ij|
     // (docs/accuracy.md, "Per-row error estimate"). analysis: row i's, if already made.
     // sampled_row: the inner row is the average of sub-hemicubes at i's 2 × 2 quadrature points
-    // (no sender quadrature ratio on top).
+    // (no sender quadrature ratio on top). The inner row of a skipped complete analysis
+    // (NearAnalysis::skipped) is empty: the row is the analysis.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr,
                  const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
     // True when no patch other than i and j can block any segment from i to j (see above).

@@ -29,11 +29,14 @@ public:
     // Sender sampling. A provider that measures F from one point of the sender (the hemicube:
     // its centre) may be able to measure some rows as the average over the sender's quadrature
     // points instead (geometry/quadrature.hpp, patch_quadrature with 2 points per axis), each
-    // with its own visibility ("sub-hemicubes"). compute_rows_sampled does that for the rows for
-    // which sampled(position in rows) returns true; it calls sampled once per listed row before
-    // computing it, possibly from several threads at once (so it must be thread-safe), and hands
-    // rows to sink in list order like compute_rows. The default never asks and samples nothing.
-    using SampleQuery = std::function<bool(std::size_t position)>;
+    // with its own visibility ("sub-hemicubes"), and to leave out rows its caller can make
+    // without it. compute_rows_sampled asks plan(position in rows) once per listed row before
+    // computing it, possibly from several threads at once (so it must be thread-safe): centre
+    // (as compute_rows), sampled (sub-hemicubes) or skip (nothing measured: the row handed to
+    // sink is empty). Rows go to sink in list order like compute_rows. The default never asks,
+    // samples nothing and skips nothing.
+    enum class RowPlan : std::uint8_t { centre, sampled, skip };
+    using SampleQuery = std::function<RowPlan(std::size_t position)>;
     virtual bool can_sample_sender() const { return false; }
     virtual void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
                                       const RowSink& sink) {

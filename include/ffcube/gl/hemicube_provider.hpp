@@ -46,6 +46,7 @@ struct HemicubeStats {
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
     std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_sampled)
+    std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
 };
 
 class HemicubeRowProvider final : public RowProvider {
