@@ -262,7 +262,8 @@ struct NearFieldCorrector::Impl {
     std::string far_status;
     double far_cost = NAN;
     void build_far_field();
-    double estimate_far_cost() const;
+    double estimate_far_cost(double& complete_fraction) const;
+    double far_complete = NAN;  // estimated share of rows the far field makes complete
     bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const;
     bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
     bool facing(std::uint32_t i, std::uint32_t j) const;
@@ -297,20 +298,26 @@ constexpr std::size_t kCostSampleRows = 64;
 // The far field's cost per row, estimated from up to kCostSampleRows rows spread over the scene:
 // for each, the facing pairs beyond the near range by rule (visibility assumed proven: an upper
 // bound). Deterministic: a function of the geometry only.
-double NearFieldCorrector::Impl::estimate_far_cost() const {
+double NearFieldCorrector::Impl::estimate_far_cost(double& complete_fraction) const {
     const std::size_t n = scene.size();
     const std::size_t rows = std::min(n, kCostSampleRows);
     double total = 0;
+    std::size_t complete = 0;
     for (std::size_t r = 0; r < rows; ++r) {
         const auto i = static_cast<std::uint32_t>(r * n / rows);
         const Patch& pi = scene.patches[i];
         double cost = kCostCandidate * static_cast<double>(n);
+        bool known = true;  // every facing pair proven: the row would not be rendered
         for (std::uint32_t j = 0; j < n; ++j) {
             if (j == i) continue;
             const Patch& pj = scene.patches[j];
             const double size = std::max(pi.size, pj.size);
             const double d = glm::length(pj.centroid - pi.centroid);
-            if (d < options.k * size || !facing(i, j)) continue;
+            if (!facing(i, j)) continue;
+            if (d < options.k * size) {
+                if (known) known = unoccluded(i, j);
+                continue;
+            }
             for (std::size_t w = 0; w < words; ++w)
                 cost += kCostSection * std::popcount((plus_bits[i * words + w] | plus_bits[j * words + w]) &
                                                      (minus_bits[i * words + w] | minus_bits[j * words + w]));
@@ -318,9 +325,12 @@ double NearFieldCorrector::Impl::estimate_far_cost() const {
                     : d < kFarPoint2K * size ? kCostPoint3
                     : d < kFarPoint1K * size ? kCostPoint2
                                              : kCostPoint1;
+            if (known) known = far_unoccluded(i, j);
         }
         total += cost;
+        complete += known;
     }
+    complete_fraction = static_cast<double>(complete) / static_cast<double>(rows);
     return total / static_cast<double>(rows);
 }
 
@@ -336,11 +346,13 @@ void NearFieldCorrector::Impl::build_far_field() {
         return;
     }
     if (options.far_field == FarField::automatic) {
-        // Every row examines every patch: a scene too large for even that is off unmeasured.
+        // Every row examines every patch: a scene too large for even that is off unmeasured
+        // (even if every row then needed no measurement, saving a whole row of the inner
+        // provider).
         const double floor = kCostCandidate * static_cast<double>(n);
-        if (floor > options.far_field_budget_ns) {
+        if (floor > options.far_field_budget_ns + options.far_field_row_ns) {
             far_status = fmt::format("off: {} patches, at least {:.3g} ms per row, over the budget of {:.3g} ms", n,
-                                     floor * 1e-6, options.far_field_budget_ns * 1e-6);
+                                     floor * 1e-6, (options.far_field_budget_ns + options.far_field_row_ns) * 1e-6);
             return;
         }
     }
@@ -397,10 +409,13 @@ void NearFieldCorrector::Impl::build_far_field() {
             }
         }
     if (options.far_field == FarField::automatic) {
-        far_cost = estimate_far_cost();
-        if (far_cost > options.far_field_budget_ns) {
-            far_status = fmt::format("off: estimated {:.3g} ms per row, over the budget of {:.3g} ms", far_cost * 1e-6,
-                                     options.far_field_budget_ns * 1e-6);
+        // The budget, plus what rows made complete save: they are not measured at all.
+        far_cost = estimate_far_cost(far_complete);
+        const double budget = options.far_field_budget_ns + far_complete * options.far_field_row_ns;
+        if (far_cost > budget) {
+            far_status = fmt::format("off: estimated {:.3g} ms per row, over the budget of {:.3g} ms ({:.0f}% of rows "
+                                     "complete)",
+                                     far_cost * 1e-6, budget * 1e-6, 100 * far_complete);
             planes.clear();
             plus_bits.clear();
             minus_bits.clear();
@@ -420,9 +435,13 @@ void NearFieldCorrector::Impl::build_far_field() {
                 rule.w[k] = wts[k];
             }
         }
-    far_status = std::isnan(far_cost) ? fmt::format("on: {} planes", planes.size())
-                                      : fmt::format("on: {} planes, estimated {:.3g} ms per row, budget {:.3g} ms",
-                                                    planes.size(), far_cost * 1e-6, options.far_field_budget_ns * 1e-6);
+    far_status = std::isnan(far_cost)
+                     ? fmt::format("on: {} planes", planes.size())
+                     : fmt::format("on: {} planes, estimated {:.3g} ms per row, budget {:.3g} ms ({:.0f}% of rows "
+                                   "complete)",
+                                   planes.size(), far_cost * 1e-6,
+                                   (options.far_field_budget_ns + far_complete * options.far_field_row_ns) * 1e-6,
+                                   100 * far_complete);
 }
 
 // Whether some patch of plane g other than i and j may meet the section of hull(i ∪ j) by that
@@ -617,7 +636,8 @@ NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
     // 30% of a hemicube row: 3N² pixels at about 5 ns each on one core of llvmpipe
     // (tools/bench_far_field prints both per row; docs/benchmarks.md).
     o.far_field = NearFieldOptions::FarField::automatic;
-    o.far_field_budget_ns = 0.3 * 3.0 * n * n * 5.0;
+    o.far_field_row_ns = 3.0 * n * n * 5.0;
+    o.far_field_budget_ns = 0.3 * o.far_field_row_ns;
     return o;
 }
 

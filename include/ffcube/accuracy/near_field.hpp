@@ -69,10 +69,13 @@ struct NearFieldOptions {
     // field"): exact receiver and 3 × 3 sender rule within 5 sizes, the point kernel on 3 × 3,
     // 2 × 2 or 1 points per patch beyond. It costs O(patches) per row. off; on (wherever the
     // scene has at most 256 planes); automatic: on where the cost per row, estimated from the
-    // geometry of a sample of rows (far_field_cost), is at most far_field_budget_ns.
+    // geometry of a sample of rows (far_field_cost), is at most far_field_budget_ns plus
+    // far_field_row_ns (the inner provider's cost of a row) times the share of sampled rows the
+    // far field makes complete (those are not measured at all: skip_complete_rows).
     enum class FarField { off, automatic, on };
     FarField far_field = FarField::off;
     double far_field_budget_ns = 0;
+    double far_field_row_ns = 0;
     // A row whose every facing pair has an analytic value (near pairs exact, far pairs proven:
     // NearAnalysis::complete) needs no measurement: it is not asked of the inner provider at
     // all (RowPlan::skip), when the provider can be asked (sub_hemicubes and can_sample_sender).
