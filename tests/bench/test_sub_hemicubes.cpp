@@ -110,6 +110,26 @@ TEST(SubHemicubes, PartlyOccludedNearPairsAreSampledAndCloser) {
     EXPECT_LT(std::abs(value[1] - reference), 5 * 2e-4);  // within 5σ of the rays' noise
 }
 
+// Hemicube rows (2 threads) through the default correction with the far field forced on.
+HemicubeOptions two_threads(int resolution) {
+    HemicubeOptions o;
+    o.resolution = resolution;
+    o.threads = 2;
+    return o;
+}
+NearFieldOptions far_field_on(int resolution) {
+    NearFieldOptions nf = near_field_options_for_hemicube(resolution);
+    nf.far_field = NearFieldOptions::FarField::on;
+    return nf;
+}
+struct FarFieldRun {
+    FarFieldRun(const Scene& s, int resolution)
+        : hemi(s, two_threads(resolution)), corrected(s, hemi, far_field_on(resolution)), F(compute_all_rows(corrected)) {}
+    HemicubeRowProvider hemi;
+    CorrectedRowProvider corrected;
+    CsrMatrix F;
+};
+
 // With sub-hemicubes possible, the near analysis of each row is made on the provider's threads
 // before the row is rendered and kept until the row is corrected. With the far field an analysis
 // holds up to a whole row: kept for every row of a call, they grew to n² entries (225 MB for
@@ -118,18 +138,11 @@ TEST(SubHemicubes, FarFieldAnalysesAreFreedWithTheirRows) {
     const std::vector<NamedPolygon> polys = {{"low", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
                                              {"high", {{0, 0, 1}, {0, 1, 1}, {1, 1, 1}, {1, 0, 1}}}};
     const Scene s = make(polys, 0.17);  // 6 × 6 per plate
-    HemicubeOptions o;
-    o.resolution = 32;
-    o.threads = 2;
-    HemicubeRowProvider hemi(s, o);
-    NearFieldOptions nf = near_field_options_for_hemicube(32);
-    nf.far_field = NearFieldOptions::FarField::on;
-    CorrectedRowProvider corrected(s, hemi, nf);
-    ASSERT_TRUE(hemi.can_sample_sender());
-    const CsrMatrix F = compute_all_rows(corrected);
-    EXPECT_EQ(corrected.stats().far_rows, s.size());
-    EXPECT_GT(corrected.stats().far_entries, s.size() * 20);  // most of each row's 36 facing patches
-    EXPECT_EQ(corrected.retained_analysis_entries(), 0u);
+    const FarFieldRun run(s, 32);
+    ASSERT_TRUE(run.hemi.can_sample_sender());
+    EXPECT_EQ(run.corrected.stats().far_rows, s.size());
+    EXPECT_GT(run.corrected.stats().far_entries, s.size() * 20);  // most of each row's 36 facing patches
+    EXPECT_EQ(run.corrected.retained_analysis_entries(), 0u);
 }
 
 // A row whose every facing pair has an analytic value (far field on, nothing refused or
@@ -148,20 +161,13 @@ TEST(SubHemicubes, CompleteRowsAreNotRendered) {
     wall("y0", {0, 0, 0}, {0, 0, 1}, {1, 0, 0});
     wall("y1", {0, 1, 0}, {1, 0, 0}, {0, 0, 1});
     const Scene s = make(polys, 0.2);  // 5 × 5 per wall
-    HemicubeOptions o;
-    o.resolution = 64;
-    o.threads = 2;
-    HemicubeRowProvider hemi(s, o);
-    NearFieldOptions nf = near_field_options_for_hemicube(64);
-    nf.far_field = NearFieldOptions::FarField::on;
-    CorrectedRowProvider corrected(s, hemi, nf);
-    const CsrMatrix F = compute_all_rows(corrected);
-    EXPECT_EQ(corrected.stats().rows_analytic, s.size());
-    EXPECT_EQ(hemi.stats().hemicubes, 0u);
-    EXPECT_EQ(hemi.stats().skipped_rows, s.size());
-    EXPECT_GE(corrected.stats().inner_row_sum_min, 1.0 - 1e-6);  // closed, as measured analytically
-    for (std::uint32_t i = 0; i < s.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 6e-8) << i;
-    const auto G = object_form_factors(F, s);
+    const FarFieldRun run(s, 64);
+    EXPECT_EQ(run.corrected.stats().rows_analytic, s.size());
+    EXPECT_EQ(run.hemi.stats().hemicubes, 0u);
+    EXPECT_EQ(run.hemi.stats().skipped_rows, s.size());
+    EXPECT_GE(run.corrected.stats().inner_row_sum_min, 1.0 - 1e-6);  // closed, as measured analytically
+    for (std::uint32_t i = 0; i < s.size(); ++i) EXPECT_NEAR(run.F.row(i).sum(), 1.0, 6e-8) << i;
+    const auto G = object_form_factors(run.F, s);
     const double opposite = ff_parallel_rectangles(1, 1, 1), adjacent = ff_perpendicular_rectangles_common_edge(1, 1, 1);
     for (std::size_t a = 0; a < 6; ++a)
         for (std::size_t b = 0; b < 6; ++b) {
