@@ -237,7 +237,7 @@ struct NearFieldCorrector::Impl {
 
     // Far field (NearFieldOptions::far_field): the planes of the scene's patches
     // (unoriented; a two-sided plate's sides share one), per patch two bit sets over them
-    // (a vertex strictly in front of / behind the plane), and 2 × 2 quadrature points per patch.
+    // (a vertex strictly in front of / behind the plane), and its 2 × 2 and 3 × 3 quadrature rules.
     struct Plane {
         Vec3 n{0.0};
         double d = 0;
@@ -297,7 +297,9 @@ constexpr std::size_t kCostSampleRows = 64;
 
 // The far field's cost per row, estimated from up to kCostSampleRows rows spread over the scene:
 // for each, the facing pairs beyond the near range by rule (visibility assumed proven: an upper
-// bound). Deterministic: a function of the geometry only.
+// bound), and whether the row would be complete (every near pair proven by the shaft test and
+// every far one by the plane test: not rendered at all). Deterministic: a function of the
+// geometry only.
 double NearFieldCorrector::Impl::estimate_far_cost(double& complete_fraction) const {
     const std::size_t n = scene.size();
     const std::size_t rows = std::min(n, kCostSampleRows);
