@@ -264,7 +264,7 @@ struct NearFieldCorrector::Impl {
     void build_far_field();
     double estimate_far_cost(double& complete_fraction) const;
     double far_complete = NAN;  // estimated share of rows the far field makes complete
-    bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const;
+    bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g, const Box& pair) const;
     bool far_unoccluded(std::uint32_t i, std::uint32_t j) const;
     bool facing(std::uint32_t i, std::uint32_t j) const;
     std::pair<double, double> far_value(std::uint32_t i, std::uint32_t j, double d) const;
@@ -290,9 +290,10 @@ constexpr double kFarPoint1K = 640.0;
 // Cost model of the far field on one core (ns), calibrated with tools/bench_far_field on these
 // machines (docs/benchmarks.md): per candidate patch (distance, facing and plane tests), and per
 // entry by its rule: 9 Lambert contours, 81, 16 or 1 kernel evaluations; per plane whose section
-// by the pair's hull must be examined.
+// by the pair's hull must be examined (or is rejected at once: the pair's box misses the
+// plane's members).
 constexpr double kCostCandidate = 12, kCostLambert3 = 1000, kCostPoint3 = 250, kCostPoint2 = 50, kCostPoint1 = 7,
-                 kCostSection = 100;
+                 kCostSection = 100, kCostSectionReject = 5;
 constexpr std::size_t kCostSampleRows = 64;
 
 // The far field's cost per row, estimated from up to kCostSampleRows rows spread over the scene:
@@ -320,9 +321,15 @@ double NearFieldCorrector::Impl::estimate_far_cost(double& complete_fraction) co
                 if (known) known = unoccluded(i, j);
                 continue;
             }
-            for (std::size_t w = 0; w < words; ++w)
-                cost += kCostSection * std::popcount((plus_bits[i * words + w] | plus_bits[j * words + w]) &
-                                                     (minus_bits[i * words + w] | minus_bits[j * words + w]));
+            const Box pair{glm::min(boxes[i].lo, boxes[j].lo), glm::max(boxes[i].hi, boxes[j].hi)};
+            for (std::size_t w = 0; w < words; ++w) {
+                std::uint64_t c = (plus_bits[i * words + w] | plus_bits[j * words + w]) &
+                                  (minus_bits[i * words + w] | minus_bits[j * words + w]);
+                for (; c; c &= c - 1)
+                    cost += pair.overlaps(planes[w * 64 + static_cast<std::size_t>(std::countr_zero(c))].box)
+                                ? kCostSection
+                                : kCostSectionReject;
+            }
             cost += d < kFarPoint3K * size   ? kCostLambert3
                     : d < kFarPoint2K * size ? kCostPoint3
                     : d < kFarPoint1K * size ? kCostPoint2
@@ -450,9 +457,13 @@ void NearFieldCorrector::Impl::build_far_field() {
 // plane (conservatively: bounding boxes). The section of a convex hull by a plane is the convex
 // hull of the hull's vertices in the plane and of the points where segments between vertices on
 // opposite sides cross it.
-bool NearFieldCorrector::Impl::section_meets(std::uint32_t i, std::uint32_t j, std::size_t g) const {
+bool NearFieldCorrector::Impl::section_meets(std::uint32_t i, std::uint32_t j, std::size_t g, const Box& pair) const {
     const Plane& P = planes[g];
     if (P.thickness > far_tol) return true;
+    // The section lies in the hull, so in the pair's bounding box: a plane whose members' box
+    // misses that box blocks nothing (most conflicts in a room: a block's face plane cuts the
+    // room, its face does not come near the pair).
+    if (!pair.overlaps(P.box)) return false;
     std::array<Vec3, 8> v{};
     std::array<double, 8> s{};
     std::size_t m = 0;
@@ -487,12 +498,14 @@ bool NearFieldCorrector::Impl::far_unoccluded(std::uint32_t i, std::uint32_t j) 
     const std::uint64_t* pj = &plus_bits[j * words];
     const std::uint64_t* mi = &minus_bits[i * words];
     const std::uint64_t* mj = &minus_bits[j * words];
+    // The pair's bounding box, widened by the tolerance of touching.
+    const Box pair{glm::min(boxes[i].lo, boxes[j].lo) - Vec3(2 * far_tol), glm::max(boxes[i].hi, boxes[j].hi) + Vec3(2 * far_tol)};
     for (std::size_t w = 0; w < words; ++w) {
         std::uint64_t c = (pi[w] | pj[w]) & (mi[w] | mj[w]);
         while (c) {
             const std::size_t g = w * 64 + static_cast<std::size_t>(std::countr_zero(c));
             c &= c - 1;
-            if (section_meets(i, j, g)) return false;
+            if (section_meets(i, j, g, pair)) return false;
         }
     }
     return true;
