@@ -27,15 +27,19 @@ double group_value(const std::string& path, const std::string& from, const std::
     return NAN;
 }
 
+// `formfactors` on the two unit squares at 90°, meshed 4 × 4, with the given options, writing
+// NAME.ffm, NAME.csv (groups) and NAME.json (report) in dir; fails the test if it fails.
+void run_squares(const TempDir& dir, const std::string& options, const std::string& name) {
+    const auto r = run_ffcube("formfactors " + test::example("perpendicular_squares.obj") + " --max-patch-edge 0.25 -q " +
+                              options + " -o " + (dir / (name + ".ffm")) + " --groups " + (dir / (name + ".csv")) +
+                              " --report " + (dir / (name + ".json")));
+    ASSERT_EQ(r.code, 0) << r.output;
+}
+
 TEST(AccuracyCli, CorrectionIsTheDefaultIsRecordedAndHelps) {
     TempDir dir;
-    const std::string scene = test::example("perpendicular_squares.obj") + " --max-patch-edge 0.25 --resolution 64 -q";
-    const auto plain = run_ffcube("formfactors " + scene + " --correct none -o " + (dir / "P.ffm") + " --groups " +
-                                  (dir / "p.csv") + " --report " + (dir / "p.json"));
-    ASSERT_EQ(plain.code, 0) << plain.output;
-    const auto corr = run_ffcube("formfactors " + scene + " -o " + (dir / "C.ffm") + " --groups " + (dir / "c.csv") +
-                                 " --report " + (dir / "c.json"));
-    ASSERT_EQ(corr.code, 0) << corr.output;
+    run_squares(dir, "--resolution 64 --correct none", "p");
+    run_squares(dir, "--resolution 64", "c");
 
     // Recorded: the report's corrections and per-row estimates, the matrix's settings.
     const auto rp = nlohmann::json::parse(test::read_text(dir / "p.json"));
@@ -47,8 +51,8 @@ TEST(AccuracyCli, CorrectionIsTheDefaultIsRecordedAndHelps) {
     EXPECT_GT(rc["corrections"]["entries_replaced"].get<int>(), 0);
     ASSERT_EQ(rc["row_error_estimate"]["rows"].size(), 32u);
     for (const auto& e : rc["row_error_estimate"]["rows"]) EXPECT_GT(e.get<double>(), 0.0);
-    EXPECT_EQ(read_ffm(dir / "P.ffm").meta.settings.find("correct="), std::string::npos);
-    EXPECT_NE(read_ffm(dir / "C.ffm").meta.settings.find("correct=near k=3"), std::string::npos);
+    EXPECT_EQ(read_ffm(dir / "p.ffm").meta.settings.find("correct="), std::string::npos);
+    EXPECT_NE(read_ffm(dir / "c.ffm").meta.settings.find("correct=near k=3"), std::string::npos);
 
     // Two unit squares at 90°, meshed 4 × 4: the plain hemicube carries the midpoint rule's
     // −4.8e-4 (tests/accuracy) plus pixel noise; the correction removes the midpoint part, and
@@ -71,19 +75,12 @@ TEST(AccuracyCli, CorrectionIsTheDefaultIsRecordedAndHelps) {
 // its reason, and it makes every entry of an unoccluded scene analytic.
 TEST(AccuracyCli, FarFieldIsAutomaticReportedAndRecorded) {
     TempDir dir;
-    const std::string scene = test::example("perpendicular_squares.obj") + " --max-patch-edge 0.25 -q";
-    const auto on = run_ffcube("formfactors " + scene + " --resolution 64 -o " + (dir / "A.ffm") + " --groups " +
-                               (dir / "a.csv") + " --report " + (dir / "a.json"));
-    ASSERT_EQ(on.code, 0) << on.output;
-    const auto off = run_ffcube("formfactors " + scene + " --resolution 64 --far-field off -o " + (dir / "O.ffm") +
-                                " --groups " + (dir / "o.csv") + " --report " + (dir / "o.json"));
-    ASSERT_EQ(off.code, 0) << off.output;
+    run_squares(dir, "--resolution 64", "a");
+    run_squares(dir, "--resolution 64 --far-field off", "o");
     // N = 8: a hemicube row (3 · 64 pixels at 5 ns: 0.96 µs) costs less than the analytic values
     // (32 patches, most within 5 sizes: ~10 µs): off, even though every row would be complete,
     // saying why.
-    const auto tiny = run_ffcube("formfactors " + scene + " --resolution 8 -o " + (dir / "T.ffm") + " --report " +
-                                 (dir / "t.json"));
-    ASSERT_EQ(tiny.code, 0) << tiny.output;
+    run_squares(dir, "--resolution 8", "t");
 
     const auto ra = nlohmann::json::parse(test::read_text(dir / "a.json"))["corrections"];
     const auto ro = nlohmann::json::parse(test::read_text(dir / "o.json"))["corrections"];
@@ -102,8 +99,8 @@ TEST(AccuracyCli, FarFieldIsAutomaticReportedAndRecorded) {
     EXPECT_EQ(ro["far_field_entries"], 0);
     EXPECT_EQ(rt["far_field"].get<std::string>().rfind("off: estimated", 0), 0u) << rt["far_field"];
     EXPECT_NE(rt["far_field"].get<std::string>().find("100% of rows complete"), std::string::npos) << rt["far_field"];
-    EXPECT_EQ(read_ffm(dir / "A.ffm").meta.settings.find("far_field"), std::string::npos);
-    EXPECT_NE(read_ffm(dir / "O.ffm").meta.settings.find("far_field=off"), std::string::npos);
+    EXPECT_EQ(read_ffm(dir / "a.ffm").meta.settings.find("far_field"), std::string::npos);
+    EXPECT_NE(read_ffm(dir / "o.ffm").meta.settings.find("far_field=off"), std::string::npos);
 
     // Every entry analytic: near pairs exact, far ones within their rules' bounds (≤ 7e-6 relative
     // at 3 sizes, falling as (h/d)⁶), so the object value is within ~1e-6 of C-14 even at N = 64
