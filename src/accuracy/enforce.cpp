@@ -17,6 +17,22 @@ EnforceMode parse_enforce_mode(const std::string& name) {
     throw InputError(fmt::format("--enforce {}: must be reciprocity, closure or both", name));
 }
 
+void require_closed_scene(std::string_view what, const ClosureEvidence& evidence, const CsrMatrix& F) {
+    if (evidence.hemicube_miss_weight > 0)
+        throw InputError(fmt::format(
+            "--enforce {}: hemicube pixels saw nothing (ΔF {:.3g} summed over hemicubes): the scene is open (light "
+            "escapes), and closure would hide that",
+            what, evidence.hemicube_miss_weight));
+    if (!std::isnan(evidence.inner_row_sum_min)) {
+        if (evidence.inner_row_sum_min < 1.0 - 1e-3)
+            throw InputError(fmt::format("--enforce {}: a row sums to {:.6g} < 1 - 0.001 before correction: the scene "
+                                         "is open (light escapes), and closure would hide that",
+                                         what, evidence.inner_row_sum_min));
+        return;
+    }
+    require_closed(F, 1e-3);
+}
+
 double EnforcedMatrix::at(std::uint32_t i, std::uint32_t j) const {
     const auto b = col.begin() + static_cast<long>(row_ptr[i]), e = col.begin() + static_cast<long>(row_ptr[i + 1]);
     const auto it = std::lower_bound(b, e, j);

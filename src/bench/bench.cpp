@@ -8,13 +8,12 @@
 #include <numbers>
 #include <nlohmann/json.hpp>
 
-#include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/checks.hpp"
-#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/hemicube/layout.hpp"
 #include "ffcube/io/atomic_file.hpp"
-#include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/pipeline/row_source.hpp"
 
 namespace ffcube {
 
@@ -71,9 +70,7 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     if (options.suite != "all" && std::find(groups.begin(), groups.end(), options.suite) == groups.end())
         throw InputError(fmt::format("--suite {}: unknown suite (all, basic, enclosure, proximity, extreme, occlusion)",
                                      options.suite));
-    for (int r : options.resolutions)
-        if (r < 8 || r > 8192 || r % 2 != 0)
-            throw InputError(fmt::format("--resolutions {}: each must be an even number of pixels from 8 to 8192", r));
+    for (int r : options.resolutions) check_row_resolution(r, "--resolutions");
     for (std::uint64_t r : options.rays)
         if (r == 0) throw InputError("--rays 0: each ray count must be at least 1");
 
@@ -101,43 +98,46 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
         r.errors = measure_errors(F, scenes[k], *selected[k]);
         if (progress) progress(++done, total, r);
     };
+    // Every run gets its rows from the one factory the command line uses (pipeline/row_source.hpp),
+    // so "hemicube+near" is exactly `ffcube formfactors --correct near` at the same settings.
+    RowOptions base;
+    base.threads = options.threads;
+    base.backend = options.backend;
+    base.seed = options.seed;
+    base.near_k = options.near_k;
+    auto run = [&](std::size_t k, const RowOptions& ro) {
+        RowSource rows = make_row_source(scenes[k], ro);
+        Stopwatch watch;
+        CsrMatrix F = compute_all_rows(rows.provider());
+        return std::pair{std::move(F), watch.seconds()};
+    };
     // Hemicubes first (see the header: worker processes need a single-threaded process).
     for (std::size_t k = 0; k < selected.size(); ++k)
         for (std::size_t s = 0; s < options.resolutions.size(); ++s) {
-            HemicubeOptions h;
-            h.resolution = options.resolutions[s];
-            h.threads = options.threads;
-            h.backend = options.backend;
-            h.seed = options.seed;
-            HemicubeRowProvider provider(scenes[k], h);
-            Stopwatch watch;
-            const CsrMatrix F = compute_all_rows(provider);
-            const double seconds = watch.seconds();
-            record(k, s, "hemicube", fmt::format("N={}", h.resolution), h.resolution, F, seconds);
+            RowOptions ro = base;
+            ro.method = RowMethod::Hemicube;
+            ro.resolution = options.resolutions[s];
+            ro.correct = Correction::None;
+            const auto [F, seconds] = run(k, ro);
+            record(k, s, "hemicube", fmt::format("N={}", ro.resolution), ro.resolution, F, seconds);
             if (!options.corrected) continue;
-            // The default `--correct near` as the command line runs it: the correction wraps a
-            // fresh provider, so rows it flags are measured by sub-hemicubes, and the time is the
-            // whole run's (rendering, sub-hemicubes, correction).
-            HemicubeRowProvider inner(scenes[k], h);
-            const NearFieldOptions nf = near_field_options_for_hemicube(h.resolution, options.near_k);
-            CorrectedRowProvider corrected(scenes[k], inner, nf);
-            Stopwatch corrected_watch;
-            const CsrMatrix C = compute_all_rows(corrected);
-            record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", h.resolution), h.resolution, C,
-                   corrected_watch.seconds());
+            // The default `--correct near` as the command line runs it: a fresh source, so rows the
+            // correction flags are measured by sub-hemicubes, and the time is the whole run's
+            // (rendering, sub-hemicubes, correction).
+            ro.correct = Correction::Near;
+            const auto [C, corrected_seconds] = run(k, ro);
+            record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", ro.resolution), ro.resolution, C,
+                   corrected_seconds);
         }
     for (std::size_t k = 0; k < selected.size(); ++k)
         for (std::size_t s = 0; s < options.rays.size(); ++s) {
-            RaycastOptions ro;
+            RowOptions ro = base;
+            ro.method = RowMethod::Raycast;
             ro.rays = options.rays[s];
-            ro.threads = options.threads;
-            ro.seed = options.seed;
-            RaycastRowProvider provider(scenes[k], ro);
-            Stopwatch watch;
-            const CsrMatrix F = compute_all_rows(provider);
-            const double seconds = watch.seconds();
-            record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays),
-                   static_cast<double>(ro.rays), F, seconds);
+            ro.correct = Correction::None;
+            const auto [F, seconds] = run(k, ro);
+            record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays), static_cast<double>(ro.rays), F,
+                   seconds);
         }
     return results;
 }

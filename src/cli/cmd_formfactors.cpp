@@ -12,54 +12,56 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/mtx.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
 
 namespace ffcube::cli {
 namespace {
 
 struct Options {
-    SceneOptions scene;
-    FormFactorOptions ff;
+    SceneFlags scene;
+    RowOptions rows;
     std::string output, groups, report;
     CheckpointOptions checkpoint;
 };
 
-bool ends_with(const std::string& s, std::string_view suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
-
-
 int run(const Options& o) {
-    const bool ffm = ends_with(o.output, ".ffm"), mtx = ends_with(o.output, ".mtx");
+    const bool ffm = o.output.ends_with(".ffm"), mtx = o.output.ends_with(".mtx");
     if (!o.output.empty() && !ffm && !mtx)
         throw InputError(fmt::format("--output {}: the name must end in .ffm (ffcube's format) or .mtx (Matrix Market)", o.output));
     check_output_path("--output", o.output);
     check_output_path("--groups", o.groups);
     check_output_path("--report", o.report);
-    hemicube_options(o.ff);  // validates before any work
+    validate(o.rows);  // before any work
 
     Report report;
     report.set("command", "formfactors");
-    Scene scene = load_and_mesh(o.scene, report);
-    const FfmMetadata meta = row_metadata(o.ff);
+    Scene scene = load_and_mesh(o.scene.scene, report);
+    const FfmMetadata meta = row_metadata(o.rows);
     std::optional<RowCheckpoint> checkpoint = open_checkpoint(o.checkpoint, scene, meta, report);
 
     Stopwatch total;
-    RowSource rows = make_row_source(scene, o.ff, report);
+    RowSource rows = make_row_source(scene, o.rows);
+    for (const std::string& line : describe(rows)) info("{}", line);
     RowProvider& provider = rows.provider();
 
     Stopwatch watch;
     watch.restart();
     CsrMatrix computed = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
     const double seconds = watch.seconds();
-    const CsrMatrix F = apply_enforcement(o.ff, std::move(computed), scene, rows, report);
+    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
     report.set("seconds", seconds);
-    report.set(rows.raycast ? "rows_per_second" : "hemicubes_per_second", static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
+    report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
+               static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
     report.set("nnz", F.nnz());
-    report.set("skipped_rows", 0);
     report_row_source(report, rows);
 
     const RowSumStats rs = row_sum_stats(F);
-    const ReciprocityStats rec = reciprocity_stats(F, scene);
+    ReciprocityStats rec;
+    {
+        Progress progress("reciprocity", F.size(), !o.scene.quiet);
+        rec = reciprocity_stats(F, scene, &progress);
+    }
     report.set("row_sums.min", rs.min);
     report.set("row_sums.max", rs.max);
     report.set("row_sums.mean", rs.mean);
@@ -74,10 +76,12 @@ int run(const Options& o) {
         // The written matrix records its enforcement too (the checkpoint's rows are from before
         // it, so `meta` without it is what resuming compares).
         FfmMetadata written = meta;
-        if (!o.ff.enforce.empty()) written.settings += " enforce=" + o.ff.enforce;
-        write_ffm(o.output, F, scene, written);
+        if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
+        Progress progress(fmt::format("writing {} (bytes)", o.output), ffm_payload_bytes(F), !o.scene.quiet);
+        write_ffm(o.output, F, scene, written, &progress);
     } else if (mtx) {
-        write_mtx(o.output, F);
+        Progress progress(fmt::format("writing {} (rows)", o.output), F.size(), !o.scene.quiet);
+        write_mtx(o.output, F, &progress);
     }
     if (!o.groups.empty()) write_groups_csv(o.groups, object_form_factors(F, scene), scene.objects);
     report.set("time.writing", watch.seconds());
@@ -92,8 +96,8 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand("formfactors", "compute the form-factor matrix of a scene (hemicubes, or rays with --method raycast)");
     add_scene_options(*sub, opts->scene);
-    add_formfactor_options(*sub, opts->ff);
-    add_enforce_option(*sub, opts->ff);
+    add_row_options(*sub, opts->rows);
+    add_enforce_option(*sub, opts->rows);
     sub->add_option("-o,--output", opts->output, "write F to F.ffm (ffcube's binary format) or F.mtx (Matrix Market)");
     sub->add_option("--groups", opts->groups, "write object-to-object form factors as CSV (from,to,F)");
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");

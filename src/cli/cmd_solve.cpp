@@ -16,6 +16,8 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/ply.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/render/renderer.hpp"
 #include "ffcube/solver/solver.hpp"
 
@@ -28,8 +30,8 @@ namespace {
 constexpr std::uint32_t kShotBatch = 16;
 
 struct Options {
-    SceneOptions scene;
-    FormFactorOptions ff;
+    SceneFlags scene;
+    RowOptions rows;
     std::string solver = "shoot";
     double tolerance = 1e-4;
     std::uint64_t max_iterations = 0;
@@ -41,10 +43,6 @@ struct Options {
     double exposure = 0.0;  // 0: automatic
     CLI::Option* exposure_option = nullptr;
 };
-
-bool ends_with(const std::string& s, std::string_view suffix) {
-    return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
-}
 
 void report_vec3(Report& r, std::string_view key, const Vec3& v) {
     const std::array<double, 3> a{v.r, v.g, v.b};
@@ -113,10 +111,10 @@ int run(const Options& o) {
     so.row_cache_mb = o.row_cache_mb;
     so.batch = kShotBatch;
     validate(so);
-    const bool exr = ends_with(o.render, ".exr"), png = ends_with(o.render, ".png");
+    const bool exr = o.render.ends_with(".exr"), png = o.render.ends_with(".png");
     if (!o.render.empty() && !exr && !png)
         throw InputError(fmt::format("--render {}: the name must end in .exr (linear float) or .png (tone-mapped)", o.render));
-    if (!ends_with(o.mesh, ".ply") && !o.mesh.empty())
+    if (!o.mesh.ends_with(".ply") && !o.mesh.empty())
         throw InputError(fmt::format("--mesh {}: the name must end in .ply", o.mesh));
     if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
         throw InputError(fmt::format("--width {} --height {}: each must be 1..16384 pixels", o.width, o.height));
@@ -125,14 +123,14 @@ int run(const Options& o) {
     for (const auto& [option, path] : {std::pair{"--objects", &o.objects}, {"--radiosity", &o.radiosity},
                                        {"--report", &o.report}, {"--render", &o.render}, {"--mesh", &o.mesh}})
         check_output_path(option, *path);
-    const HemicubeOptions hopt = hemicube_options(o.ff);
+    validate(o.rows);
     std::optional<Camera> camera;
     if (!o.camera.empty()) camera = parse_camera(o.camera);
 
     Stopwatch total;
     Report report;
     report.set("command", "solve");
-    const Scene scene = load_and_mesh(o.scene, report);
+    const Scene scene = load_and_mesh(o.scene.scene, report);
 
     // Rows: from the file, or hemicubes. The hemicube provider starts before this process makes a
     // GL context of its own (the picture's), so that its workers can be forked processes.
@@ -151,7 +149,8 @@ int run(const Options& o) {
         report.set("time.reading_matrix", watch.seconds());
         info("rows from {} ({} non-zeros, {} {})", o.matrix, ffm->matrix.nnz(), ffm->meta.method, ffm->meta.settings);
     } else {
-        computed_rows = make_row_source(scene, o.ff, report);
+        computed_rows = make_row_source(scene, o.rows);
+        for (const std::string& line : describe(computed_rows)) info("{}", line);
         provider = &computed_rows.provider();
         report.set("rows", provider->name());
     }
@@ -203,7 +202,7 @@ int run(const Options& o) {
         rs.flat = o.flat;
         rs.camera = camera ? *camera : default_camera(scene);
         rs.back_face_value = Vec3(0.02 / exposure);  // shows as a dark grey (2% linear) in the PNG
-        const std::unique_ptr<GlContext> ctx = create_headless_context(hopt.backend);
+        const std::unique_ptr<GlContext> ctx = create_headless_context(o.rows.backend);
         image = render_mesh(*ctx, shade_patches(scene, radiance, shading), rs);
         report.set("render.path", o.render);
         report.set("render.width", rs.width);
@@ -271,7 +270,7 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand("solve", "solve the radiosity of a scene; write CSV, report, picture, mesh");
     add_scene_options(*sub, opts->scene);
-    add_formfactor_options(*sub, opts->ff);
+    add_row_options(*sub, opts->rows);
     sub->add_option("--solver", opts->solver, "shoot (progressive refinement), jacobi, gauss-seidel or direct")
         ->check(CLI::IsMember({"shoot", "jacobi", "gauss-seidel", "direct"}))
         ->default_val("shoot");

@@ -10,14 +10,16 @@
 #include "cli/common.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/viewer/viewer.hpp"
 
 namespace ffcube::cli {
 namespace {
 
 struct Options {
-    SceneOptions scene;
-    FormFactorOptions ff;
+    SceneFlags scene;
+    RowOptions rows;
     SolverOptions solver;
     ViewerOptions viewer;
     std::string size = "1280x800", pick;
@@ -49,17 +51,17 @@ int run(Options& o) {
     validate(o.viewer);
     check_output_path("--screenshot", o.viewer.screenshot);
     check_output_path("--exr", o.viewer.exr);
-    const HemicubeOptions hopt = hemicube_options(o.ff);
+    validate(o.rows);
 
     Report report;
-    const Scene scene = load_and_mesh(o.scene, report);
+    const Scene scene = load_and_mesh(o.scene.scene, report);
     // Before the window: with no GL context in this process yet, the provider can fork its
     // workers (each with its own headless context) instead of sharing one process's llvmpipe.
-    HemicubeRowProvider provider(scene, hopt);
-    info("{} on {} ({}), {} {}, resolution {}", provider.name(), provider.backend(), provider.renderer(),
-         provider.threads(), provider.workers(), provider.resolution());
-    if (!o.batch) o.solver.batch = provider.threads();
-    run_viewer(scene, provider, o.solver, o.viewer);
+    RowSource rows = make_row_source(scene, o.rows);
+    for (const std::string& line : describe(rows)) info("{}", line);
+    if (!o.batch)
+        o.solver.batch = rows.hemicube() ? rows.hemicube()->threads() : rows.raycast()->threads();
+    run_viewer(scene, rows.provider(), rows.hemicube(), o.solver, o.viewer);
     return 0;
 }
 
@@ -69,7 +71,7 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand("view", "watch progressive radiosity converge in a window (docs/viewer.md)");
     add_scene_options(*sub, opts->scene);
-    add_formfactor_options(*sub, opts->ff);
+    add_row_options(*sub, opts->rows);
     auto& s = opts->solver;
     sub->add_option("--tolerance", s.tolerance, "stop shooting when unshot power <= tolerance x emitted power")
         ->default_val(s.tolerance);

@@ -44,7 +44,7 @@ std::vector<std::vector<double>> object_form_factors(const CsrMatrix& F, const S
     return G;
 }
 
-ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene) {
+ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene, Progress* progress) {
     ReciprocityStats s;
     const std::uint32_t n = F.rows_filled();
     if (n != F.size()) return s;  // needs every row
@@ -65,6 +65,7 @@ ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene) {
             const double aj = scene.patches[j].area;
             s.patch_max_abs = std::max(s.patch_max_abs, std::abs(ai * r.val[k] - aj * fji) / (0.5 * (ai + aj)));
         }
+        if (progress) progress->add();
     }
     const auto G = object_form_factors(F, scene);
     std::vector<double> area(scene.objects.size(), 0.0);

@@ -58,6 +58,12 @@ Interval folded(double e0, double e1) { return e1 <= 0.0 ? Interval{-e1, -e0} : 
 
 }  // namespace
 
+void check_row_resolution(int resolution, std::string_view what) {
+    if (resolution < kMinRowResolution || resolution > kMaxRowResolution || resolution % 2 != 0)
+        throw InputError(fmt::format("{} {}: must be an even number of pixels from {} to {}", what, resolution,
+                                     kMinRowResolution, kMaxRowResolution));
+}
+
 HemicubeLayout::HemicubeLayout(int resolution) : n_(resolution) {
     if (resolution < 2 || resolution > 16384 || resolution % 2 != 0)
         throw InputError(fmt::format(

@@ -105,10 +105,20 @@ std::uint32_t checked_u32(std::size_t v, const char* what) {
 // Writes bytes to the stream and into the checksum.
 class HashingWriter {
 public:
-    explicit HashingWriter(std::ostream& out) : out_(out) {}
+    HashingWriter(std::ostream& out, Progress* progress) : out_(out), progress_(progress) {}
+    // In pieces of 64 MiB, so that progress moves while a matrix of many gigabytes is written
+    // (the checksum depends only on the byte sequence, not on how it is split).
     void bytes(const void* data, std::size_t size) {
-        out_.write(static_cast<const char*>(data), static_cast<std::streamsize>(size));
-        sum_.update(data, size);
+        constexpr std::size_t kPiece = std::size_t(64) << 20;
+        const char* p = static_cast<const char*>(data);
+        while (size > 0) {
+            const std::size_t k = std::min(size, kPiece);
+            out_.write(p, static_cast<std::streamsize>(k));
+            sum_.update(p, k);
+            if (progress_) progress_->add(k);
+            p += k;
+            size -= k;
+        }
     }
     template <typename T>
     void array(const std::vector<T>& v) {
@@ -125,6 +135,7 @@ public:
 
 private:
     std::ostream& out_;
+    Progress* progress_;
     Checksum64 sum_;
 };
 
@@ -168,7 +179,13 @@ void write_string(HashingWriter& w, std::string_view s) { w.bytes(s.data(), s.si
 
 }  // namespace
 
-void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta) {
+std::uint64_t ffm_payload_bytes(const CsrMatrix& F) {
+    const std::uint64_t n = F.size();
+    return 8 * n + 8 * (n + 1) + pad8(4 * n) + 2 * pad8(4 * F.nnz());
+}
+
+void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta,
+               Progress* progress) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_ffm needs every row of the matrix");
     FFCUBE_CHECK_MSG(scene.size() == n, "write_ffm: matrix and scene differ in patch count");
@@ -201,7 +218,7 @@ void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scen
     h.names_len = checked_u32(names_len, "object name block size");
 
     write_file_atomically(path, [&](std::ostream& out) {
-        HashingWriter w(out);
+        HashingWriter w(out, progress);
         const auto header = encode(h);
         w.bytes(header.data(), header.size());
         write_string(w, meta.method);

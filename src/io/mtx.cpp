@@ -7,7 +7,7 @@
 
 namespace ffcube {
 
-void write_mtx(const std::filesystem::path& path, const CsrMatrix& F) {
+void write_mtx(const std::filesystem::path& path, const CsrMatrix& F, Progress* progress) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_mtx needs every row of the matrix");
     write_file_atomically(path, [&](std::ostream& out) {
@@ -29,6 +29,7 @@ void write_mtx(const std::filesystem::path& path, const CsrMatrix& F) {
                 out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
                 buf.clear();
             }
+            if (progress) progress->add();
         }
         out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
     });

@@ -5,6 +5,8 @@
 // and record the piece as a Scene::grids entry (renderers draw pieces whole).
 #include "ffcube/scene/mesher.hpp"
 
+#include <unistd.h>
+
 #include <fmt/format.h>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -433,6 +435,13 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
     scene.stats.warnings = std::move(d.warnings);
     scene.fingerprint = fingerprint(scene);
     return scene;
+}
+
+std::size_t patch_limit_for_physical_memory(std::size_t limit) {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    if (pages <= 0 || page <= 0) return limit;
+    const double bytes = static_cast<double>(pages) * static_cast<double>(page);
+    return std::min(limit, static_cast<std::size_t>(bytes / static_cast<double>(sizeof(Patch) + sizeof(Vec3))));
 }
 
 }  // namespace ffcube

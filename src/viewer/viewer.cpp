@@ -126,11 +126,13 @@ std::string next_file_name(const char* extension) {
 
 class Viewer {
 public:
-    Viewer(const Scene& scene, HemicubeRowProvider& provider, const SolverOptions& solver_options, const ViewerOptions& o)
+    Viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
+           const ViewerOptions& o)
         : scene_(scene),
-          provider_(provider),
+          provider_(rows),
+          hemicube_(hemicube),
           options_(o),
-          solver_(scene, provider, solver_options),
+          solver_(scene, rows, solver_options),
           window_(o.width, o.height, scene.source.empty() ? "ffcube view" : "ffcube view: " + scene.source),
           imgui_(window_.window()),
           mesh_(build_display_mesh(scene)),
@@ -315,10 +317,12 @@ private:
         const std::uint32_t rows[1] = {patch};
         provider_.compute_rows(rows, [&](std::uint32_t, const SparseRow& row) { in->row = row; });
         in->heat = row_heat_map(scene_, patch, in->row);
-        in->image.upload(window_.api(), provider_.item_buffer(patch), provider_.resolution());
+        // The picture is the plain hemicube's item buffer (what the row was measured from); the
+        // numbers are the row as the solver gets it (corrected when the correction is on).
+        if (hemicube_) in->image.upload(window_.api(), hemicube_->item_buffer(patch), hemicube_->resolution());
         inspected_ = std::move(in);
         row_mode_ = true;
-        info("picked patch {} ({}): {} form factors, row sum {:.4f}", patch, scene_.objects[scene_.patches[patch].object],
+        info("picked patch {} ({}): {} form factors, row sum {:.9g}", patch, scene_.objects[scene_.patches[patch].object],
              inspected_->row.nnz(), inspected_->row.sum());
     }
 
@@ -346,7 +350,10 @@ private:
         ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
         ImGui::Begin("ffcube view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
         ImGui::PushItemWidth(200);
-        ImGui::Text("%zu patches, hemicube %d px, %s", scene_.size(), provider_.resolution(), provider_.backend().c_str());
+        if (hemicube_)
+            ImGui::Text("%zu patches, hemicube %d px, %s", scene_.size(), hemicube_->resolution(), hemicube_->backend().c_str());
+        else
+            ImGui::Text("%zu patches, rows by %s", scene_.size(), provider_.name().c_str());
         ImGui::Text("shots %llu   unshot %.3e", static_cast<unsigned long long>(solver_.shots()), solver_.unshot_fraction());
         ImGui::Text("%.0f shots/s   %s", shots_per_second(),
                     solver_.status() == StopReason::Running ? (paused_ ? "paused" : "running")
@@ -394,11 +401,13 @@ private:
         ImGui::Text("row: %zu form factors, sum %.5f", in.row.nnz(), in.row.sum());
         ImGui::Checkbox("row heat map (F_ij / A_j, log, 3 decades)", &row_mode_);
         const float w = 300.0f;
-        // The atlas's row 0 is at the bottom: flip v.
-        ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(in.image.texture.id())),
-                     ImVec2(w, w * static_cast<float>(in.image.height) / static_cast<float>(in.image.width)), ImVec2(0, 1),
-                     ImVec2(1, 0));
-        ImGui::TextDisabled("hemicube item buffer: five faces, one colour per patch");
+        if (hemicube_) {
+            // The atlas's row 0 is at the bottom: flip v.
+            ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(in.image.texture.id())),
+                         ImVec2(w, w * static_cast<float>(in.image.height) / static_cast<float>(in.image.width)),
+                         ImVec2(0, 1), ImVec2(1, 0));
+            ImGui::TextDisabled("hemicube item buffer: five faces, one colour per patch");
+        }
         // Closed after this frame is drawn: its draw list still refers to the hemicube texture.
         if (ImGui::Button("close (Esc)")) close_inspector_ = true;
         ImGui::End();
@@ -412,7 +421,8 @@ private:
     };
 
     const Scene& scene_;
-    HemicubeRowProvider& provider_;
+    RowProvider& provider_;
+    HemicubeRowProvider* hemicube_;  // null when rows are not hemicubes (no item-buffer picture)
     ViewerOptions options_;
     ProgressiveSolver solver_;
     // GL objects below the window: destroyed first, while its context still exists.
@@ -451,10 +461,10 @@ void validate(const ViewerOptions& o) {
         throw InputError(fmt::format("--pick {},{}: must lie inside the {}x{} window", o.pick->first, o.pick->second, o.width, o.height));
 }
 
-void run_viewer(const Scene& scene, HemicubeRowProvider& provider, const SolverOptions& solver_options,
+void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
                 const ViewerOptions& options) {
     validate(options);
-    Viewer viewer(scene, provider, solver_options, options);
+    Viewer viewer(scene, rows, hemicube, solver_options, options);
     viewer.run();
 }
 

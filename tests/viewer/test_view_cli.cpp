@@ -16,6 +16,7 @@
 #include "cli/cli_util.hpp"
 #include <glm/geometric.hpp>
 
+#include "ffcube/io/ffm.hpp"
 #include "ffcube/viewer/display.hpp"
 
 namespace ffcube {
@@ -102,6 +103,44 @@ TEST(ViewCli, MoreShotsBrightenTheImage) {
     ASSERT_EQ(view(common + "--frames 40 --screenshot " + dir / "many.png").code, 0);
     const double few = load_png(dir / "few.png").mean(), many = load_png(dir / "many.png").mean();
     EXPECT_GT(many, few + 1.0) << "few " << few << " many " << many;
+}
+
+// The viewer gets its rows from the same factory as `ffcube formfactors` (and `solve`), with
+// every row option honoured: the row of a picked patch is the formfactors row, entry count and
+// sum alike. Options that change rows (--correct near with the far field on, --near-k, no
+// rotation) are given to both, so a viewer that dropped one would show a different row.
+TEST(ViewCli, PickedRowIsTheFormFactorsRow) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    const std::string rows = "--patches 300 --resolution 64 --correct near --far-field on --near-k 2.5 --no-rotate ";
+    const RunResult ff = test::run_ffcube("formfactors -q " + rows + "-o " + dir / "F.ffm");
+    ASSERT_EQ(ff.code, 0) << ff.output;
+    const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(FFCUBE_BINARY) + " view " + rows +
+                            "--size 320x240 --hide-ui --frames 2 --pick 170,100 2>&1";
+    RunResult v;
+    FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    char buf[4096];
+    std::size_t n;
+    while ((n = std::fread(buf, 1, sizeof buf, p)) > 0) v.output.append(buf, n);
+    ASSERT_EQ(pclose(p), 0) << v.output;
+    const auto at = v.output.find("picked patch ");
+    ASSERT_NE(at, std::string::npos) << v.output;
+    unsigned patch = 0;
+    std::size_t count = 0;
+    double sum = -1;
+    const std::string line = v.output.substr(at, v.output.find('\n', at) - at);
+    ASSERT_EQ(std::sscanf(line.c_str(), "picked patch %u", &patch), 1) << line;
+    const auto colon = line.find("): ");
+    ASSERT_NE(colon, std::string::npos) << line;
+    ASSERT_EQ(std::sscanf(line.c_str() + colon, "): %zu form factors, row sum %lf", &count, &sum), 2) << line;
+    const FfmFile F = read_ffm(dir / "F.ffm");
+    ASSERT_LT(patch, F.matrix.size());
+    const RowView row = F.matrix.row(patch);
+    EXPECT_EQ(count, row.col.size()) << line;
+    // The same floats summed in the same order (SparseRow::sum and RowView::sum both sum in
+    // double in column order); printed with 9 significant digits.
+    EXPECT_NEAR(sum, row.sum(), 1e-8 * std::max(1.0, row.sum())) << line;
 }
 
 TEST(ViewCli, ScriptedPickShowsTheRowAsAHeatMap) {

@@ -13,8 +13,10 @@
 #pragma once
 
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ffcube/formfactor/sparse.hpp"
@@ -51,6 +53,21 @@ struct EnforceStats {
 // Throws InputError when some row sums below 1 − tolerance (row, its sum and the rule named):
 // the scene is open (or a row missed part of its view) and closure would hide escaping light.
 void require_closed(const CsrMatrix& F, double tolerance);
+
+// The closure-refusal policy of `--enforce closure|both`, judged on the evidence of the provider
+// that measured the rows (a correction may have rebalanced rows to 1, hiding an open scene):
+//  * hemicube_miss_weight: Σ ΔF of hemicube pixels that saw nothing (NaN: not a hemicube). Any
+//    positive value means light escapes.
+//  * inner_row_sum_min: the smallest row sum before the near-field correction (NaN: no
+//    correction). Below 1 − 1e-3 is open; ray-cast rows of a closed scene sum to 1 up to rays lost
+//    at cracks, and 1e-3 tolerates few.
+//  * otherwise F itself is judged by require_closed(F, 1e-3).
+// Throws InputError naming `what` (the option as given) and the evidence.
+struct ClosureEvidence {
+    double hemicube_miss_weight = std::numeric_limits<double>::quiet_NaN();
+    double inner_row_sum_min = std::numeric_limits<double>::quiet_NaN();
+};
+void require_closed_scene(std::string_view what, const ClosureEvidence& evidence, const CsrMatrix& F);
 
 // areas.size() == F.size(), every area > 0 (InputError otherwise). Closure also throws
 // InputError for a row with no entries (nothing to scale) and when 100000 iterations do not

@@ -30,6 +30,8 @@
 // rasterises. All 3N² atlas pixels belong to a face.
 #pragma once
 
+#include <string_view>
+
 #include "ffcube/geometry/polygon.hpp"
 
 #include <array>
@@ -66,6 +68,13 @@ struct AtlasPixel {
     HemicubeFace face;
     int x, y;
 };
+
+// The one rule for the resolution a hemicube row is rendered at (command line, bench, viewer,
+// Python, the GL provider): an even number of pixels from 8 to 8192. Throws InputError
+// "<what> <N>: must be an even number of pixels from 8 to 8192". The layout below accepts a wider
+// range ([2, 16384]) because its ΔF table is exact for any even N; rendering is what sets 8..8192.
+constexpr int kMinRowResolution = 8, kMaxRowResolution = 8192;
+void check_row_resolution(int resolution, std::string_view what = "--resolution");
 
 class HemicubeLayout {
 public:

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/core/progress.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -46,7 +47,10 @@ struct FfmFile {
 // Writes F (every row filled, F.size() == scene.size()) with the scene's patch areas, objects,
 // object names, fingerprint and meshing, atomically (see atomic_file.hpp). Throws IoError when
 // the file cannot be written.
-void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta);
+// progress, when given, is advanced by the bytes written (about ffm_payload_bytes(F) in all).
+void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta,
+               Progress* progress = nullptr);
+std::uint64_t ffm_payload_bytes(const CsrMatrix& F);
 
 // Reads and validates a .ffm file. Nothing in it is trusted before it is checked: magic, version,
 // the file size implied by the header (checked before anything is allocated), the checksum, then

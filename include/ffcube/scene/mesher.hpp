@@ -23,4 +23,11 @@ std::size_t count_patches(const ObjModel& model, double max_patch_edge);
 
 Scene build_scene(const ObjModel& model, const MeshOptions& options);
 
+// The memory policy of meshing: `limit` lowered to what this machine's physical memory can hold
+// at the mesher's own estimate of bytes per patch (a Patch and about one vertex), so that a
+// too-small --max-patch-edge is refused with the estimate instead of ending in the out-of-memory
+// killer. The form-factor rows need more (docs/robustness.md), but that depends on the resolution
+// and is not known before meshing.
+std::size_t patch_limit_for_physical_memory(std::size_t limit);
+
 }  // namespace ffcube

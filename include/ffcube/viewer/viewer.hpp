@@ -37,13 +37,16 @@ struct ViewerOptions {
 void validate(const ViewerOptions& options);
 
 // Opens the window (an OpenGL 4.5 core context through GLFW) and runs until it is closed, or for
-// options.frames frames. The provider should have been created before (so that its workers could
-// be forked while this process had no GL context); the solver steps on it from this thread.
+// options.frames frames. The rows come from `rows` (pipeline/row_source.hpp's provider, so the
+// viewer gets the same rows as `ffcube solve` for the same options); `hemicube`, when not null, is
+// the measuring provider, whose item buffer the patch inspector shows. Both should have been
+// created before (so that hemicube workers could be forked while this process had no GL context);
+// the solver steps on them from this thread.
 // Exposure by default: 2^exposure × ρ̄ × ambient₀ = 0.5, ambient₀ being Cohen's ambient radiosity
 // before any shot (the emitted power spread over the scene and all its bounces: the average
 // radiosity to expect). Throws GlError when no window can be opened, InputError for bad options,
 // IoError when a file cannot be written.
-void run_viewer(const Scene& scene, HemicubeRowProvider& provider, const SolverOptions& solver_options,
+void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
                 const ViewerOptions& options);
 
 }  // namespace ffcube

@@ -1,0 +1,75 @@
+// The options that say how a scene is loaded and how its rows are made, parsed once into enums
+// and numbers. Every front end fills one of these (the command line from its flags, the bench
+// from its settings, the Python module from keyword arguments) and hands it to the one factory in
+// pipeline/row_source.hpp, so the same options give the same rows everywhere.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "ffcube/accuracy/enforce.hpp"
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/gl/context.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+
+namespace ffcube {
+
+// Where the scene comes from and how it is meshed.
+struct SceneOptions {
+    std::string path;            // empty: the built-in Cornell box
+    double max_patch_edge = 0;   // > 0: split faces so that no patch edge exceeds it
+    std::size_t patches = 0;     // > 0: mesh to about this many patches (default of the mesher otherwise)
+};
+
+enum class RowMethod { Hemicube, Raycast };
+enum class Correction { None, Near };
+using FarFieldMode = NearFieldOptions::FarField;
+// --enforce: both = closure (which implies reciprocity); kept apart for the record.
+enum class EnforceRequest { None, Reciprocity, Closure, Both };
+
+struct RowOptions {
+    RowMethod method = RowMethod::Hemicube;
+    // Hemicube (gl/hemicube_provider.hpp): top-face pixels (hemicube/layout.hpp's rule), context.
+    int resolution = 256;
+    Backend backend = Backend::Auto;
+    bool rotate = true;
+    // Both methods: worker threads (0: every core) and the seed of angles or rays.
+    unsigned threads = 0;
+    std::uint64_t seed = 0x5eed;
+    // Ray caster: rays per patch (≥ 1).
+    std::uint64_t rays = 4096;
+    // The near-field correction (accuracy/near_field.hpp) and its far field.
+    Correction correct = Correction::Near;
+    double near_k = 3.0;
+    FarFieldMode far_field = FarFieldMode::automatic;
+    // On the finished matrix (formfactors only).
+    EnforceRequest enforce = EnforceRequest::None;
+};
+
+// Parsers of the command line's words; each throws InputError naming the option and the words
+// it accepts.
+RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
+Correction parse_correction(std::string_view text);       // none | near
+FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
+EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
+std::string_view to_string(RowMethod m);
+std::string_view to_string(Correction c);
+std::string_view to_string(FarFieldMode f);
+std::string_view to_string(EnforceRequest e);
+
+// Refuses inconsistent or out-of-range options (InputError naming the option) before any work.
+void validate(const SceneOptions& o);
+void validate(const RowOptions& o);
+
+// The options of each layer, as these RowOptions give them.
+HemicubeOptions hemicube_options(const RowOptions& o);
+RaycastOptions raycast_options(const RowOptions& o);
+// Only meaningful with correct == Near.
+NearFieldOptions near_field_options(const RowOptions& o);
+// Only meaningful with enforce != None.
+EnforceMode enforce_mode(EnforceRequest e);
+
+}  // namespace ffcube

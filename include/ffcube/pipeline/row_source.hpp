@@ -1,0 +1,79 @@
+// The one composition root of the row pipeline: from a scene and RowOptions to the RowProvider
+// every front end uses (command line, bench, viewer, Python), and the figures it reports.
+//
+//   request ─► CorrectedRowProvider (--correct near: plans each row, asks the inner provider
+//              for the rows that need a measurement, corrects them) ─► HemicubeRowProvider
+//              (hemicubes on GL workers) or RaycastRowProvider (rays through Embree) ─► sink
+//
+// docs/architecture.md follows one row along that path.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/io/ffm.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/options.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+// Where rows come from: hemicubes on a GL context, or rays through Embree, wrapped by the
+// near-field correction when it is on. Movable; the scene must outlive it.
+class RowSource {
+public:
+    RowSource() = default;
+    RowSource(RowSource&&) noexcept = default;
+    RowSource& operator=(RowSource&&) noexcept = default;
+    ~RowSource();
+
+    // What the rows are asked of: the correction when on, else the measuring provider.
+    RowProvider& provider();
+    const RowOptions& options() const { return options_; }
+    // The parts; null where the options did not ask for them.
+    HemicubeRowProvider* hemicube() const { return hemicube_.get(); }
+    RaycastRowProvider* raycast() const { return raycast_.get(); }
+    CorrectedRowProvider* corrected() const { return corrected_.get(); }
+    // Wall seconds spent starting it (GL contexts, worker processes, Embree, near-field setup).
+    double setup_seconds() const { return setup_seconds_; }
+
+private:
+    friend RowSource make_row_source(const Scene& scene, const RowOptions& options);
+    RowOptions options_;
+    // Order matters: the correction holds a reference to the measuring provider, so it is
+    // declared last (destroyed first).
+    std::unique_ptr<HemicubeRowProvider> hemicube_;
+    std::unique_ptr<RaycastRowProvider> raycast_;
+    std::unique_ptr<CorrectedRowProvider> corrected_;
+    double setup_seconds_ = 0;
+};
+
+// Validates the options (InputError) and starts the provider they name. Start it before this
+// process makes a GL context of its own, so that hemicube workers can be forked processes.
+RowSource make_row_source(const Scene& scene, const RowOptions& options);
+
+// One line per part, saying what it runs on ("hemicube on egl (llvmpipe), 2 threads, ...").
+std::vector<std::string> describe(const RowSource& rows);
+
+// How rows are made, as recorded in .ffm files and checkpoints (deterministic settings only:
+// not threads, not the backend). Same options, same metadata, so a resumed run refuses rows
+// made differently.
+FfmMetadata row_metadata(const RowOptions& options);
+
+// The provider's figures into the report: method and setup time; backend, renderer, resolution,
+// workers, time split and culling for hemicubes; rays for the ray caster; the correction's
+// counts and per-row error estimates.
+void report_row_source(Report& report, const RowSource& rows);
+
+// --enforce on the finished matrix, with before/after figures in the report ("enforce.*").
+// Closure is refused (InputError) for open scenes, judged on the measuring provider's evidence:
+// a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
+// when options.enforce is None.
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report);
+
+}  // namespace ffcube

@@ -1,0 +1,110 @@
+#include "ffcube/pipeline/options.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/hemicube/layout.hpp"
+
+namespace ffcube {
+
+RowMethod parse_row_method(std::string_view text) {
+    if (text == "hemicube") return RowMethod::Hemicube;
+    if (text == "raycast") return RowMethod::Raycast;
+    throw InputError(fmt::format("--method {}: must be hemicube or raycast", text));
+}
+
+Correction parse_correction(std::string_view text) {
+    if (text == "none") return Correction::None;
+    if (text == "near") return Correction::Near;
+    throw InputError(fmt::format("--correct {}: must be near or none", text));
+}
+
+FarFieldMode parse_far_field(std::string_view text) {
+    if (text == "auto") return FarFieldMode::automatic;
+    if (text == "on") return FarFieldMode::on;
+    if (text == "off") return FarFieldMode::off;
+    throw InputError(fmt::format("--far-field {}: must be auto, on or off", text));
+}
+
+EnforceRequest parse_enforce_request(std::string_view text) {
+    if (text.empty()) return EnforceRequest::None;
+    if (text == "reciprocity") return EnforceRequest::Reciprocity;
+    if (text == "closure") return EnforceRequest::Closure;
+    if (text == "both") return EnforceRequest::Both;
+    throw InputError(fmt::format("--enforce {}: must be reciprocity, closure or both", text));
+}
+
+std::string_view to_string(RowMethod m) { return m == RowMethod::Raycast ? "raycast" : "hemicube"; }
+std::string_view to_string(Correction c) { return c == Correction::Near ? "near" : "none"; }
+std::string_view to_string(FarFieldMode f) {
+    switch (f) {
+        case FarFieldMode::on: return "on";
+        case FarFieldMode::off: return "off";
+        case FarFieldMode::automatic: break;
+    }
+    return "auto";
+}
+std::string_view to_string(EnforceRequest e) {
+    switch (e) {
+        case EnforceRequest::Reciprocity: return "reciprocity";
+        case EnforceRequest::Closure: return "closure";
+        case EnforceRequest::Both: return "both";
+        case EnforceRequest::None: break;
+    }
+    return "";
+}
+
+void validate(const SceneOptions& o) {
+    if (o.max_patch_edge > 0 && o.patches > 0)
+        throw InputError("--max-patch-edge and --patches: give one of the two");
+    if (o.max_patch_edge < 0 || !std::isfinite(o.max_patch_edge))
+        throw InputError(fmt::format("--max-patch-edge {}: must be a finite length > 0", o.max_patch_edge));
+}
+
+void validate(const RowOptions& o) {
+    if (o.method == RowMethod::Hemicube) check_row_resolution(o.resolution);
+    if (o.method == RowMethod::Raycast && o.rays == 0) throw InputError("--rays 0: at least 1 ray per patch");
+    if (!(o.near_k > 0) || !std::isfinite(o.near_k))
+        throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
+}
+
+HemicubeOptions hemicube_options(const RowOptions& o) {
+    HemicubeOptions h;
+    h.resolution = o.resolution;
+    h.backend = o.backend;
+    h.threads = o.threads;
+    h.rotate = o.rotate;
+    h.seed = o.seed;
+    return h;
+}
+
+RaycastOptions raycast_options(const RowOptions& o) {
+    RaycastOptions r;
+    r.rays = o.rays;
+    r.threads = o.threads;
+    r.seed = o.seed;
+    return r;
+}
+
+NearFieldOptions near_field_options(const RowOptions& o) {
+    if (o.method == RowMethod::Raycast) {
+        // The ray caster samples the whole sender (no sender quadrature); its noise, for the
+        // per-row error estimate. No far field: its rows carry no pixel error to remove.
+        NearFieldOptions nf;
+        nf.k = o.near_k;
+        nf.rays = static_cast<double>(o.rays);
+        return nf;
+    }
+    NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);
+    nf.far_field = o.far_field;
+    return nf;
+}
+
+EnforceMode enforce_mode(EnforceRequest e) {
+    FFCUBE_CHECK(e != EnforceRequest::None);
+    return e == EnforceRequest::Reciprocity ? EnforceMode::Reciprocity : EnforceMode::Closure;
+}
+
+}  // namespace ffcube

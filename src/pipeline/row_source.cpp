@@ -1,0 +1,200 @@
+#include "ffcube/pipeline/row_source.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+
+#include "ffcube/accuracy/enforce.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/timer.hpp"
+
+namespace ffcube {
+
+RowSource::~RowSource() = default;
+
+RowProvider& RowSource::provider() {
+    if (corrected_) return *corrected_;
+    if (hemicube_) return *hemicube_;
+    FFCUBE_CHECK_MSG(raycast_ != nullptr, "RowSource::provider() on a source that was never made");
+    return *raycast_;
+}
+
+RowSource make_row_source(const Scene& scene, const RowOptions& options) {
+    validate(options);
+    RowSource rows;
+    rows.options_ = options;
+    Stopwatch watch;
+    if (options.method == RowMethod::Raycast)
+        rows.raycast_ = std::make_unique<RaycastRowProvider>(scene, raycast_options(options));
+    else
+        rows.hemicube_ = std::make_unique<HemicubeRowProvider>(scene, hemicube_options(options));
+    if (options.correct == Correction::Near) {
+        RowProvider& inner = rows.hemicube_ ? static_cast<RowProvider&>(*rows.hemicube_) : *rows.raycast_;
+        rows.corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options));
+    }
+    rows.setup_seconds_ = watch.seconds();
+    return rows;
+}
+
+std::vector<std::string> describe(const RowSource& rows) {
+    std::vector<std::string> lines;
+    if (const RaycastRowProvider* r = rows.raycast())
+        lines.push_back(fmt::format("raycast (Embree), {} thread(s), {} rays per patch", r->threads(), r->rays()));
+    if (const HemicubeRowProvider* h = rows.hemicube())
+        lines.push_back(fmt::format("hemicube on {} ({}), {} {}, resolution {}", h->backend(), h->renderer(), h->threads(),
+                                    h->workers(), h->resolution()));
+    if (const CorrectedRowProvider* c = rows.corrected()) {
+        const NearFieldOptions nf = near_field_options(rows.options());
+        lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
+                                    nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
+    }
+    return lines;
+}
+
+FfmMetadata row_metadata(const RowOptions& o) {
+    FfmMetadata meta;
+    meta.method = std::string(to_string(o.method));
+    if (o.method == RowMethod::Raycast) {
+        meta.settings = fmt::format("rays={} seed={}", o.rays, o.seed);
+    } else {
+        meta.resolution = static_cast<std::uint32_t>(o.resolution);
+        meta.settings = fmt::format("rotate={} seed={}", o.rotate ? 1 : 0, o.seed);
+    }
+    // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
+    if (o.correct == Correction::Near) {
+        meta.settings += fmt::format(" correct=near k={}", o.near_k);
+        if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
+    }
+    return meta;
+}
+
+namespace {
+
+void report_correction(Report& r, const CorrectedRowProvider& corrected) {
+    const NearFieldStats& c = corrected.stats();
+    r.set("corrections.kind", "near");
+    r.set("corrections.rows", c.rows);
+    r.set("corrections.rows_touched", c.rows_touched);
+    r.set("corrections.near_pairs", c.near_pairs);
+    r.set("corrections.entries_replaced", c.replaced);
+    r.set("corrections.pairs_refused_possibly_occluded", c.refused);
+    r.set("corrections.entries_quadrature", c.quadrature);
+    r.set("corrections.rows_quadrature", c.rows_quadrature);
+    r.set("corrections.rows_untouched", c.rows_untouched);
+    r.set("corrections.rows_closed_rebalanced", c.rows_closed);
+    r.set("corrections.rows_capped_at_one", c.rows_capped);
+    r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
+    r.set("corrections.small_receiver_entries", c.small_receiver_entries);
+    r.set("corrections.far_field", corrected.corrector().far_field_status());
+    r.set("corrections.far_field_planes", corrected.corrector().far_field_planes());
+    if (const double ns = corrected.corrector().far_field_cost_ns(); std::isfinite(ns))
+        r.set("corrections.far_field_estimated_ms_per_row", ns * 1e-6);
+    r.set("corrections.far_field_rows", c.far_rows);
+    r.set("corrections.far_field_entries", c.far_entries);
+    r.set("corrections.far_field_pairs_unproven", c.far_unproven);
+    r.set("corrections.rows_analytic", c.rows_analytic);
+    r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
+    r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
+    // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row
+    // (−1 where not computed), then the largest, the mean and the row that has the largest.
+    const std::vector<float>& est = corrected.row_error_estimates();
+    std::vector<double> values;
+    values.reserve(est.size());
+    double mx = 0, sum = 0;
+    std::int64_t worst = -1;
+    std::uint64_t counted = 0;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        values.push_back(std::isnan(est[i]) ? -1.0 : static_cast<double>(est[i]));
+        if (std::isnan(est[i])) continue;
+        ++counted;
+        sum += est[i];
+        if (est[i] > mx || worst < 0) {
+            mx = est[i];
+            worst = static_cast<std::int64_t>(i);
+        }
+    }
+    r.set("row_error_estimate.max", mx);
+    r.set("row_error_estimate.mean", counted ? sum / static_cast<double>(counted) : 0.0);
+    r.set("row_error_estimate.worst_row", worst);
+    r.set_array("row_error_estimate.rows", values);
+    r.set("corrections.seconds", c.seconds);
+    r.set("corrections.near_seconds", c.near_seconds);
+    r.set("corrections.quadrature_seconds", c.quadrature_seconds);
+}
+
+void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
+    const HemicubeStats st = provider.stats();
+    r.set("backend", provider.backend());
+    r.set("renderer", provider.renderer());
+    r.set("resolution", provider.resolution());
+    r.set("threads", provider.threads());
+    r.set("workers", provider.workers());
+    r.set("hemicubes", st.hemicubes);
+    // CPU-seconds summed over workers.
+    r.set("time.prepare", st.prepare_seconds);
+    r.set("time.drawing", st.draw_seconds);
+    r.set("time.readback", st.readback_seconds);
+    r.set("time.accumulation", st.accumulate_seconds);
+    // Culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
+    r.set("left_out.pieces_considered", st.pieces_considered);
+    r.set("left_out.pieces_behind_plane", st.pieces_behind);
+    const char* names[5] = {"top", "pos_x", "neg_x", "pos_y", "neg_y"};
+    for (std::size_t f = 0; f < 5; ++f) {
+        r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);
+        r.set(fmt::format("drawn.pieces_per_face.{}", names[f]), st.pieces_drawn[f]);
+    }
+    const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
+    r.set("coverage.mean_miss_fraction", st.miss_weight / h);
+    r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
+    r.set("self_hits", st.self_hits);
+    r.set("sub_hemicube_rows", st.sampled_rows);
+    r.set("rows_not_rendered", st.skipped_rows);
+}
+
+}  // namespace
+
+void report_row_source(Report& r, const RowSource& rows) {
+    r.set("method", std::string(to_string(rows.options().method)));
+    r.set("time.setup", rows.setup_seconds());
+    if (const CorrectedRowProvider* c = rows.corrected()) report_correction(r, *c);
+    if (const RaycastRowProvider* rc = rows.raycast()) {
+        r.set("rays_per_patch", rc->rays());
+        r.set("rays_traced", rc->rays_traced());
+        r.set("threads", rc->threads());
+    }
+    if (const HemicubeRowProvider* h = rows.hemicube()) report_hemicube(r, *h);
+}
+
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
+    const EnforceRequest request = rows.options().enforce;
+    if (request == EnforceRequest::None) return F;
+    const std::string what(to_string(request));
+    const EnforceMode mode = enforce_mode(request);
+    if (mode == EnforceMode::Closure) {
+        ClosureEvidence evidence;
+        if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight;
+        if (rows.corrected()) evidence.inner_row_sum_min = rows.corrected()->stats().inner_row_sum_min;
+        require_closed_scene(what, evidence, F);
+    }
+    std::vector<double> areas;
+    areas.reserve(scene.size());
+    for (const Patch& p : scene.patches) areas.push_back(p.area);
+    EnforceStats st;
+    Stopwatch watch;
+    const EnforcedMatrix E = enforce(F, areas, mode, st);
+    report.set("enforce.mode", what);
+    for (const auto& [when, f] : {std::pair{"before", st.before}, std::pair{"after", st.after}}) {
+        report.set(fmt::format("enforce.{}.row_sum_min", when), f.row_sum_min);
+        report.set(fmt::format("enforce.{}.row_sum_max", when), f.row_sum_max);
+        report.set(fmt::format("enforce.{}.reciprocity_max", when), f.reciprocity_max);
+    }
+    report.set("enforce.iterations", st.iterations);
+    report.set("enforce.seconds", watch.seconds());
+    info("--enforce {}: row sums {:.6f}..{:.6f} -> {:.6f}..{:.6f}, reciprocity {:.2e} -> {:.2e} (in double; stored as float)",
+         what, st.before.row_sum_min, st.before.row_sum_max, st.after.row_sum_min, st.after.row_sum_max,
+         st.before.reciprocity_max, st.after.reciprocity_max);
+    return E.to_csr();
+}
+
+}  // namespace ffcube

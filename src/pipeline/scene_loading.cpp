@@ -1,0 +1,45 @@
+#include "ffcube/pipeline/scene_loading.hpp"
+
+#include <fmt/format.h>
+
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/scene/builtin.hpp"
+#include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/obj_loader.hpp"
+
+namespace ffcube {
+
+Scene load_and_mesh(const SceneOptions& o, Report& report) {
+    validate(o);
+    Stopwatch watch;
+    ObjModel model = o.path.empty() ? load_cornell_box() : load_obj(o.path);
+    for (const auto& w : model.warnings) log_warning(w);
+    const double load_s = watch.seconds();
+    watch.restart();
+    MeshOptions mo;
+    mo.max_patch_edge = o.max_patch_edge;
+    mo.target_patches = o.patches;
+    mo.max_patches = patch_limit_for_physical_memory(mo.max_patches);
+    Scene scene = build_scene(model, mo);
+    const double mesh_s = watch.seconds();
+    for (const auto& w : scene.stats.warnings) log_warning(w);
+    info("scene {}: {} faces, {} objects -> {} patches ({})", scene.source, scene.stats.input_faces, scene.objects.size(),
+         scene.size(), scene.stats.how);
+    if (scene.stats.dropped_degenerate) info("dropped {} degenerate (zero-area) faces", scene.stats.dropped_degenerate);
+    report.set("scene", scene.source);
+    report.set("patches", scene.size());
+    report.set("objects", scene.objects.size());
+    report.set("meshing.max_patch_edge", scene.stats.max_patch_edge);
+    report.set("meshing.how", scene.stats.how);
+    report.set("meshing.input_faces", scene.stats.input_faces);
+    report.set("meshing.dropped_degenerate", scene.stats.dropped_degenerate);
+    report.set("meshing.non_planar", scene.stats.non_planar);
+    report.set("meshing.triangulated_ngons", scene.stats.triangulated_ngons);
+    report.set("fingerprint", fmt::format("{:016x}", scene.fingerprint));
+    report.set("time.loading", load_s);
+    report.set("time.meshing", mesh_s);
+    return scene;
+}
+
+}  // namespace ffcube

@@ -1,0 +1,183 @@
+// The composition root: options parsed once, one factory, and the rows it gives are the rows of
+// the layers composed by hand (so every front end that calls it gets the same rows).
+#include <gtest/gtest.h>
+
+#include <fmt/format.h>
+
+#include <cstring>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/formfactor/row_provider.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "support/scenes.hpp"
+
+namespace ffcube {
+namespace {
+
+std::string error_of(const auto& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "";
+}
+
+TEST(PipelineOptions, WordsRoundTripAndBadWordsNameTheOption) {
+    for (RowMethod m : {RowMethod::Hemicube, RowMethod::Raycast}) EXPECT_EQ(parse_row_method(to_string(m)), m);
+    for (Correction c : {Correction::None, Correction::Near}) EXPECT_EQ(parse_correction(to_string(c)), c);
+    for (FarFieldMode f : {FarFieldMode::automatic, FarFieldMode::on, FarFieldMode::off})
+        EXPECT_EQ(parse_far_field(to_string(f)), f);
+    for (EnforceRequest e :
+         {EnforceRequest::None, EnforceRequest::Reciprocity, EnforceRequest::Closure, EnforceRequest::Both})
+        EXPECT_EQ(parse_enforce_request(to_string(e)), e);
+    EXPECT_NE(error_of([] { parse_row_method("hemicubes"); }).find("--method hemicubes"), std::string::npos);
+    EXPECT_NE(error_of([] { parse_correction("far"); }).find("--correct far"), std::string::npos);
+    EXPECT_NE(error_of([] { parse_far_field("yes"); }).find("--far-field yes"), std::string::npos);
+    EXPECT_NE(error_of([] { parse_enforce_request("all"); }).find("--enforce all"), std::string::npos);
+    EXPECT_EQ(enforce_mode(EnforceRequest::Both), EnforceMode::Closure);
+    EXPECT_EQ(enforce_mode(EnforceRequest::Reciprocity), EnforceMode::Reciprocity);
+}
+
+TEST(PipelineOptions, OneResolutionRule) {
+    RowOptions o;
+    for (int bad : {7, 6, 9, 8194, -8, 0}) {
+        o.resolution = bad;
+        EXPECT_EQ(error_of([&] { validate(o); }),
+                  fmt::format("--resolution {}: must be an even number of pixels from 8 to 8192", bad));
+    }
+    for (int good : {8, 10, 256, 8192}) {
+        o.resolution = good;
+        EXPECT_NO_THROW(validate(o));
+    }
+    // The ray caster has no resolution; it has rays.
+    o.method = RowMethod::Raycast;
+    o.resolution = 7;
+    EXPECT_NO_THROW(validate(o));
+    o.rays = 0;
+    EXPECT_NE(error_of([&] { validate(o); }).find("--rays 0"), std::string::npos);
+}
+
+// What .ffm files and checkpoints record: these strings are compared when a run resumes or a
+// matrix is read back, so they must not drift with refactoring.
+TEST(PipelineOptions, MetadataIsStable) {
+    RowOptions o;
+    FfmMetadata m = row_metadata(o);
+    EXPECT_EQ(m.method, "hemicube");
+    EXPECT_EQ(m.resolution, 256u);
+    EXPECT_EQ(m.settings, "rotate=1 seed=24301 correct=near k=3");
+    o.rotate = false;
+    o.far_field = FarFieldMode::off;
+    o.near_k = 2.5;
+    EXPECT_EQ(row_metadata(o).settings, "rotate=0 seed=24301 correct=near k=2.5 far_field=off");
+    o.method = RowMethod::Raycast;
+    o.rays = 1000;
+    o.correct = Correction::None;
+    m = row_metadata(o);
+    EXPECT_EQ(m.method, "raycast");
+    EXPECT_EQ(m.resolution, 0u);
+    EXPECT_EQ(m.settings, "rays=1000 seed=24301");
+}
+
+void expect_same_rows(const CsrMatrix& a, const CsrMatrix& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::uint32_t i = 0; i < a.size(); ++i) {
+        const RowView x = a.row(i), y = b.row(i);
+        ASSERT_EQ(x.col.size(), y.col.size()) << "row " << i;
+        for (std::size_t k = 0; k < x.col.size(); ++k) {
+            EXPECT_EQ(x.col[k], y.col[k]) << "row " << i;
+            // Bitwise: the same computation, not merely close.
+            EXPECT_EQ(std::memcmp(&x.val[k], &y.val[k], sizeof(float)), 0) << "row " << i << " entry " << k;
+        }
+    }
+}
+
+// A closed box with a blocker: near pairs along every edge (exact values), a possibly occluded
+// pair (sub-hemicubes) and far pairs (the far field when on).
+Scene box_scene() {
+    std::vector<NamedPolygon> polys = test::inward_box(1.0, 1.0, 1.0);
+    polys.push_back(test::square_z("blocker", 0.4, true, 0.3, Vec3(0.35, 0.35, 0.0)));
+    return test::make_scene(polys, 0.25);
+}
+
+TEST(RowSource, FactoryRowsAreTheHandComposedRows) {
+    const Scene scene = box_scene();
+    for (FarFieldMode ff : {FarFieldMode::off, FarFieldMode::on}) {
+        RowOptions o;
+        o.resolution = 32;
+        o.threads = 2;
+        o.far_field = ff;
+        RowSource rows = make_row_source(scene, o);
+        ASSERT_NE(rows.corrected(), nullptr);
+        ASSERT_NE(rows.hemicube(), nullptr);
+        EXPECT_EQ(rows.raycast(), nullptr);
+        EXPECT_EQ(&rows.provider(), rows.corrected());
+        const CsrMatrix F = compute_all_rows(rows.provider());
+
+        HemicubeOptions h;
+        h.resolution = 32;
+        h.threads = 1;  // rows do not depend on the thread count
+        HemicubeRowProvider hemi(scene, h);
+        NearFieldOptions nf = near_field_options_for_hemicube(32, 3.0);
+        nf.far_field = ff;
+        CorrectedRowProvider corrected(scene, hemi, nf);
+        expect_same_rows(F, compute_all_rows(corrected));
+    }
+}
+
+TEST(RowSource, PlainAndRaycastSources) {
+    const Scene scene = box_scene();
+    RowOptions o;
+    o.resolution = 16;
+    o.correct = Correction::None;
+    RowSource plain = make_row_source(scene, o);
+    EXPECT_EQ(plain.corrected(), nullptr);
+    EXPECT_EQ(&plain.provider(), plain.hemicube());
+    HemicubeRowProvider hemi(scene, hemicube_options(o));
+    expect_same_rows(compute_all_rows(plain.provider()), compute_all_rows(hemi));
+
+    o.method = RowMethod::Raycast;
+    o.rays = 64;
+    RowSource rays = make_row_source(scene, o);
+    ASSERT_NE(rays.raycast(), nullptr);
+    EXPECT_EQ(rays.hemicube(), nullptr);
+    RaycastRowProvider direct(scene, raycast_options(o));
+    expect_same_rows(compute_all_rows(rays.provider()), compute_all_rows(direct));
+
+    // The report names what ran.
+    Report r;
+    report_row_source(r, rays);
+    const std::string text = r.dump();
+    EXPECT_NE(text.find("\"method\": \"raycast\""), std::string::npos) << text;
+    EXPECT_NE(text.find("\"rays_per_patch\": 64"), std::string::npos) << text;
+}
+
+TEST(RowSource, ClosureIsRefusedForAnOpenScene) {
+    // Two facing squares: light escapes at the sides, so closure would hide it.
+    const Scene scene = test::make_scene({test::square_z("a", 0, true), test::square_z("b", 1, false)}, 0.5);
+    RowOptions o;
+    o.resolution = 16;
+    o.enforce = EnforceRequest::Closure;
+    Report r;
+    // Plain hemicubes: the evidence is the pixels that saw nothing.
+    o.correct = Correction::None;
+    RowSource plain = make_row_source(scene, o);
+    const std::string e1 = error_of([&] { apply_enforcement(plain, compute_all_rows(plain.provider()), scene, r); });
+    EXPECT_NE(e1.find("--enforce closure: hemicube pixels saw nothing"), std::string::npos) << e1;
+    // Corrected: here every row is analytic (the far field proves both pairs), no pixel is
+    // rendered, and the evidence is the row sum before correction (F = 0.19982 for this pair).
+    o.correct = Correction::Near;
+    RowSource rows = make_row_source(scene, o);
+    const std::string e2 = error_of([&] { apply_enforcement(rows, compute_all_rows(rows.provider()), scene, r); });
+    EXPECT_NE(e2.find("--enforce closure: a row sums to 0.19982"), std::string::npos) << e2;
+    // Reciprocity needs no closed scene.
+    RowOptions recip = o;
+    recip.enforce = EnforceRequest::Reciprocity;
+    RowSource rows2 = make_row_source(scene, recip);
+    const CsrMatrix G = apply_enforcement(rows2, compute_all_rows(rows2.provider()), scene, r);
+    EXPECT_EQ(G.size(), scene.size());
+}
+
+}  // namespace
+}  // namespace ffcube
