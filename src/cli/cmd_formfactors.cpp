@@ -55,7 +55,6 @@ int run(const Options& o) {
     report.set("seconds", seconds);
     report.set(rows.raycast ? "rows_per_second" : "hemicubes_per_second", static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
     report.set("nnz", F.nnz());
-    report.set("skipped_rows", 0);
     report_row_source(report, rows);
 
     const RowSumStats rs = row_sum_stats(F);
