@@ -111,6 +111,7 @@ void send_current_error(int fd) {
                     send_vector(fd, row.col);
                     send_vector(fd, row.val);
                 } else {
+                    FFCUBE_CHECK_MSG(req.kind == Request::ItemBuffer, "hemicube worker: unknown request");
                     worker.render(req.patch, r.stats);
                     r.stats = HemicubeStats{};
                     r.count = worker.ids().size();

@@ -147,15 +147,9 @@ void triangulate_boundary(const std::vector<std::uint32_t>& b, const std::vector
     }
 }
 
-// Pieces meet in T-junctions where a corner of one lies inside an edge of another (a wall split
-// at a height its neighbours are not, a floor of faces of different widths). Rasterized from
-// different endpoints, the long edge and the short ones beside it do not cover the same pixels:
-// pixel-size cracks open between them, and hemicubes see through closed walls. So each piece is
-// drawn as the polygon of its corners and of the other pieces' corners that lie strictly inside
-// its edges (within edge_tolerance: 1e-6 of the edge length plus a few ulps of the coordinates): those
-// T-vertices take the other piece's corner position bit for bit, so after the shared
-// double → float transform in Worker::render both pieces' edges end at the very same vertices,
-// and the rasterizer's rules for shared edges leave no gap and no overlap.
+// Why T-vertices: see pieces.hpp. They take the other piece's corner position bit for bit, so
+// after the shared double → float transform in the GL worker both pieces' edges end at the very
+// same vertices.
 //   The polygon (convex, with collinear vertices on its edges) is cut into as many triangles as
 // it has vertices less two, none of zero area (triangulate_boundary). Plane coordinates are
 // affine in position, so the new vertices' are computed like the corners'. Pieces without
