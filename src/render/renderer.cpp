@@ -12,11 +12,7 @@
 #include "ffcube/core/error.hpp"
 #include "gl/gl_api.hpp"
 #include "gl/objects.hpp"
-
-namespace ffcube::shaders {
-extern const std::string_view shade_vert;
-extern const std::string_view shade_frag;
-}  // namespace ffcube::shaders
+#include "gl/shaders.hpp"
 
 namespace ffcube {
 namespace {

@@ -3,13 +3,7 @@
 #include <glm/gtc/type_ptr.hpp>
 
 #include "ffcube/core/error.hpp"
-
-namespace ffcube::shaders {
-extern const std::string_view view_scene_vert;
-extern const std::string_view view_scene_frag;
-extern const std::string_view view_id_frag;
-extern const std::string_view view_line_frag;
-}  // namespace ffcube::shaders
+#include "gl/shaders.hpp"
 
 namespace ffcube {
 namespace {

@@ -132,3 +132,26 @@ TEST(BadSceneCliMemory, TinyPatchEdgeIsRefusedUpFrontWithTheEstimate) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// An error raised inside a hemicube worker process (test hook FFCUBE_TEST_WORKER_FAIL, see
+// docs/robustness.md) exits with its class's code, as it would from a worker thread
+// (tests/gl/test_worker_errors.cpp shows the classes agree), and leaves no output.
+TEST(WorkerErrorsCli, ExitCodeFollowsTheClassRaisedInTheWorker) {
+    const std::pair<const char*, int> cases[] = {{"input", 2}, {"io", 3}, {"gl", 4}, {"internal", 70}};
+    for (const auto& [fail, code] : cases) {
+        test::TempDir dir;
+        const auto r = test::run_ffcube_env(std::string("FFCUBE_TEST_WORKER_FAIL=") + fail + " ",
+                                            "formfactors " + test::example("cube.obj") +
+                                                " --max-patch-edge 0.5 --resolution 16 --correct none --threads 2 -q -o " +
+                                                (dir / "F.ffm"));
+        EXPECT_EQ(r.code, code) << fail << ": " << r.output;
+        EXPECT_NE(r.output.find("FFCUBE_TEST_WORKER_FAIL"), std::string::npos) << r.output;
+        EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm")) << fail;
+    }
+}
+
+}  // namespace
+}  // namespace ffcube

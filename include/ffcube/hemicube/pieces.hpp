@@ -1,0 +1,91 @@
+// What a hemicube draws: the mesher's pieces (Scene::grids, a face's quad or triangle drawn
+// whole; the fragment shader finds the patch), prepared once per scene on the CPU and shared
+// read-only by every worker. No GL here: the GL worker (src/gl) uploads these arrays as they are.
+//
+// Pieces meet in T-junctions where a corner of one lies inside an edge of another (a wall split
+// at a height its neighbours are not, a floor of faces of different widths). Rasterized from
+// different endpoints, the long edge and the short ones beside it do not cover the same pixels:
+// pixel-size cracks open between them, and hemicubes see through closed walls. So each piece is
+// drawn as the polygon of its corners and of the other pieces' corners that lie strictly inside
+// its edges (find_edge_vertices): those T-vertices take the other piece's corner position bit
+// for bit, so after the shared double → float transform both pieces' edges end at the very same
+// vertices, and the rasterizer's rules for shared edges leave no gap and no overlap. The polygon
+// is cut into triangles none of zero area (triangulate_boundary).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "ffcube/geometry/polygon.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+// What the fragment shader reads per piece (std430 layout of 'struct Grid' in shaders/item.frag).
+// kind: 3 triangle, 4 general quad (plane coordinates, inverse bilinear), 5 parallelogram.
+struct GpuGrid {
+    float q1[2], q2[2], q3[2];
+    std::uint32_t count, nu, nv, first;
+};
+static_assert(sizeof(GpuGrid) == 40);
+
+// The scene's pieces. Each piece owns a run of vertex slots: its corners first (count of them),
+// then the T-vertices on its edges. Per slot: world position, the vertex parameter (cell
+// coordinates for affine pieces, plane coordinates for general quads) and the piece index.
+struct ScenePieces {
+    std::vector<GpuGrid> gpu;
+    std::vector<Vec3> pos;             // 1 per vertex slot: world position
+    std::vector<float> param;          // 2 per vertex slot
+    std::vector<std::uint32_t> grid;   // 1 per vertex slot
+    std::vector<std::uint32_t> info;   // 4 per vertex slot: its piece's kind, nu, nv, first patch
+    std::array<bool, 6> has_kind{};    // some piece is of this kind (3, 4 or 5)
+    std::vector<std::uint32_t> first;  // per piece, plus one at the end: its first vertex slot
+    // Per piece, plus one at the end: its range in 'tris'. An empty range means the piece is
+    // drawn as its corners say: (c0, c1, c2), and (c0, c2, c3) for a quad.
+    std::vector<std::uint32_t> tri_first;
+    std::vector<std::uint32_t> tris;   // vertex slot triples, CCW from the front
+    // Per piece: another piece has exactly its corners and faces the other way (one side of a
+    // two-sided plate made of two one-sided faces). When such a piece shows its back, its twin
+    // shows its front over exactly the same pixels: the back is not drawn at all, so the two
+    // can never z-fight, however steeply they are seen (a depth offset could not settle that
+    // without letting things behind edge-on back faces through).
+    std::vector<std::uint8_t> has_twin;
+};
+
+// Builds ScenePieces: plane coordinates, piece kinds, T-vertices and their triangulation, twins.
+// Pieces without T-vertices keep exactly the triangles (c0, c1, c2), (c0, c2, c3).
+ScenePieces prepare_pieces(std::span<const PatchGrid> grids);
+
+// has_twin per piece: another piece has the same corner set (bitwise equal positions) and an
+// opposite normal.
+std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids);
+
+// A corner of another piece strictly inside edge k (corner k → k + 1) of piece g.
+struct EdgeVertex {
+    std::uint32_t g, k;
+    double t;            // position along the edge, 0 at corner k, 1 at corner k + 1
+    std::uint32_t at;    // index into the unique corner positions
+};
+
+// How far off an edge (a → b) a corner may lie and still count as on it: 1e-6 of the edge
+// (OBJ files written with 6 significant digits put a corner meant to lie inside an oblique edge
+// up to ~1e-7 of the edge off it), plus a few ulps of the coordinates' magnitude, so a small
+// piece far from the origin (1e5) is judged by what its coordinates can hold, not by its size
+// alone.
+double edge_tolerance(const Vec3& a, const Vec3& b);
+
+// Corners of other pieces that lie on a piece's edge strictly between its endpoints (within
+// edge_tolerance), for every piece edge, sorted by (piece, edge, t), each corner once per edge.
+// 'corners' receives the unique corner positions, sorted; EdgeVertex::at indexes it.
+std::vector<EdgeVertex> find_edge_vertices(std::span<const PatchGrid> grids, std::vector<Vec3>& corners);
+
+// Triangulates a convex piece whose boundary b (vertex slots into pos, CCW from the front,
+// starting at corner 0) has T-vertices inside some edges, appending b.size() − 2 triangles to
+// tris, none of which has its three vertices on one edge of the piece. on_edges[i]: the piece
+// edges (bit k: edge k) boundary vertex i lies on: two bits for a corner, one for a T-vertex.
+void triangulate_boundary(const std::vector<std::uint32_t>& b, const std::vector<std::uint8_t>& on_edges,
+                          const std::vector<Vec3>& pos, std::vector<std::uint32_t>& tris);
+
+}  // namespace ffcube

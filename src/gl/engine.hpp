@@ -1,0 +1,28 @@
+// How a hemicube worker thread computes: through an Engine, either in this process on a GL
+// context of its own (LocalEngine, hemicube_worker.hpp) or in a child process that owns the
+// context (ProcessEngine, process_engine.hpp). Another transport (MPI ranks) is one more Engine.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+
+namespace ffcube {
+
+class Engine {
+public:
+    virtual ~Engine() = default;
+    virtual void start() = 0;  // on the worker thread, before the first request
+    // Row p (sampled: the average of sub-hemicubes) into out; the work done is added to st.
+    // Errors are thrown as the class they were raised as, wherever that was (core/error.hpp).
+    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) = 0;
+    virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
+    virtual void stop() = 0;  // on the worker thread, after the last request
+};
+
+// a += b, field by field.
+void add_stats(HemicubeStats& a, const HemicubeStats& b);
+
+}  // namespace ffcube

@@ -1,0 +1,396 @@
+#include "gl/hemicube_worker.hpp"
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/quadrature.hpp"
+#include "ffcube/hemicube/frame.hpp"
+#include "gl/gl_api.hpp"
+#include "gl/shaders.hpp"
+
+namespace ffcube {
+
+namespace {
+
+// Column-major 4×4 for glUniformMatrix4fv: reversed-Z, infinite far plane, near at 'near'
+// (eye units), times the face's view rotation (rows right, up, -forward).
+std::array<float, 16> face_matrix(const FaceSpec& f, double near) {
+    const FaceFrustum& fr = f.frustum;
+    // Projection rows (acting on eye coordinates):
+    //   x' = 2/(r-l) x + (r+l)/(r-l) z,  y' = 2/(t-b) y + (t+b)/(t-b) z,  z' = near,  w' = -z
+    // so NDC depth = near / distance: with glClipControl(ZERO_TO_ONE) and GL_GREATER, float depth
+    // keeps about 7 significant digits at every distance.
+    const double P[4][4] = {{2 / (fr.right - fr.left), 0, (fr.right + fr.left) / (fr.right - fr.left), 0},
+                            {0, 2 / (fr.top - fr.bottom), (fr.top + fr.bottom) / (fr.top - fr.bottom), 0},
+                            {0, 0, 0, near},
+                            {0, 0, -1, 0}};
+    const Vec3 rows[3] = {f.right, f.up, -f.forward};
+    double V[4][4] = {};
+    for (int r = 0; r < 3; ++r) {
+        V[r][0] = rows[r].x;
+        V[r][1] = rows[r].y;
+        V[r][2] = rows[r].z;
+    }
+    V[3][3] = 1;
+    std::array<float, 16> m{};
+    for (int r = 0; r < 4; ++r)
+        for (int c = 0; c < 4; ++c) {
+            double s = 0;
+            for (int k = 0; k < 4; ++k) s += P[r][k] * V[k][c];
+            m[static_cast<std::size_t>(c * 4 + r)] = static_cast<float>(s);
+        }
+    return m;
+}
+
+}  // namespace
+
+int half_resolution(int n) { return n / 2 >= 8 && (n / 2) % 2 == 0 ? n / 2 : n; }
+
+
+Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+       const HemicubeOptions& opt)
+    : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), half_layout_(half_resolution(layout.resolution())),
+      opt_(opt) {
+    const gl::Api& gl = gl_;
+    // The fragment shader specialised to the piece kinds of the scene: llvmpipe runs both
+    // sides of a branch under a mask, so a path no piece takes still costs every pixel.
+    std::string frag(shaders::item_frag);
+    const std::size_t eol = frag.find('\n') + 1;
+    frag.insert(eol, fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
+                                 pieces.has_kind[4] ? 1 : 0));
+    program_ = gl::make_program(gl, "item shader", shaders::item_vert, frag);
+    target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
+    half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
+    vao_ = gl::make_vertex_array(gl);
+    vbo_ = gl::make_buffer(gl);
+    static_vbo_ = gl::make_buffer(gl);
+    grid_vbo_ = gl::make_buffer(gl);
+    info_vbo_ = gl::make_buffer(gl);
+    ebo_ = gl::make_buffer(gl);
+    ssbo_ = gl::make_buffer(gl);
+    const std::size_t slots = pieces.pos.size();
+    gl.BindVertexArray(vao_.id());
+    gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * 3 * sizeof(float)), nullptr,
+                  GL_STREAM_DRAW);
+    gl.EnableVertexAttribArray(0);
+    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+    gl.BindBuffer(GL_ARRAY_BUFFER, static_vbo_.id());
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.param.size() * sizeof(float)), pieces.param.data(),
+                  GL_STATIC_DRAW);
+    gl.EnableVertexAttribArray(1);
+    gl.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
+    gl.BindBuffer(GL_ARRAY_BUFFER, grid_vbo_.id());
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.grid.size() * sizeof(std::uint32_t)),
+                  pieces.grid.data(), GL_STATIC_DRAW);
+    gl.EnableVertexAttribArray(2);
+    gl.VertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(std::uint32_t), nullptr);
+    gl.BindBuffer(GL_ARRAY_BUFFER, info_vbo_.id());
+    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.info.size() * sizeof(std::uint32_t)),
+                  pieces.info.data(), GL_STATIC_DRAW);
+    gl.EnableVertexAttribArray(3);
+    gl.VertexAttribIPointer(3, 4, GL_UNSIGNED_INT, 4 * sizeof(std::uint32_t), nullptr);
+    gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
+    gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo_.id());
+    gl.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(pieces.gpu.size() * sizeof(GpuGrid)),
+                  pieces.gpu.data(), GL_STATIC_DRAW);
+    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo_.id());
+    gl.UseProgram(program_.id());
+    u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
+    u_back_ = gl.GetUniformLocation(program_.id(), "u_back");
+    // All state the item pass needs is set here and never changed: nothing leaks in or out.
+    gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
+    gl.Enable(GL_DEPTH_TEST);
+    gl.DepthFunc(GL_GREATER);
+    gl.DepthMask(GL_TRUE);
+    gl.ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    gl.Disable(GL_CULL_FACE);  // back faces must block (they write kBackFace)
+    gl.Disable(GL_BLEND);
+    gl.Disable(GL_DITHER);
+    gl.Disable(GL_MULTISAMPLE);
+    gl.Disable(GL_FRAMEBUFFER_SRGB);
+    gl.Disable(GL_SCISSOR_TEST);
+    gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
+    gl::check_gl(gl, "hemicube worker setup");
+
+    local_.resize(slots * 3);
+    for (std::size_t f = 0; f < 5; ++f) {
+        face_m_[f] = layout.faces()[f];
+        half_face_m_[f] = half_layout_.faces()[f];
+    }
+    half_ids_.resize(static_cast<std::size_t>(half_layout_.atlas_width()) * half_layout_.atlas_height());
+    for (auto& l : lists_) l.reserve(slots);
+    all_idx_.reserve(slots * 2);
+    ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
+    acc_.assign(scene.patches.size(), 0.0);
+    stamp_.assign(scene.patches.size(), 0);
+    if (const char* fail = std::getenv("FFCUBE_TEST_WORKER_FAIL"); fail && *fail) {
+        const std::string f = fail;
+        test_fail_ = f == "input" ? 1 : f == "io" ? 2 : f == "internal" ? 3 : f == "gl" ? 4 : -1;
+    }
+}
+
+namespace {
+
+// The test hook FFCUBE_TEST_WORKER_FAIL (docs/robustness.md): an error of the class asked for,
+// raised inside the worker as the real ones are.
+[[noreturn]] void fail_for_test(int what, std::uint32_t p) {
+    const std::string where = fmt::format("row {} (test hook FFCUBE_TEST_WORKER_FAIL)", p);
+    switch (what) {
+        case 1: throw InputError(where + ": input error");
+        case 2: throw IoError(where + ": I/O error");
+        case 3: FFCUBE_CHECK_MSG(false, where); break;
+        case 4: throw GlError(where + ": GL error");
+        default: break;
+    }
+    throw InputError("FFCUBE_TEST_WORKER_FAIL: use input, io, internal or gl");
+}
+
+}  // namespace
+
+// Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
+// point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
+// (half) the half-resolution one of sub-hemicubes.
+void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st) {
+    const gl::Api& gl = gl_;
+    const Patch& pa = scene_.patches[p];
+    Stopwatch watch;
+    const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
+    const HemicubeFrame fr = make_frame(pa.normal, angle);
+    const Vec3 eye = at + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
+    // Vertex slots (piece corners, T-vertices) relative to the eye in the local frame,
+    // subtracted in double before they become floats: far-off coordinates (1e5) keep full
+    // float precision near the eye. Equal world positions give bitwise equal vertices.
+    const std::size_t ns = pieces_.pos.size();
+    const Vec3* pos = pieces_.pos.data();
+    for (std::size_t s = 0; s < ns; ++s) {
+        const Vec3 d = pos[s] - eye;
+        float* out = &local_[s * 3];
+        out[0] = static_cast<float>(glm::dot(d, fr.tangent));
+        out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
+        out[2] = static_cast<float>(glm::dot(d, fr.normal));
+    }
+    cull(st);
+    st.prepare_seconds += watch.seconds();
+    watch.restart();
+
+    // Upload the corners and the five index lists back to back.
+    gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
+    all_idx_.clear();
+    for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
+    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
+                  all_idx_.data(), GL_STREAM_DRAW);
+
+    gl.BindFramebuffer(GL_FRAMEBUFFER, (half ? half_target_ : target_).fbo.id());
+    const std::array<FaceSpec, 5>& faces = half ? half_face_m_ : face_m_;
+    const GLuint zero_id[4] = {0, 0, 0, 0};
+    const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
+    gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
+    gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
+    const double near = HemicubeRowProvider::kNear * pa.size;
+    // Front-facing pieces first, then back-facing ones pushed 64 depth units farther
+    // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
+    // back shows its front side, never the back of the other (no z-fighting; GL_GREATER also
+    // lets the first drawn win exact ties; 4 units were too few for the two faces' rounding,
+    // measured). No slope factor: a back face seen edge-on (a wall standing on the sender's
+    // plate) has a huge depth slope, and slope × 1 let what is behind it show through
+    // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (u_back,
+    // from cull()'s classification of the whole piece), not gl_FrontFacing: the rasterizer
+    // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
+    // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
+    // back-face pixel.
+    std::size_t first_index = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+        if (pass == 1) {
+            gl.Enable(GL_POLYGON_OFFSET_FILL);
+            gl.PolygonOffset(0.0f, -64.0f);
+        }
+        gl.Uniform1ui(u_back_, static_cast<GLuint>(pass));
+        for (int f = 0; f < 5; ++f) {
+            const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
+            const std::size_t count = lists_[pass * 5 + f].size();
+            if (count > 0) {
+                const auto m = face_matrix(fs, near);
+                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
+                gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
+                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
+            }
+            first_index += count;
+        }
+    }
+    gl.Disable(GL_POLYGON_OFFSET_FILL);
+    gl.Finish();
+    st.draw_seconds += watch.seconds();
+    watch.restart();
+    const HemicubeLayout& lay = half ? half_layout_ : layout_;
+    gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                  (half ? half_ids_ : ids_).data());
+    gl::check_gl(gl, "hemicube rendering");
+    st.readback_seconds += watch.seconds();
+    st.hemicubes += 1;
+}
+
+// Row p: one hemicube at the centroid, or (sampled) the average of sub-hemicubes at the
+// patch's 2 × 2 quadrature points (geometry/quadrature.hpp, the points the near-field
+// correction's sender quadrature uses), each with its own visibility.
+void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
+    if (test_fail_ != 0) fail_for_test(test_fail_, p);
+    ++epoch_;
+    touched_.clear();
+    if (!sampled) {
+        render(p, st);
+        accumulate(p, 1.0, false, st);
+    } else {
+        const auto v = scene_.patch_vertices(p);
+        patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
+        // At half the resolution: four of them cost about one full hemicube, and their
+        // average has about the pixel noise of one (each has twice the relative noise).
+        for (std::size_t q = 0; q < points_.size(); ++q) {
+            render(p, points_[q], true, st);
+            accumulate(p, weights_[q], true, st);
+        }
+        ++st.sampled_rows;
+    }
+    Stopwatch watch;
+    std::sort(touched_.begin(), touched_.end());
+    out.clear();
+    out.col.reserve(touched_.size());
+    out.val.reserve(touched_.size());
+    for (std::uint32_t j : touched_) {
+        out.col.push_back(j);
+        out.val.push_back(acc_[j]);
+    }
+    st.accumulate_seconds += watch.seconds();
+}
+
+// Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
+void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st) {
+    Stopwatch watch;
+    const std::vector<double>& w = (half ? half_layout_ : layout_).delta_ff();
+    const std::vector<std::uint32_t>& ids = half ? half_ids_ : ids_;
+    const std::uint32_t self = p + 1;
+    double back = 0.0, miss = 0.0;
+    const std::size_t npix = ids.size();
+    for (std::size_t k = 0; k < npix; ++k) {
+        const std::uint32_t id = ids[k];
+        if (id == 0) {
+            miss += w[k];
+        } else if (id == kBackFace) {
+            back += w[k];
+        } else if (id == self) {
+            ++st.self_hits;
+        } else {
+            const std::uint32_t j = id - 1;
+            // An id past the last patch means a broken patch lookup (shader or pieces): a bug,
+            // stopped here instead of writing past the row's arrays.
+            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
+                                                            p, k, id, stamp_.size()));
+            if (stamp_[j] != epoch_) {
+                stamp_[j] = epoch_;
+                acc_[j] = 0.0;
+                touched_.push_back(j);
+            }
+            acc_[j] += weight * w[k];
+        }
+    }
+    st.back_face_weight += weight * back;
+    st.miss_weight += weight * miss;
+    st.accumulate_seconds += watch.seconds();
+}
+
+// Sorts the pieces into the five faces' index lists: a piece goes to a face unless all its
+// corners lie outside one of the face's frustum planes; pieces wholly behind the hemicube
+// plane (z ≤ 0: this includes the patch's own piece and every piece coplanar with it) go
+// nowhere. Corners suffice for pieces drawn with T-vertices too: those lie on the edges.
+void Worker::cull(HemicubeStats& st) {
+    for (auto& l : lists_) l.clear();
+    const std::size_t ng = scene_.grids.size();
+    st.pieces_considered += ng;
+    for (std::size_t g = 0; g < ng; ++g) {
+        const std::uint32_t count = scene_.grids[g].count;
+        const std::uint32_t base = pieces_.first[g];
+        unsigned all = ~0u;
+        bool behind = true;
+        for (std::uint32_t k = 0; k < count; ++k) {
+            const float* c = &local_[(base + k) * 3];
+            const float x = c[0], y = c[1], z = c[2];
+            behind = behind && z <= 0;
+            // Outcodes against the planes x = ±z, y = ±z (top face) and y = ±x, x = ±y,
+            // z = 0, z = ±x, z = ±y (side faces): a bit set for every corner means the
+            // piece misses each face that has that plane.
+            const bool out[13] = {x > z,  -x > z, y > z,  -y > z, z < 0,  y > x,  -y > x,
+                                  y > -x, -y > -x, z > x, z > -x, z > y, z > -y};
+            unsigned code = 0;
+            for (unsigned b = 0; b < 13; ++b) code |= static_cast<unsigned>(out[b]) << b;
+            all &= code;
+        }
+        if (behind) {
+            ++st.pieces_behind;
+            continue;
+        }
+        // x > y is bit 8 (-y > -x) and -x > y is bit 6 (-y > x); likewise for -y.
+        constexpr unsigned kTop = 0b1111u;                                             // |x|,|y| ≤ z
+        constexpr unsigned kPosX = (1u << 4) | (1u << 5) | (1u << 6) | (1u << 9);    // |y| ≤ x, 0 ≤ z ≤ x
+        constexpr unsigned kNegX = (1u << 4) | (1u << 7) | (1u << 8) | (1u << 10);   // |y| ≤ -x, 0 ≤ z ≤ -x
+        constexpr unsigned kPosY = (1u << 4) | (1u << 6) | (1u << 8) | (1u << 11);   // |x| ≤ y, 0 ≤ z ≤ y
+        constexpr unsigned kNegY = (1u << 4) | (1u << 5) | (1u << 7) | (1u << 12);   // |x| ≤ -y, 0 ≤ z ≤ -y
+        constexpr unsigned masks[5] = {kTop, kPosX, kNegX, kPosY, kNegY};
+        // Front-facing: the eye (the origin) lies in front of the piece's plane, whose normal
+        // (c1 − c0) × (c2 − c0) points to its front (corners CCW from the front).
+        const float* c0 = &local_[base * 3];
+        const float* c1 = c0 + 3;
+        const float* c2 = c0 + 6;
+        const double e1[3] = {double(c1[0]) - c0[0], double(c1[1]) - c0[1], double(c1[2]) - c0[2]};
+        const double e2[3] = {double(c2[0]) - c0[0], double(c2[1]) - c0[1], double(c2[2]) - c0[2]};
+        const double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const bool back = nrm[0] * c0[0] + nrm[1] * c0[1] + nrm[2] * c0[2] > 0;
+        if (back && pieces_.has_twin[g]) continue;  // its twin's front covers it (find_twins)
+        const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[g];
+        const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[g + 1];
+        for (std::size_t f = 0; f < 5; ++f) {
+            if (all & masks[f]) {
+                ++st.pieces_culled[f];
+            } else {
+                ++st.pieces_drawn[f];
+                auto& l = lists_[f + (back ? 5 : 0)];
+                if (tri_begin == tri_end) {
+                    l.insert(l.end(), {base, base + 1, base + 2});
+                    if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
+                } else {
+                    l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
+                }
+            }
+        }
+    }
+}
+
+void LocalEngine::start() {
+    ctx_->make_current();
+    worker_ = std::make_unique<Worker>(*ctx_, scene_, pieces_, layout_, opt_);
+}
+
+void LocalEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
+    worker_->row(p, out, st, sampled);
+}
+
+void LocalEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {
+    HemicubeStats ignored;
+    worker_->render(p, ignored);
+    out = worker_->ids();
+}
+
+void LocalEngine::stop() {
+    worker_.reset();
+    ctx_->release_current();
+}
+
+}  // namespace ffcube

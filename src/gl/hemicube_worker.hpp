@@ -1,0 +1,95 @@
+// The GL worker: one GL context current on one thread (or in one worker process), its item
+// buffers and its scratch space; renders a patch's hemicube and turns it into a row.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/gl/context.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/pieces.hpp"
+#include "ffcube/scene/scene.hpp"
+#include "gl/engine.hpp"
+#include "gl/objects.hpp"
+
+namespace ffcube {
+
+// Pixel value of a back face in the item buffer (0 is nothing, 1 + patch a front face).
+inline constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
+
+// Resolution of sub-hemicubes: half the row's, when that is still a valid resolution (even, ≥ 8).
+int half_resolution(int n);
+
+class Worker {
+public:
+    // ctx must be current on this thread, now and for every call. Everything referenced must
+    // outlive the worker.
+    Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+           const HemicubeOptions& opt);
+
+    // Renders patch p's hemicube into ids() (the atlas).
+    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, false, st); }
+    // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
+    // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
+    // (half) the half-resolution one of sub-hemicubes.
+    void render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st);
+    // Row p: one hemicube at the centroid, or (sampled) the average of sub-hemicubes at the
+    // patch's 2 × 2 quadrature points, each with its own visibility.
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled = false);
+    const std::vector<std::uint32_t>& ids() const { return ids_; }
+
+private:
+    void accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st);
+    void cull(HemicubeStats& st);
+
+    const gl::Api& gl_;
+    const Scene& scene_;
+    const ScenePieces& pieces_;
+    const HemicubeLayout& layout_;
+    const HemicubeLayout half_layout_;  // sub-hemicubes (half_resolution)
+    const HemicubeOptions& opt_;
+    // Test hook (docs/robustness.md): FFCUBE_TEST_WORKER_FAIL=input|io|internal|gl makes every
+    // row throw that class of error, from inside the worker (thread or process). 0: unset.
+    int test_fail_ = 0;
+    std::array<FaceSpec, 5> face_m_, half_face_m_;
+    gl::Program program_;
+    gl::ItemTarget target_, half_target_;
+    gl::VertexArray vao_;
+    gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
+    GLint u_face_ = -1, u_back_ = -1;
+    std::vector<float> local_;
+    std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
+    std::vector<std::uint32_t> ids_, half_ids_;
+    std::vector<double> acc_;
+    std::vector<std::uint32_t> stamp_, touched_;
+    std::uint32_t epoch_ = 0;
+    std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row
+    std::vector<double> weights_;
+};
+
+// A worker in this process: the context is made current on the worker thread (start).
+class LocalEngine final : public Engine {
+public:
+    LocalEngine(std::unique_ptr<GlContext> ctx, const Scene& scene, const ScenePieces& pieces,
+                const HemicubeLayout& layout, const HemicubeOptions& opt)
+        : ctx_(std::move(ctx)), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {}
+    ~LocalEngine() override { ctx_.reset(); }
+    void start() override;
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override;
+    void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
+    void stop() override;
+
+private:
+    std::unique_ptr<GlContext> ctx_;
+    const Scene& scene_;
+    const ScenePieces& pieces_;
+    const HemicubeLayout& layout_;
+    const HemicubeOptions& opt_;
+    std::unique_ptr<Worker> worker_;
+};
+
+}  // namespace ffcube

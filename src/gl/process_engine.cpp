@@ -1,0 +1,241 @@
+#include "gl/process_engine.hpp"
+
+#include <fmt/format.h>
+
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <memory>
+#include <string>
+
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/error_transport.hpp"
+#include "ffcube/gl/context.hpp"
+#include "gl/gl_api.hpp"
+#include "gl/hemicube_worker.hpp"
+
+namespace ffcube {
+
+// The wire protocol between a ProcessEngine and its child: fixed-size headers and raw arrays
+// over a Unix socket pair (both ends are the same binary).
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2 };
+struct RequestMsg {
+    Request kind;
+    std::uint32_t patch;
+};
+struct ProcessEngine::Reply {
+    std::uint32_t error;   // 0: payload follows; else an ErrorKind, and 'count' bytes of message follow
+    std::uint64_t count;   // entries (row), pixels (item buffer), bytes (hello strings, error)
+    HemicubeStats stats;   // work done for this reply
+};
+using ReplyMsg = ProcessEngine::Reply;
+
+namespace {
+
+void send_all(int fd, const void* data, std::size_t size) {
+    const char* p = static_cast<const char*>(data);
+    while (size > 0) {
+        const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) throw IoError(fmt::format("hemicube worker socket: send failed: {}", std::strerror(errno)));
+        p += n;
+        size -= static_cast<std::size_t>(n);
+    }
+}
+
+// Returns false on a clean end of stream before any byte.
+bool recv_all(int fd, void* data, std::size_t size) {
+    char* p = static_cast<char*>(data);
+    std::size_t got = 0;
+    while (got < size) {
+        const ssize_t n = ::recv(fd, p + got, size - got, 0);
+        if (n < 0 && errno == EINTR) continue;
+        if (n < 0) throw IoError(fmt::format("hemicube worker socket: receive failed: {}", std::strerror(errno)));
+        if (n == 0) {
+            if (got == 0) return false;
+            throw IoError("hemicube worker socket: truncated message");
+        }
+        got += static_cast<std::size_t>(n);
+    }
+    return true;
+}
+
+template <typename T>
+void send_vector(int fd, const std::vector<T>& v) {
+    if (!v.empty()) send_all(fd, v.data(), v.size() * sizeof(T));
+}
+
+// Sends the exception being handled: its class tag and message.
+void send_current_error(int fd) {
+    ErrorKind kind = ErrorKind::other;
+    std::string what = "unknown exception";
+    try {
+        throw;
+    } catch (const std::exception& e) {
+        kind = error_kind(e);
+        what = e.what();
+    } catch (...) {
+    }
+    ReplyMsg r{static_cast<std::uint32_t>(kind), what.size(), {}};
+    send_all(fd, &r, sizeof r);
+    send_all(fd, what.data(), what.size());
+}
+
+[[noreturn]] void child_main(int fd, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+                             const HemicubeOptions& opt) {
+    int code = 0;
+    try {
+        std::unique_ptr<GlContext> ctx = create_headless_context(opt.backend);
+        ctx->make_current();
+        Worker worker(*ctx, scene, pieces, layout, opt);
+        const std::string hello = ctx->backend() + '\n' + ctx->renderer();
+        ReplyMsg h{0, hello.size(), {}};
+        send_all(fd, &h, sizeof h);
+        send_all(fd, hello.data(), hello.size());
+        SparseRow row;
+        RequestMsg req{};
+        while (recv_all(fd, &req, sizeof req)) {
+            try {
+                ReplyMsg r{0, 0, {}};
+                if (req.kind == Request::Row || req.kind == Request::SampledRow) {
+                    worker.row(req.patch, row, r.stats, req.kind == Request::SampledRow);
+                    r.count = row.nnz();
+                    send_all(fd, &r, sizeof r);
+                    send_vector(fd, row.col);
+                    send_vector(fd, row.val);
+                } else {
+                    FFCUBE_CHECK_MSG(req.kind == Request::ItemBuffer, "hemicube worker: unknown request");
+                    worker.render(req.patch, r.stats);
+                    r.stats = HemicubeStats{};
+                    r.count = worker.ids().size();
+                    send_all(fd, &r, sizeof r);
+                    send_vector(fd, worker.ids());
+                }
+            } catch (...) {
+                send_current_error(fd);
+            }
+        }
+        ctx->release_current();
+    } catch (...) {
+        try {
+            send_current_error(fd);
+        } catch (...) {
+        }
+        code = 1;
+    }
+    // No destructors of the parent's objects, no atexit handlers, no flush of inherited stdio.
+    std::_Exit(code);
+}
+
+}  // namespace
+
+bool can_fork_workers() {
+    if (gl::context_created_in_process()) return false;
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line))
+        if (line.rfind("Threads:", 0) == 0) return std::stoi(line.substr(8)) == 1;
+    return false;
+}
+
+ProcessEngine::ProcessEngine(const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
+                             const HemicubeOptions& opt) {
+    int sv[2];
+    if (::socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0, sv) != 0)
+        throw IoError(fmt::format("socketpair for a hemicube worker failed: {}", std::strerror(errno)));
+    std::fflush(nullptr);
+    pid_ = ::fork();
+    if (pid_ < 0) {
+        const int err = errno;
+        ::close(sv[0]);
+        ::close(sv[1]);
+        throw IoError(fmt::format("fork of a hemicube worker failed: {}", std::strerror(err)));
+    }
+    if (pid_ == 0) {
+        // Keep only stdio and this child's socket (as fd 3): the parent's ends of earlier
+        // siblings' sockets must not stay open here, or those siblings never see the end of
+        // their requests.
+        int fd = sv[1];
+        if (fd != 3) {
+            ::dup2(fd, 3);
+            fd = 3;
+        }
+        ::close_range(4, ~0u, 0);
+        setenv("LP_NUM_THREADS", "0", 0);
+        child_main(fd, scene, pieces, layout, opt);
+    }
+    ::close(sv[1]);
+    fd_ = sv[0];
+}
+
+ProcessEngine::~ProcessEngine() {
+    if (fd_ >= 0) ::close(fd_);  // the child sees the end of its requests and exits
+    if (pid_ > 0) {
+        int status = 0;
+        while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {
+        }
+    }
+}
+
+std::pair<std::string, std::string> ProcessEngine::hello() {
+    Reply r{};
+    recv_or_throw(&r, sizeof r);
+    std::string text = read_text(r.count);
+    if (r.error) throw_error(static_cast<ErrorKind>(r.error), text);
+    const auto nl = text.find('\n');
+    return {text.substr(0, nl), nl == std::string::npos ? std::string() : text.substr(nl + 1)};
+}
+
+void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
+    const Reply r = request(static_cast<std::uint32_t>(sampled ? Request::SampledRow : Request::Row), p);
+    out.col.resize(r.count);
+    out.val.resize(r.count);
+    if (r.count) {
+        recv_or_throw(out.col.data(), r.count * sizeof(std::uint32_t));
+        recv_or_throw(out.val.data(), r.count * sizeof(double));
+    }
+    add_stats(st, r.stats);
+}
+
+void ProcessEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {
+    const Reply r = request(static_cast<std::uint32_t>(Request::ItemBuffer), p);
+    out.resize(r.count);
+    if (r.count) recv_or_throw(out.data(), r.count * sizeof(std::uint32_t));
+}
+
+ProcessEngine::Reply ProcessEngine::request(std::uint32_t kind, std::uint32_t p) {
+    const RequestMsg req{static_cast<Request>(kind), p};
+    send_all(fd_, &req, sizeof req);
+    Reply r{};
+    recv_or_throw(&r, sizeof r);
+    if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
+    return r;
+}
+
+std::string ProcessEngine::read_text(std::uint64_t n) {
+    std::string text(n, '\0');
+    if (n) recv_or_throw(text.data(), n);
+    return text;
+}
+
+void ProcessEngine::recv_or_throw(void* data, std::size_t size) {
+    if (!recv_all(fd_, data, size)) {
+        int status = 0;
+        std::string how = "exited";
+        if (::waitpid(pid_, &status, 0) == pid_) {
+            how = WIFSIGNALED(status) ? fmt::format("was killed by signal {}", WTERMSIG(status))
+                                      : fmt::format("exited with status {}", WEXITSTATUS(status));
+            pid_ = -1;
+        }
+        throw IoError("a hemicube worker process " + how + " unexpectedly");
+    }
+}
+
+}  // namespace ffcube

@@ -1,0 +1,52 @@
+// Hemicube workers as child processes: fork, then requests and replies over a Unix socket pair.
+//
+// Why processes: Mesa's llvmpipe rasterizes every context of a process through one screen, under
+// one lock, so two contexts on two threads run at about 1.1× one (measured, docs/benchmarks.md);
+// two processes run at 2×. Children are forked before this process has made any GL context and
+// while it runs a single thread, so they inherit the scene (copy-on-write) and no locks or GL
+// state; otherwise the provider falls back to threads (LocalEngine).
+//
+// Errors: an exception in the child comes back as its class tag (core/error.hpp ErrorKind) and
+// message and is thrown again as that class here. Socket, fork and pipe failures, and a child
+// that dies, are IoError.
+#pragma once
+
+#include <string>
+#include <sys/types.h>
+#include <utility>
+
+#include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/pieces.hpp"
+#include "gl/engine.hpp"
+
+namespace ffcube {
+
+// True when fork() is safe here: this process runs a single thread (no lock can be held by a
+// thread the child would not have) and has never made a GL context (no driver state to share).
+bool can_fork_workers();
+
+class ProcessEngine final : public Engine {
+public:
+    // Forks the child, which makes its own GL context and a Worker; call only while
+    // can_fork_workers(). Everything referenced is the child's copy-on-write from then on.
+    ProcessEngine(const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout, const HemicubeOptions& opt);
+    ~ProcessEngine() override;  // closes the socket (the child then exits) and reaps the child
+    // Reads the child's hello: its backend and GL_RENDERER, or throws why it could not start.
+    std::pair<std::string, std::string> hello();
+    void start() override {}
+    void stop() override {}
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override;
+    void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
+
+    struct Reply;  // the wire format's reply header (process_engine.cpp)
+
+private:
+    Reply request(std::uint32_t kind, std::uint32_t p);
+    std::string read_text(std::uint64_t n);
+    void recv_or_throw(void* data, std::size_t size);
+
+    int fd_ = -1;
+    pid_t pid_ = -1;
+};
+
+}  // namespace ffcube

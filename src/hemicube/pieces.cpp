@@ -1,0 +1,264 @@
+#include "ffcube/hemicube/pieces.hpp"
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <tuple>
+
+#include "ffcube/core/error.hpp"
+#include "hemicube/point_grid.hpp"
+
+namespace ffcube {
+
+std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids) {
+    using Key = std::array<double, 13>;  // count, then the corners sorted, 3 doubles each
+    std::map<Key, std::vector<std::uint32_t>> by_corners;
+    for (std::uint32_t g = 0; g < grids.size(); ++g) {
+        const PatchGrid& pg = grids[g];
+        std::vector<Vec3> c(pg.corners.begin(), pg.corners.begin() + pg.count);
+        std::sort(c.begin(), c.end(),
+                  [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+        Key key{};
+        key[0] = pg.count;
+        for (std::uint32_t k = 0; k < pg.count; ++k)
+            for (int d = 0; d < 3; ++d) key[1 + 3 * k + static_cast<std::size_t>(d)] = c[k][d];
+        by_corners[key].push_back(g);
+    }
+    std::vector<std::uint8_t> has_twin(grids.size(), 0);
+    for (const auto& [key, gs] : by_corners)
+        for (std::size_t a = 0; a < gs.size(); ++a)
+            for (std::size_t b = a + 1; b < gs.size(); ++b) {
+                const PatchGrid &ga = grids[gs[a]], &gb = grids[gs[b]];
+                const Vec3 na = polygon_normal(std::span<const Vec3>(ga.corners.data(), ga.count));
+                const Vec3 nb = polygon_normal(std::span<const Vec3>(gb.corners.data(), gb.count));
+                if (glm::dot(na, nb) < 0) has_twin[gs[a]] = has_twin[gs[b]] = 1;
+            }
+    return has_twin;
+}
+
+double edge_tolerance(const Vec3& a, const Vec3& b) {
+    const Vec3 m = glm::max(glm::abs(a), glm::abs(b));
+    return 1e-6 * glm::length(b - a) + 4 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
+}
+
+
+// Corners of other pieces that lie on a piece's edge strictly between its endpoints, for every
+// piece edge, sorted by (piece, edge, t). Corner positions are deduplicated and put in a
+// PointGrid whose level-0 cell is the median edge length: a typical edge looks at a few cells
+// holding a few corners each, and long edges cost little where no corners lie.
+std::vector<EdgeVertex> find_edge_vertices(std::span<const PatchGrid> grids, std::vector<Vec3>& corners) {
+    corners.clear();
+    std::vector<double> lengths;
+    for (const PatchGrid& pg : grids)
+        for (std::uint32_t k = 0; k < pg.count; ++k) {
+            corners.push_back(pg.corners[k]);
+            lengths.push_back(glm::length(pg.corners[(k + 1) % pg.count] - pg.corners[k]));
+        }
+    const auto lex = [](const Vec3& a, const Vec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::sort(corners.begin(), corners.end(), lex);
+    corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+    std::vector<EdgeVertex> found;
+    if (lengths.empty()) return found;
+    const auto mid = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+    std::nth_element(lengths.begin(), mid, lengths.end());
+    if (!(*mid > 0)) return found;  // cannot happen: pieces have area
+    const PointGrid grid(corners, *mid);
+
+    std::vector<EdgeVertex> on_edge;
+    for (std::uint32_t g = 0; g < grids.size(); ++g) {
+        const PatchGrid& pg = grids[g];
+        for (std::uint32_t k = 0; k < pg.count; ++k) {
+            const Vec3 a = pg.corners[k], b = pg.corners[(k + 1) % pg.count];
+            const Vec3 d = b - a;
+            const double len2 = glm::dot(d, d), len = std::sqrt(len2);
+            // See edge_tolerance: 1e-9 of the edge was too tight for six-digit OBJ coordinates (test
+            // TJunctionsWithSixDigitCoordinatesLeakNothing); moving the piece's outline through
+            // such a corner changes it by that much, far below a pixel.
+            const double tol = edge_tolerance(a, b);
+            on_edge.clear();
+            grid.near_segment(a, b, tol, [&](std::uint32_t at) {
+                const Vec3 w = corners[at] - a;
+                const double t = glm::dot(w, d) / len2;
+                if (t * len <= tol || (1 - t) * len <= tol) return;  // an endpoint, or beyond
+                const Vec3 off = w - d * t;
+                if (glm::dot(off, off) > tol * tol) return;
+                on_edge.push_back(EdgeVertex{g, k, t, at});
+            });
+            // A corner seen from two cells (or two steps) counts once.
+            std::sort(on_edge.begin(), on_edge.end(),
+                      [](const EdgeVertex& u, const EdgeVertex& v) { return std::tie(u.t, u.at) < std::tie(v.t, v.at); });
+            for (std::size_t i = 0; i < on_edge.size(); ++i)
+                if (i == 0 || on_edge[i].at != on_edge[i - 1].at) found.push_back(on_edge[i]);
+        }
+    }
+    return found;
+}
+
+// Triangulates a convex piece whose boundary (vertex slots, CCW from the front) has T-vertices
+// inside some edges, into boundary.size() − 2 triangles none of which has its three vertices on
+// one edge of the piece (zero area: float rounding could turn it into a back face). on_edges[i]:
+// the piece edges vertex i lies on (two for a corner, one for a T-vertex), which is what decides
+// collinearity, exactly. A strip from corner 0: the part still to cover is the chain l, l+1 ... r
+// closed by the diagonal (r, l); each step cuts the triangle (l, l+1, r) or (l, r−1, r) off it,
+// the one whose new diagonal is shorter among those that have area and leave a chain with a
+// corner strictly inside (one with area) or of two vertices (done). One of the two always
+// qualifies: a chain with an inner corner has area, so its first and last vertices share no
+// edge with both their neighbours unless the diagonal lies along that edge, which the strip
+// never makes; and if neither cut left an inner corner, l + 1 = r − 1 would be the only one.
+void triangulate_boundary(const std::vector<std::uint32_t>& b, const std::vector<std::uint8_t>& on_edges,
+                          const std::vector<Vec3>& pos, std::vector<std::uint32_t>& tris) {
+    const std::size_t n = b.size();
+    const auto fwd = [n](std::size_t from, std::size_t to) { return (to + n - from) % n; };
+    const auto is_corner = [&](std::size_t i) { return (on_edges[i] & (on_edges[i] - 1)) != 0; };
+    // next_corner[i]: the first corner after position i, going forward.
+    std::vector<std::size_t> next_corner(n);
+    std::size_t c = 0;  // position 0 is corner 0
+    for (std::size_t k = 2 * n; k-- > 0;) {
+        const std::size_t i = k % n;
+        next_corner[i] = c;
+        if (is_corner(i)) c = i;
+    }
+    const auto has_area = [&](std::size_t from, std::size_t to) {  // the chain from .. to, closed
+        return fwd(from, to) == 1 || fwd(from, next_corner[from]) < fwd(from, to);
+    };
+    std::size_t l = 0, r = n - 1;
+    while (fwd(l, r) >= 2) {
+        const std::size_t l1 = (l + 1) % n, r1 = (r + n - 1) % n;
+        const bool cut_l = (on_edges[l] & on_edges[l1] & on_edges[r]) == 0 && has_area(l1, r);
+        const bool cut_r = (on_edges[l] & on_edges[r1] & on_edges[r]) == 0 && has_area(l, r1);
+        FFCUBE_CHECK_MSG(cut_l || cut_r, "triangulating a piece with T-vertices");
+        const auto len2 = [&](std::size_t i, std::size_t j) {
+            const Vec3 d = pos[b[i]] - pos[b[j]];
+            return glm::dot(d, d);
+        };
+        if (cut_l && (!cut_r || len2(l1, r) <= len2(l, r1))) {
+            tris.insert(tris.end(), {b[l], b[l1], b[r]});
+            l = l1;
+        } else {
+            tris.insert(tris.end(), {b[l], b[r1], b[r]});
+            r = r1;
+        }
+    }
+}
+
+// Why T-vertices: see pieces.hpp. They take the other piece's corner position bit for bit, so
+// after the shared double → float transform in the GL worker both pieces' edges end at the very
+// same vertices.
+//   The polygon (convex, with collinear vertices on its edges) is cut into as many triangles as
+// it has vertices less two, none of zero area (triangulate_boundary). Plane coordinates are
+// affine in position, so the new vertices' are computed like the corners'. Pieces without
+// T-vertices keep exactly their old triangles (c0, c1, c2), (c0, c2, c3), in the old order:
+// their pixels do not change. Culling still uses the corners only (the polygon is the same
+// piece), and finding the T-vertices is done once per scene (find_edge_vertices).
+ScenePieces prepare_pieces(std::span<const PatchGrid> grids) {
+    ScenePieces sp;
+    const std::size_t ng = grids.size();
+    sp.gpu.reserve(ng);
+    sp.first.reserve(ng + 1);
+    sp.tri_first.reserve(ng + 1);
+    std::vector<Vec3> corners;
+    const std::vector<EdgeVertex> tv = find_edge_vertices(grids, corners);
+    std::size_t next_tv = 0;
+    std::vector<std::uint32_t> boundary;
+    std::vector<std::uint8_t> on_edges;
+    sp.tri_first.push_back(0);
+    for (std::uint32_t g = 0; g < ng; ++g) {
+        const PatchGrid& pg = grids[g];
+        // An orthonormal basis of the piece's plane; coordinates relative to corner 0 in double,
+        // so far-off scenes lose nothing before the conversion to float.
+        const Vec3 n = polygon_normal(std::span<const Vec3>(pg.corners.data(), pg.count));
+        const Vec3 e1 = glm::normalize(pg.corners[1] - pg.corners[0]);
+        const Vec3 e2 = glm::cross(n, e1);
+        double qd[4][2];
+        float q[4][2];
+        for (int k = 0; k < 4; ++k) {
+            const Vec3 d = pg.corners[static_cast<std::size_t>(k)] - pg.corners[0];
+            qd[k][0] = glm::dot(d, e1);
+            qd[k][1] = glm::dot(d, e2);
+            q[k][0] = static_cast<float>(qd[k][0]);
+            q[k][1] = static_cast<float>(qd[k][1]);
+        }
+        // Affine pieces carry their cell coordinates as the vertex parameter, so the fragment
+        // shader only takes their floor (a perspective-correct interpolation of an affine
+        // function of the plane is exact up to float rounding, as the plane coordinates it
+        // replaces are): triangles (s, t) = k × barycentric, and quads that are parallelograms
+        // (count 5 on the GPU side) (u nu, v nv). Other quads keep plane coordinates and the
+        // shader's inverse bilinear. The drawing time at N = 256 was 80% this per-pixel solve
+        // (docs/benchmarks.md).
+        std::uint32_t kind = pg.count;
+        double inv[2][2] = {};  // plane coordinates → cell coordinates, affine pieces
+        {
+            const double size = std::max(std::abs(qd[1][0]) + std::abs(qd[1][1]), std::abs(qd[3][0]) + std::abs(qd[3][1]));
+            const double gx = qd[2][0] - qd[1][0] - qd[3][0], gy = qd[2][1] - qd[1][1] - qd[3][1];
+            // Columns: the cell axes' plane vectors (c1 − c0 and c2 − c0 or c3 − c0) over nu, nv.
+            double a[2][2];
+            if (pg.count == 3) {
+                a[0][0] = qd[1][0] / pg.nu; a[1][0] = qd[1][1] / pg.nu;
+                a[0][1] = qd[2][0] / pg.nu; a[1][1] = qd[2][1] / pg.nu;
+            } else {
+                a[0][0] = qd[1][0] / pg.nu; a[1][0] = qd[1][1] / pg.nu;
+                a[0][1] = qd[3][0] / pg.nv; a[1][1] = qd[3][1] / pg.nv;
+                // A parallelogram to 1e-9 of its size: the bilinear map is then affine to well
+                // below float rounding of the cell coordinates (≤ 1e-9 × nu of a cell). Or to a
+                // few ulps of its coordinates: a small piece far from the origin cannot be told
+                // from a parallelogram by more than its corners' own rounding.
+                double mag = 0;
+                for (std::uint32_t k = 0; k < 4; ++k)
+                    for (int d = 0; d < 3; ++d) mag = std::max(mag, std::abs(pg.corners[k][d]));
+                if (std::abs(gx) + std::abs(gy) <= 1e-9 * size + 8 * std::numeric_limits<double>::epsilon() * mag) kind = 5;
+            }
+            const double det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+            inv[0][0] = a[1][1] / det; inv[0][1] = -a[0][1] / det;
+            inv[1][0] = -a[1][0] / det; inv[1][1] = a[0][0] / det;
+        }
+        const bool affine = kind != 4;
+        sp.has_kind[kind] = true;
+        const auto add_slot = [&](const Vec3& p) {
+            const Vec3 d = p - pg.corners[0];
+            const double x = glm::dot(d, e1), y = glm::dot(d, e2);
+            sp.pos.push_back(p);
+            if (affine) {
+                sp.param.push_back(static_cast<float>(inv[0][0] * x + inv[0][1] * y));
+                sp.param.push_back(static_cast<float>(inv[1][0] * x + inv[1][1] * y));
+            } else {
+                sp.param.push_back(static_cast<float>(x));
+                sp.param.push_back(static_cast<float>(y));
+            }
+            sp.grid.push_back(g);
+            sp.info.insert(sp.info.end(), {kind, pg.nu, pg.nv, pg.first_patch});
+            return static_cast<std::uint32_t>(sp.pos.size() - 1);
+        };
+        sp.gpu.push_back(GpuGrid{{q[1][0], q[1][1]}, {q[2][0], q[2][1]}, {q[3][0], q[3][1]}, kind, pg.nu, pg.nv,
+                                 pg.first_patch});
+        const auto base = static_cast<std::uint32_t>(sp.pos.size());
+        sp.first.push_back(base);
+        for (std::uint32_t k = 0; k < pg.count; ++k) add_slot(pg.corners[k]);
+        if (next_tv < tv.size() && tv[next_tv].g == g) {
+            // The boundary, CCW: each corner, then the T-vertices inside the edge it starts;
+            // with, per vertex, the piece edges it lies on (bit k: edge k, corner k → k + 1).
+            boundary.clear();
+            on_edges.clear();
+            for (std::uint32_t k = 0; k < pg.count; ++k) {
+                boundary.push_back(base + k);
+                on_edges.push_back(static_cast<std::uint8_t>((1u << k) | (1u << ((k + pg.count - 1) % pg.count))));
+                for (; next_tv < tv.size() && tv[next_tv].g == g && tv[next_tv].k == k; ++next_tv) {
+                    boundary.push_back(add_slot(corners[tv[next_tv].at]));
+                    on_edges.push_back(static_cast<std::uint8_t>(1u << k));
+                }
+            }
+            triangulate_boundary(boundary, on_edges, sp.pos, sp.tris);
+        }
+        sp.tri_first.push_back(static_cast<std::uint32_t>(sp.tris.size()));
+    }
+    sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
+    sp.has_twin = find_twins(grids);
+    return sp;
+}
+
+}  // namespace ffcube
