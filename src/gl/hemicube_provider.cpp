@@ -80,8 +80,7 @@ struct HemicubeRowProvider::Impl {
 };
 
 HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options) {
-    if (options.resolution < 8 || options.resolution > 8192 || options.resolution % 2 != 0)
-        throw InputError(fmt::format("--resolution {}: must be an even number of pixels from 8 to 8192", options.resolution));
+    check_row_resolution(options.resolution);
     if (scene.patches.size() >= kBackFace - 1) throw InputError("the scene has too many patches for 32-bit item IDs");
     unsigned n = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
     n = static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(1, scene.patches.size())));
