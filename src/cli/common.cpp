@@ -20,6 +20,10 @@ void add_scene_options(CLI::App& app, SceneOptions& o) {
     auto* edge = app.add_option("--max-patch-edge", o.max_patch_edge, "split faces so that no patch edge exceeds L (scene units)")
                      ->check(CLI::PositiveNumber);
     app.add_option("--patches", o.patches, "mesh to about N patches (default: 2000)")->check(CLI::PositiveNumber)->excludes(edge);
+    app.add_option("--objects-by", o.objects_by,
+                   "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material")
+        ->check(CLI::IsMember({"auto", "o", "g", "material"}))
+        ->default_val("auto");
     app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
 }
 
@@ -77,7 +81,7 @@ std::size_t patch_limit_for_this_machine(std::size_t limit) {
 
 Scene load_and_mesh(const SceneOptions& o, Report& report) {
     Stopwatch watch;
-    ObjModel model = o.scene.empty() ? load_cornell_box() : load_obj(o.scene);
+    ObjModel model = o.scene.empty() ? load_cornell_box() : load_obj(o.scene, {parse_objects_by(o.objects_by)});
     for (const auto& w : model.warnings) log_warning(w);
     const double load_s = watch.seconds();
     watch.restart();

@@ -24,6 +24,7 @@ struct SceneOptions {
     std::string scene;  // empty: the built-in Cornell box
     double max_patch_edge = 0.0;
     std::size_t patches = 0;
+    std::string objects_by = "auto";  // --objects-by: auto, o, g or material (ObjObjectsBy)
     bool quiet = false;
 };
 
