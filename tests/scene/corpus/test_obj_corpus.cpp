@@ -608,7 +608,9 @@ TEST_F(Corpus, ClosedCylinderRowsSumToOne) { expect_closed(formfactors(write(cyl
 //            3.5e-5 at N = 128);
 //   cc_cube  one row 1.1e-4 short (--no-rotate: five symmetric rows each 1.5e-5 short);
 //   terrain  10 rows 1.7e-5 to 3.9e-5 short (grazing pixels over the shallow floor), 7 with
-//            --no-rotate.
+//            --no-rotate. Not the T-junctions: with walls split at every floor vertex it loses
+//            the same (min 0.99996); that mesh flattened to z = 0 loses nothing. It is the
+//            shallow folds between neighbouring triangles.
 // At default settings the correction rebalances closed rows and hides it (terrain 1 − 4e-8).
 // Until it is fixed these assert at most one heaviest pixel lost per row (and so at most that
 // on average), and the strict versions below are disabled.
