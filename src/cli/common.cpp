@@ -33,6 +33,9 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
     app.add_option("--patches", o.scene.patches, "mesh to about N patches (default: 2000)")
         ->check(CLI::PositiveNumber)
         ->excludes(edge);
+    add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
+                    {"auto", "o", "g", "material"},
+                    "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto");
     app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
 }
 

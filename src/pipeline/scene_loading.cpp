@@ -13,7 +13,7 @@ namespace ffcube {
 Scene load_and_mesh(const SceneOptions& o, Report& report) {
     validate(o);
     Stopwatch watch;
-    ObjModel model = o.path.empty() ? load_cornell_box() : load_obj(o.path);
+    ObjModel model = o.path.empty() ? load_cornell_box() : load_obj(o.path, {o.objects_by});
     for (const auto& w : model.warnings) log_warning(w);
     const double load_s = watch.seconds();
     watch.restart();

@@ -189,8 +189,8 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
 class ObjParser {
 public:
-    ObjParser(std::string_view text, const std::string& source, const MtlResolver& mtl)
-        : text_(text), mtl_(mtl) {
+    ObjParser(std::string_view text, const std::string& source, const MtlResolver& mtl, const ObjLoadOptions& options)
+        : text_(text), mtl_(mtl), options_(options) {
         model_.source = source;
         model_.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
     }
@@ -314,16 +314,23 @@ private:
         Tokens tokens(rest, model_.source, number);
         std::string_view token;
         while (tokens.next(token)) names.push_back(token);
-        const bool all_found = names.size() > 1 && std::all_of(names.begin(), names.end(), [this](std::string_view n) {
+        // Every word is tried (no short cut at the first one missing), so the warning below can
+        // name each path tried.
+        const bool all_found = names.size() > 1 && std::count_if(names.begin(), names.end(), [this](std::string_view n) {
                                    return static_cast<bool>(mtl_(std::string(n)));
-                               });
+                               }) == static_cast<std::ptrdiff_t>(names.size());
         if (all_found) {
             for (const std::string_view n : names) load_mtl(n);
             return;
         }
-        model_.warnings.push_back(fmt::format("{}:{}: material library '{}' not found; its materials get the default "
-                                              "(Kd 0.5 0.5 0.5, Ke 0 0 0)",
-                                              model_.source, number, rest));
+        // Name every path tried (the whole rest of the line, then each word when there are
+        // several), as the resolver saw them: relative to the OBJ's directory.
+        std::string tried = fmt::format("'{}'", mtl_source(model_.source, rest));
+        if (names.size() > 1)
+            for (const std::string_view n : names) tried += fmt::format(", '{}'", mtl_source(model_.source, n));
+        model_.warnings.push_back(fmt::format("{}:{}: material library '{}' not found (tried {}); its materials get the "
+                                              "default (Kd 0.5 0.5 0.5, Ke 0 0 0)",
+                                              model_.source, number, rest, tried));
     }
 
     bool load_mtl(std::string_view name) {
@@ -333,20 +340,25 @@ private:
         return true;
     }
 
-    // 'o' names objects; a file without any 'o' is named by its 'g' groups; else "default".
+    // Objects by options_.objects_by; auto: 'o' names objects, a file without any 'o' is named by
+    // its 'g' groups, a file with neither by its materials ('usemtl' names). Faces before the
+    // first statement of the chosen kind belong to "default".
     void assign_objects() {
-        const bool by_o = saw_o_;
-        const bool by_g = !by_o && !g_names_.empty();
-        const NameTable& table = by_o ? o_names_ : g_names_;
-        const std::vector<std::uint32_t>& slots = by_o ? face_o_ : face_g_;
+        ObjObjectsBy by = options_.objects_by;
+        if (by == ObjObjectsBy::automatic)
+            by = saw_o_ ? ObjObjectsBy::o : !g_names_.empty() ? ObjObjectsBy::g : ObjObjectsBy::material;
+        const NameTable& table = by == ObjObjectsBy::o ? o_names_ : by == ObjObjectsBy::g ? g_names_ : usemtl_names_;
+        const std::vector<std::uint32_t>& slots = by == ObjObjectsBy::o ? face_o_ : by == ObjObjectsBy::g ? face_g_ : face_mtl_;
         std::vector<std::uint32_t> object_of_slot(table.names().size(), kNone);
         std::uint32_t default_object = kNone;
         for (std::size_t i = 0; i < model_.faces.size(); ++i) {
-            const std::uint32_t slot = (by_o || by_g) ? slots[i] : kNone;
+            const std::uint32_t slot = slots[i];
             std::uint32_t& object = slot == kNone ? default_object : object_of_slot[slot];
             if (object == kNone) {
                 object = static_cast<std::uint32_t>(model_.objects.size());
-                model_.objects.push_back(slot == kNone ? std::string("default") : table.names()[slot]);
+                // 'usemtl' with an empty name is allowed; as an object it is "default" like 'o'.
+                model_.objects.push_back(slot == kNone ? std::string("default")
+                                                       : std::string(name_or_default(table.names()[slot])));
             }
             model_.faces[i].object = object;
         }
@@ -378,6 +390,7 @@ private:
 
     std::string_view text_;
     const MtlResolver& mtl_;
+    ObjLoadOptions options_;
     ObjModel model_;
 
     NameTable o_names_, g_names_, usemtl_names_;
@@ -445,8 +458,16 @@ void parse_mtl(std::string_view text, const std::string& source, std::vector<Mat
     }
 }
 
-ObjModel parse_obj(std::string_view text, const std::string& source, const MtlResolver& mtl) {
-    return ObjParser(text, source, mtl).run();
+ObjObjectsBy parse_objects_by(std::string_view name, std::string_view option) {
+    if (name == "auto") return ObjObjectsBy::automatic;
+    if (name == "o") return ObjObjectsBy::o;
+    if (name == "g") return ObjObjectsBy::g;
+    if (name == "material") return ObjObjectsBy::material;
+    throw InputError(fmt::format("{} {}: must be auto, o, g or material", option, shown(name)));
+}
+
+ObjModel parse_obj(std::string_view text, const std::string& source, const MtlResolver& mtl, const ObjLoadOptions& options) {
+    return ObjParser(text, source, mtl, options).run();
 }
 
 namespace {
@@ -472,7 +493,7 @@ std::optional<std::string> read_file(const std::filesystem::path& path) {
 
 }  // namespace
 
-ObjModel load_obj(const std::filesystem::path& path) {
+ObjModel load_obj(const std::filesystem::path& path, const ObjLoadOptions& options) {
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (!std::filesystem::exists(status))
@@ -483,7 +504,7 @@ ObjModel load_obj(const std::filesystem::path& path) {
     if (!text) throw InputError(fmt::format("{}: is not a regular file, not an OBJ file", path.string()));
     const std::filesystem::path dir = path.parent_path();
     const MtlResolver resolver = [&dir](const std::string& name) { return read_file(dir / name); };
-    return parse_obj(*text, path.string(), resolver);
+    return parse_obj(*text, path.string(), resolver, options);
 }
 
 }  // namespace ffcube

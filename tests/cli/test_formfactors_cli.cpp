@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 
@@ -125,6 +126,7 @@ TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
         {"formfactors -o " + (dir / "nodir/F.ffm"), 2, "does not exist"},
         {"formfactors --resolution 7 -o " + out, 2, "even number"},
         {"formfactors --backend vulkan -o " + out, 2, "vulkan"},
+        {"formfactors --objects-by groups -o " + out, 2, "--objects-by"},
         {"formfactors --patches 10 --max-patch-edge 1 -o " + out, 2, "excludes"},
         {"formfactors --max-patch-edge 1e-9 -o " + out, 2, "patches"},
     };
@@ -136,6 +138,35 @@ TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
     }
     // Nothing but the (absent) outputs was left behind: no temporaries either.
     EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+// Issue 13: a Cornell-box-like file that lists each block's faces before its 'g' line (one
+// material per block). By groups (auto: the file has no 'o') the faces land in the object named
+// before them; --objects-by material puts each block's faces together.
+TEST(FormfactorsCli, ObjectsByMaterialGroupsFacesListedBeforeTheirG) {
+    TempDir dir;
+    const std::string obj = dir / "blocks.obj";
+    // Two unit squares facing each other at distance 1 (F = 0.19982 each way), written as
+    //   usemtl lower / f (lower) / g lower_block / usemtl upper / f (upper) / g upper_block
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                          "usemtl lower\nf 1 2 3 4\ng lower_block\nusemtl upper\nf 5 8 7 6\ng upper_block\n";
+    const auto groups_of = [&](const std::string& by) {
+        const std::string csv = dir / ("g_" + by + ".csv");
+        const auto r = run_ffcube("formfactors " + obj + " --objects-by " + by +
+                                  " --max-patch-edge 1 --resolution 64 --threads 1 -q --groups " + csv);
+        EXPECT_EQ(r.code, 0) << r.output;
+        return read_groups(csv);
+    };
+    const auto by_material = groups_of("material");
+    ASSERT_EQ(by_material.size(), 2u);
+    EXPECT_NEAR((by_material.at({"lower", "upper"})), 0.19982, 1e-3);
+    EXPECT_NEAR((by_material.at({"upper", "lower"})), 0.19982, 1e-3);
+    // auto and g: the lower square is "default" (no 'g' before it), the upper one "lower_block".
+    for (const std::string by : {"auto", "g"}) {
+        const auto g = groups_of(by);
+        ASSERT_EQ(g.size(), 2u) << by;
+        EXPECT_EQ(g.count({"default", "lower_block"}), 1u) << by;
+    }
 }
 
 // With EGL's vendor list pointing nowhere, --backend egl has no context to offer: exit 4 and a

@@ -1,5 +1,6 @@
 // libFuzzer target: the OBJ/MTL loader and the mesher on arbitrary bytes.
 // Input: OBJ text, optionally followed by "\n#MTL\n" and the text every 'mtllib' resolves to.
+// The input's length modulo 4 chooses the ObjObjectsBy mode (auto, o, g, material).
 // Bad input must end in InputError; anything else (a crash, a sanitizer report, an uncaught
 // InternalError = a failed FFCUBE_CHECK) is a bug.
 #include <cstddef>
@@ -23,7 +24,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         return mtl;
     };
     try {
-        const ffcube::ObjModel model = ffcube::parse_obj(obj, "fuzz.obj", resolver);
+        // Every way of naming objects (--objects-by), chosen by the input's length.
+        constexpr ffcube::ObjObjectsBy kBy[] = {ffcube::ObjObjectsBy::automatic, ffcube::ObjObjectsBy::o,
+                                                ffcube::ObjObjectsBy::g, ffcube::ObjObjectsBy::material};
+        const ffcube::ObjModel model = ffcube::parse_obj(obj, "fuzz.obj", resolver, {kBy[size % 4]});
         // Mesh it too, small: a fuzzed scene must not make the mesher misbehave either. The
         // patch limit keeps a tiny edge on a huge face from running out of memory on purpose.
         ffcube::MeshOptions options;

@@ -254,6 +254,71 @@ TEST(ValidInput, ObjectsWinOverGroupsAndUnnamedFacesAreDefault) {
     EXPECT_EQ(m.faces[2].object, 1u);
 }
 
+TEST(ValidInput, MaterialsNameObjectsWhenThereIsNoOAndNoG) {
+    // Faces before the first 'usemtl' belong to "default".
+    const ObjModel m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nusemtl red\nf 1 2 3\nusemtl white\nf 1 2 3\n"
+                             "usemtl red\nf 1 2 3\n");
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"default", "red", "white"}));
+    ASSERT_EQ(m.faces.size(), 4u);
+    EXPECT_EQ(m.faces[0].object, 0u);
+    EXPECT_EQ(m.faces[1].object, 1u);
+    EXPECT_EQ(m.faces[2].object, 2u);
+    EXPECT_EQ(m.faces[3].object, 1u);
+}
+
+// A box's faces listed before its 'g' line (as in some widely used Cornell box files), one
+// material per box: auto takes the groups, which are off by one; --objects-by material is right.
+constexpr std::string_view kGroupsAfterFaces =
+    "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
+    "usemtl short\nf 1 2 3\nf 1 3 2\ng short_block\n"
+    "usemtl tall\nf 1 2 3\nf 1 3 2\ng tall_block\n"
+    "o extra\n";
+
+TEST(ValidInput, ObjectsByChoosesTheStatement) {
+    const auto objects = [](ObjObjectsBy by) {
+        const ObjModel m = parse_obj(kGroupsAfterFaces, "t.obj", no_mtl(), {by});
+        std::vector<std::string> per_face;
+        for (const ObjFace& f : m.faces) per_face.push_back(m.objects[f.object]);
+        return per_face;
+    };
+    using V = std::vector<std::string>;
+    // The file has an 'o' (after every face): auto takes 'o', so every face is "default".
+    EXPECT_EQ(objects(ObjObjectsBy::automatic), (V{"default", "default", "default", "default"}));
+    EXPECT_EQ(objects(ObjObjectsBy::o), (V{"default", "default", "default", "default"}));
+    EXPECT_EQ(objects(ObjObjectsBy::g), (V{"default", "default", "short_block", "short_block"}));
+    EXPECT_EQ(objects(ObjObjectsBy::material), (V{"short", "short", "tall", "tall"}));
+    // Without the 'o', auto takes the groups.
+    const std::string no_o(kGroupsAfterFaces.substr(0, kGroupsAfterFaces.find("o extra")));
+    const ObjModel m = parse(no_o);
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"default", "short_block"}));
+}
+
+TEST(ValidInput, ObjectsByMaterialWithoutAnyUsemtlIsOneDefaultObject) {
+    const ObjModel m = parse_obj("o a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "t.obj", no_mtl(), {ObjObjectsBy::material});
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"default"}));
+}
+
+TEST(BadInput, ObjectsByNamesTheOptionAndTheChoices) {
+    EXPECT_EQ(parse_objects_by("auto"), ObjObjectsBy::automatic);
+    EXPECT_EQ(parse_objects_by("o"), ObjObjectsBy::o);
+    EXPECT_EQ(parse_objects_by("g"), ObjObjectsBy::g);
+    EXPECT_EQ(parse_objects_by("material"), ObjObjectsBy::material);
+    EXPECT_EQ(error_of([] { parse_objects_by("groups"); }), "--objects-by 'groups': must be auto, o, g or material");
+}
+
+TEST(ValidInput, MissingMtlWarningNamesEveryPathTried) {
+    const MtlResolver only_a = [](const std::string& name) -> std::optional<std::string> {
+        if (name == "a.mtl") return std::string("newmtl ma\nKd 0.1\n");
+        return std::nullopt;
+    };
+    const ObjModel m = parse_obj("mtllib a.mtl b c.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "dir/t.obj", only_a);
+    ASSERT_EQ(m.warnings.size(), 1u);
+    EXPECT_NE(m.warnings[0].find("dir/t.obj:1: material library 'a.mtl b c.mtl' not found (tried 'dir/a.mtl b c.mtl', "
+                                 "'dir/a.mtl', 'dir/b', 'dir/c.mtl')"),
+              std::string::npos)
+        << m.warnings[0];
+}
+
 TEST(ValidInput, NoNamesAtAllGiveDefault) {
     const ObjModel m = parse("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     EXPECT_EQ(m.objects, (std::vector<std::string>{"default"}));
@@ -262,7 +327,9 @@ TEST(ValidInput, NoNamesAtAllGiveDefault) {
 TEST(ValidInput, MissingMtlWarnsAndUsesTheDefaultMaterial) {
     const ObjModel m = load_obj(kScenes / "good" / "missing_mtl.obj");
     ASSERT_EQ(m.warnings.size(), 2u);
-    EXPECT_NE(m.warnings[0].find("missing_mtl.obj:1: material library 'nowhere.mtl' not found"), std::string::npos)
+    EXPECT_NE(m.warnings[0].find("missing_mtl.obj:1: material library 'nowhere.mtl' not found (tried '" +
+                                 (kScenes / "good" / "nowhere.mtl").string() + "')"),
+              std::string::npos)
         << m.warnings[0];
     EXPECT_NE(m.warnings[1].find("missing_mtl.obj:2: material 'm' is not defined"), std::string::npos) << m.warnings[1];
     EXPECT_EQ(m.faces[0].material, 0u);

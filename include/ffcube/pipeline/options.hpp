@@ -14,6 +14,7 @@
 #include "ffcube/gl/context.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/scene/obj_loader.hpp"
 
 namespace ffcube {
 
@@ -22,6 +23,7 @@ struct SceneOptions {
     std::string path;            // empty: the built-in Cornell box
     double max_patch_edge = 0;   // > 0: split faces so that no patch edge exceeds it
     std::size_t patches = 0;     // > 0: mesh to about this many patches (default of the mesher otherwise)
+    ObjObjectsBy objects_by = ObjObjectsBy::automatic;  // OBJ: what names objects (--objects-by)
 };
 
 enum class RowMethod { Hemicube, Raycast };

@@ -32,7 +32,7 @@ struct ObjModel {
     std::string source;                 // file path (or "<built-in cornell box>") for messages
     std::vector<Vec3> positions;
     std::vector<ObjFace> faces;
-    std::vector<std::string> objects;   // 'o' names, else 'g' names, else "default"
+    std::vector<std::string> objects;   // ObjObjectsBy: 'o' names, else 'g', else materials; else "default"
     std::vector<Material> materials;    // [0] is the default material
     std::vector<std::string> warnings;  // also printed with log_warning when loaded from the CLI
 };
