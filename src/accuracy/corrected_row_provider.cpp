@@ -44,7 +44,10 @@ struct CorrectedRowProvider::Pools {
         const std::lock_guard lock(mutex);
         scratch.push_back(std::move(s));
     }
+    // Keeps exact's buffer for a later analysis (when it has one: an analysis made by correct()
+    // itself lives in the sink's scratch, and the slot's is empty).
     void recycle(Entries& exact) {
+        if (exact.capacity() == 0) return;
         exact.clear();
         const std::lock_guard lock(mutex);
         entries.push_back(std::move(exact));
