@@ -1,6 +1,7 @@
 // The far field of the near-field corrector (NearFieldOptions::far_field): the plane
 // visibility proof (NearFieldCorrector::far_unoccluded) checked against brute-force segment
-// casting written here, the far values of analyse() against ff_polygon_polygon, and the
+// casting written here, the values of analyse() against Howell's closed forms (near pairs) and
+// ff_polygon_polygon (far pairs, which it does not use), and the
 // conditions that switch the far field off.
 #include <gtest/gtest.h>
 
@@ -17,10 +18,18 @@
 
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/geometry/analytic.hpp"
+#include "support/closed_forms.hpp"
 #include "support/scenes.hpp"
+#include "support/segments.hpp"
 
 namespace ffcube {
 namespace {
+
+using test::crosses_interior;
+using test::random_point;
+using test::Rng;
+using test::test_poly;
+using test::TestPoly;
 
 std::vector<Vec3> patch_polygon(const Scene& s, std::uint32_t j) {
     const auto v = s.patch_vertices(j);
@@ -31,30 +40,6 @@ NearFieldOptions far_on() {
     NearFieldOptions o;
     o.far_field = NearFieldOptions::FarField::on;
     return o;
-}
-
-// Deterministic uniform [0, 1) from a fixed-seed engine (own conversion: the same numbers with
-// any standard library).
-struct Rng {
-    std::mt19937_64 e;
-    explicit Rng(std::uint64_t seed) : e(seed) {}
-    double operator()() { return static_cast<double>(e() >> 11) * 0x1.0p-53; }
-    double operator()(double lo, double hi) { return lo + (hi - lo) * (*this)(); }
-};
-
-// A random point of patch j: bilinear (u, v) on a quad (inside a convex quad), folded
-// barycentric on a triangle. Not area-uniform on a quad; any distribution with full support
-// will do for finding blocked segments.
-Vec3 random_point(const Scene& s, std::uint32_t j, Rng& rng) {
-    const auto v = s.patch_vertices(j);
-    double u = rng(), w = rng();
-    if (s.patches[j].count == 4)
-        return (1 - u) * (1 - w) * v[0] + u * (1 - w) * v[1] + u * w * v[2] + (1 - u) * w * v[3];
-    if (u + w > 1) {
-        u = 1 - u;
-        w = 1 - w;
-    }
-    return v[0] + u * (v[1] - v[0]) + w * (v[2] - v[0]);
 }
 
 struct Box {
@@ -74,42 +59,6 @@ Box patch_box(const Scene& s, std::uint32_t j) {
 bool overlaps(const Box& a, const Box& b, double eps) {
     for (int k = 0; k < 3; ++k)
         if (a.hi[k] + eps < b.lo[k] || b.hi[k] + eps < a.lo[k]) return false;
-    return true;
-}
-
-// A patch for the segment test: its vertices and Newell's unit normal (which follows the vertex
-// order, so the inside is left of every edge seen from the front).
-struct TestPoly {
-    std::vector<Vec3> v;
-    Vec3 n{0.0};
-};
-
-TestPoly test_poly(const Scene& s, std::uint32_t j) {
-    TestPoly q{patch_polygon(s, j), Vec3(0.0)};
-    for (std::size_t k = 0; k < q.v.size(); ++k) {
-        const Vec3& p = q.v[k];
-        const Vec3& r = q.v[(k + 1) % q.v.size()];
-        q.n += Vec3((p.y - r.y) * (p.z + r.z), (p.z - r.z) * (p.x + r.x), (p.x - r.x) * (p.y + r.y));
-    }
-    q.n = glm::normalize(q.n);
-    return q;
-}
-
-// Whether segment a→b passes through the interior of the planar convex polygon q: its ends lie
-// strictly on opposite sides of q's plane (by more than eps), the crossing is not within a
-// relative 1e-9 of either end, and the crossing point is more than eps inside every edge.
-// Touching (an end in the plane, a segment in the plane, a crossing on an edge) is not blocking,
-// as the header documents: such segments are a set of measure zero.
-bool crosses_interior(const Vec3& a, const Vec3& b, const TestPoly& q, double eps) {
-    const double da = glm::dot(q.n, a - q.v[0]), db = glm::dot(q.n, b - q.v[0]);
-    if (!((da > eps && db < -eps) || (da < -eps && db > eps))) return false;
-    const double t = da / (da - db);
-    if (!(t > 1e-9 && t < 1 - 1e-9)) return false;
-    const Vec3 x = a + t * (b - a);
-    for (std::size_t k = 0; k < q.v.size(); ++k) {
-        const Vec3 e = q.v[(k + 1) % q.v.size()] - q.v[k];
-        if (!(glm::dot(glm::cross(e, x - q.v[k]), q.n) / glm::length(e) > eps)) return false;
-    }
     return true;
 }
 
@@ -351,9 +300,10 @@ TEST(FarField, SoundRandomFacets) {
     }
 }
 
-// analyse() of every row against ff_polygon_polygon in an unoccluded scene.
+// analyse() of every row in an unoccluded scene of axis-aligned rectangles: near entries against
+// Howell's closed forms (test::rectangle_pair_ff), far ones against the contour integral.
 //
-// How near_field.cpp integrates a far pair, by centroid distance d in sizes H (the larger longest
+// How far_field.cpp integrates a far pair, by centroid distance d in sizes H (the larger longest
 // edge of the two): exact receiver + 3 × 3 sender Gauss below 5 H, the point kernel on 3 × 3
 // points of each patch below 16 H, on 2 × 2 points below 640 H, on the centroids beyond.
 // Gauss–Legendre with n points on an interval of length h errs by h^(2n+1) (n!)⁴ / ((2n+1)
@@ -401,7 +351,18 @@ ValueCheck check_values(const Scene& s, bool check_estimate = true) {
         double ref_sum = 0;
         for (std::uint32_t j = 0; j < n; ++j)
             if (j != i) {
-                ref[j] = ff_polygon_polygon(patch_polygon(s, i), patch_polygon(s, j));
+                // Near pairs, which the corrector computes with the contour integral: Howell's
+                // closed forms. Far pairs (point rules, Lambert's point-to-polygon formula): the
+                // contour integral, which the far field does not use. (C-12's 16 terms cancel
+                // too much for far pairs: 5e-4 relative at 720 sizes.)
+                const Patch& pj = s.patches[j];
+                const bool near = glm::length(pj.centroid - pi.centroid) < kNearK * std::max(pi.size, pj.size);
+                if (near) {
+                    ref[j] = test::rectangle_pair_ff(s, i, j);
+                    EXPECT_FALSE(std::isnan(ref[j])) << "not a closed-form arrangement: " << i << " " << j;
+                } else {
+                    ref[j] = ff_polygon_polygon(patch_polygon(s, i), patch_polygon(s, j));
+                }
                 ref_sum += ref[j];
             }
         double sum = 0, allowed = 0;
@@ -432,7 +393,7 @@ ValueCheck check_values(const Scene& s, bool check_estimate = true) {
                 ++v.count[t];
                 ++far;
             }
-            // + 1e-10 relative: ff_polygon_polygon's own accuracy (~1e-12) with room.
+            // + 1e-10 relative: the references' own accuracy (~1e-12) with room.
             EXPECT_LE(rel, bound + 1e-10) << "row " << i << " col " << j << " d/H " << d / H << " f " << f << " ref "
                                          << ref[j];
             allowed += (bound + 1e-10) * ref[j];

@@ -137,6 +137,21 @@ struct NearAnalysis {
     bool done = false;
 };
 
+// Scratch space for analysing and correcting rows on one thread: buffers reused from row to row
+// (no heap allocation per row once they have grown). Not thread-safe: one per thread.
+class NearFieldScratch {
+public:
+    NearFieldScratch();
+    ~NearFieldScratch();
+    NearFieldScratch(NearFieldScratch&&) noexcept;
+    NearFieldScratch& operator=(NearFieldScratch&&) noexcept;
+    struct Buffers;  // src/accuracy/scratch.hpp
+    Buffers& buffers() { return *buffers_; }
+
+private:
+    std::unique_ptr<Buffers> buffers_;
+};
+
 // Finds near pairs and decides occlusion for one scene. Builds a uniform grid of the patches'
 // bounding boxes once (O(patches)); thread-compatible (const after construction).
 class NearFieldCorrector {
@@ -148,6 +163,13 @@ public:
 
     // The near pairs of row i: exact values of those proven unoccluded, counts. Thread-safe.
     void analyse(std::uint32_t i, NearAnalysis& out) const;
+    // The same with the caller's scratch space (out's buffer is reused too).
+    void analyse(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const;
+    // How row i must be measured, from its analysis (made into out): sampled (sub-hemicubes)
+    // when a near pair may be occluded, skip when every facing pair is known analytically (and
+    // NearFieldOptions::skip_complete_rows; out.skipped is then set), centre otherwise. A
+    // function of the scene and i only, so it may run before the row is asked of anyone.
+    RowProvider::RowPlan plan_row(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const;
     // Corrects row i in place (columns stay strictly increasing, values > 0) and adds to stats
     // (all but seconds). With error_estimate: the row's estimated error Σ_j |F_ij − exact_ij|
     // (docs/accuracy.md, "Per-row error estimate"). analysis: row i's, if already made.
@@ -156,6 +178,10 @@ public:
     // (NearAnalysis::skipped) is empty: the row is the analysis.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr,
                  const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
+    // The same with the caller's scratch space: no heap allocation in the steady state.
+    void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, NearFieldScratch& scratch,
+                 double* error_estimate = nullptr, const NearAnalysis* analysis = nullptr,
+                 bool sampled_row = false) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
     // The far field's visibility proof, O(1) per pair for scenes of few planes: no plane that
@@ -180,6 +206,7 @@ public:
     // inner and scene must outlive this; inner.size() == scene.size() (InputError otherwise,
     // also for k ≤ 0).
     CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options = {});
+    ~CorrectedRowProvider() override;
     std::uint32_t size() const override { return inner_.size(); }
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
@@ -204,6 +231,10 @@ private:
     std::vector<float> row_error_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
+    // Scratch space reused across rows: the sink's, one per plan callback running at once (on
+    // the inner provider's threads), and the analyses' buffers (corrected_row_provider.cpp).
+    struct Pools;
+    std::unique_ptr<Pools> pools_;
 };
 
 }  // namespace ffcube

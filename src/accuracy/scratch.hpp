@@ -1,0 +1,31 @@
+// Internal to the accuracy layer. One job: the buffers one thread reuses across rows
+// (NearFieldScratch), so that analysing and correcting a row allocates nothing once they have
+// grown to the largest row.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "accuracy/near_values.hpp"
+#include "accuracy/row_merge.hpp"
+#include "accuracy/shaft_test.hpp"
+#include "ffcube/accuracy/near_field.hpp"
+
+namespace ffcube {
+
+struct NearFieldScratch::Buffers {
+    // analyse
+    std::vector<std::uint32_t> near;                        // candidates within reach
+    accuracy::ShaftScratch shaft;                           // the occlusion test's
+    accuracy::NearValueScratch values;                      // separated near values'
+    std::vector<std::pair<std::uint32_t, double>> far;      // far entries, j increasing
+    std::vector<std::pair<std::uint32_t, double>> near_exact;  // the near entries while merging
+    // correct
+    NearAnalysis analysis;  // when the caller has none
+    std::vector<Vec3> quadrature_points;
+    std::vector<double> quadrature_weights;
+    accuracy::MergedRow merged;
+};
+
+}  // namespace ffcube

@@ -1,0 +1,87 @@
+// The occlusion (shaft) test of near pairs (see shaft_test.hpp).
+#include "accuracy/shaft_test.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace ffcube::accuracy {
+
+namespace {
+
+// Whether the projections of the hull points and of q on `axis` overlap by at most tol.
+bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, double tol) {
+    double hlo = INFINITY, hhi = -INFINITY, qlo = INFINITY, qhi = -INFINITY;
+    for (const Vec3& v : hull) {
+        const double d = glm::dot(axis, v);
+        hlo = std::min(hlo, d);
+        hhi = std::max(hhi, d);
+    }
+    for (std::size_t k = 0; k < q.n; ++k) {
+        const double d = glm::dot(axis, q.v[k]);
+        qlo = std::min(qlo, d);
+        qhi = std::max(qhi, d);
+    }
+    return hhi <= qlo + tol || qhi <= hlo + tol;
+}
+
+}  // namespace
+
+// Candidate axes: the normals of q, i and j; the cross products of q's edges with every segment
+// between two hull points (the edge–edge axes of the full test); and the normals of every plane
+// through three hull points (the hull's face planes are among them).
+bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                      ShaftScratch& scratch) {
+    const Scene& scene = patches.scene;
+    std::array<Vec3, 8> hull_points{};
+    std::size_t m = 0;
+    for (std::size_t k = 0; k < patches.polys[i].n; ++k) hull_points[m++] = patches.polys[i].v[k];
+    for (std::size_t k = 0; k < patches.polys[j].n; ++k) hull_points[m++] = patches.polys[j].v[k];
+    const std::span<const Vec3> hull(hull_points.data(), m);
+    const Box pair = patches.pair_box(i, j);
+    const double scale = glm::length(pair.hi - pair.lo);
+    // Relative tolerance of touching: a q that enters the hull by less than 1e-9 of the pair's
+    // size blocks at most a sliver of that relative width (documented in docs/accuracy.md).
+    const double tol = 1e-9 * scale;
+    const Box inflated{pair.lo - Vec3(tol), pair.hi + Vec3(tol)};
+    std::vector<std::uint32_t>& candidates = scratch.candidates;
+    grid.query(inflated, candidates);
+
+    // Hull-only axes are the same for every q: precompute them.
+    std::vector<Vec3>& axes = scratch.axes;
+    axes.clear();
+    axes.push_back(scene.patches[i].normal);
+    axes.push_back(scene.patches[j].normal);
+    for (std::size_t a = 0; a < m; ++a)
+        for (std::size_t b = a + 1; b < m; ++b)
+            for (std::size_t c = b + 1; c < m; ++c) {
+                const Vec3 nrm = glm::cross(hull[b] - hull[a], hull[c] - hull[a]);
+                if (glm::dot(nrm, nrm) > 1e-24 * scale * scale * scale * scale) axes.push_back(glm::normalize(nrm));
+            }
+    std::vector<Vec3>& seg = scratch.segments;
+    seg.clear();
+    for (std::size_t a = 0; a < m; ++a)
+        for (std::size_t b = a + 1; b < m; ++b) seg.push_back(hull[b] - hull[a]);
+
+    for (std::uint32_t qi : candidates) {
+        if (qi == i || qi == j) continue;
+        const Poly& q = patches.polys[qi];
+        bool sep = separated(scene.patches[qi].normal, hull, q, tol);
+        for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], hull, q, tol);
+        for (std::size_t e = 0; !sep && e < q.n; ++e) {
+            const Vec3 edge = q.v[(e + 1) % q.n] - q.v[e];
+            for (std::size_t s = 0; !sep && s < seg.size(); ++s) {
+                const Vec3 axis = glm::cross(edge, seg[s]);
+                const double len2 = glm::dot(axis, axis);
+                if (len2 <= 1e-24 * scale * scale * scale * scale) continue;
+                sep = separated(axis / std::sqrt(len2), hull, q, tol);
+            }
+        }
+        if (!sep) return false;
+    }
+    return true;
+}
+
+}  // namespace ffcube::accuracy

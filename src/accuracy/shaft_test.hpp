@@ -1,0 +1,29 @@
+// Internal to the accuracy layer. One job: decide soundly whether anything can block a near
+// pair (the occlusion, or shaft, test): true only when every other patch whose bounding box
+// meets the pair's is separated from the convex hull of the two patches by a plane.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "accuracy/patch_set.hpp"
+#include "accuracy/spatial_grid.hpp"
+
+namespace ffcube::accuracy {
+
+// Reused across calls (no heap allocation once grown).
+struct ShaftScratch {
+    std::vector<std::uint32_t> candidates;
+    std::vector<Vec3> axes;
+    std::vector<Vec3> segments;
+};
+
+// Separating-axis test between the convex hull of patches i ∪ j and each other patch q whose
+// bounding box meets the pair's (inflated by the tolerance of touching, 1e-9 of the pair's
+// size). Touching counts as separated (contact in a supporting plane of the hull blocks a set of
+// segments of measure zero). A missed separating axis can only make the test refuse: it may
+// return false for an unoccluded pair, never true for an occluded one.
+bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                      ShaftScratch& scratch);
+
+}  // namespace ffcube::accuracy
