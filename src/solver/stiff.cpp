@@ -221,6 +221,7 @@ void finish_with_gmres(const Scene& scene, RowProvider& provider, ProgressiveSol
     r.timings.solve += seconds - rows.rows_seconds;
     if (r.history.size() >= options.history_capacity) r.history.pop_back();
     r.history.push_back({r.timings.total, r.unshot_fraction});
+    if (options.progress) options.progress(SolveProgress{SolverMethod::Shoot, r.shots, r.unshot_fraction, r.timings.total});
 }
 
 }  // namespace
