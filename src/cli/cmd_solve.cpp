@@ -42,6 +42,7 @@ struct Options {
     bool flat = false;
     double exposure = 0.0;  // 0: automatic
     CLI::Option* exposure_option = nullptr;
+    bool allow_unconverged = false;
 };
 
 void report_vec3(Report& r, std::string_view key, const Vec3& v) {
@@ -61,6 +62,23 @@ void report_result(Report& r, const SolveResult& res, const SolverOptions& so, s
     r.set("shots", res.shots);
     r.set("unshot_fraction", res.unshot_fraction);
     r.set("stop_reason", to_string(res.stop));
+    r.set("converged", res.converged());
+    report_vec3(r, "error_bound.mean_abs", res.error_bound);
+    r.set("error_bound.relative", res.error_bound_relative);
+    r.set("ambient_included", res.ambient_included);
+    const StiffnessReport& st = res.stiffness;
+    r.set("stiffness.rho_max", st.rho_max);
+    r.set("stiffness.max_row_sum", st.max_row_sum);
+    r.set("stiffness.predicted_generations", st.predicted_generations);
+    r.set("stiffness.decay_per_window", st.decay_per_window);
+    r.set("stiffness.window_shots", st.window_shots);
+    r.set("stiffness.predicted_shots", st.predicted_shots);
+    r.set("stiffness.stiff", st.stiff);
+    r.set("stiffness.action", st.action);
+    r.set("stiffness.reason", st.reason);
+    r.set("stiffness.switched_at_shot", st.switched_at_shot);
+    r.set("stiffness.krylov_products", st.krylov_products);
+    r.set("stiffness.finish_rows_computed", st.finish_rows_computed);
     report_vec3(r, "energy.emitted", res.energy.emitted);
     report_vec3(r, "energy.absorbed", res.energy.absorbed);
     report_vec3(r, "energy.escaped", res.energy.escaped);
@@ -166,20 +184,20 @@ int run(const Options& o) {
     info("{}: {} after {} {} ({} rows computed, {} reused), unshot {:.3e}, {:.2f} s", to_string(res.method),
          to_string(res.stop), res.iterations, res.method == SolverMethod::Shoot ? "shots" : "sweeps",
          res.cache.rows_computed, res.cache.rows_reused, res.unshot_fraction, res.timings.total);
+    if (res.stiffness.action != "none")
+        info("stiff scene: {} after {} shots ({} products with the rows): {}", res.stiffness.action,
+             res.stiffness.switched_at_shot, res.stiffness.krylov_products, res.stiffness.reason);
     report_result(report, res, so, scene.size());
     if (o.matrix.empty()) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done
     }
-    if (res.stop == StopReason::Diverged) {
-        if (!o.report.empty()) report.write(o.report);
-        throw Error(fmt::format("the solve diverged after {} iterations (unshot fraction {:.3e}); no results written{}",
-                                      res.iterations, res.unshot_fraction,
-                                      o.report.empty() ? "" : ", the report says more: " + o.report));
+    if (!res.converged()) {  // exit 5 and only the report, unless --allow-unconverged (docs/solve.md)
+        if (!o.report.empty() && (!o.allow_unconverged || res.stop == StopReason::Diverged)) report.write(o.report);
+        require_converged(res, so, o.allow_unconverged);
+        warn("{}; writing the results anyway (--allow-unconverged; the report says \"converged\": false)",
+             describe_unconverged(res, so));
     }
-    if (res.stop == StopReason::IterationLimit)
-        warn("stopped at the iteration limit ({}) before the tolerance: unshot fraction {:.3e} > {:.1e}", res.iterations,
-             res.unshot_fraction, so.tolerance);
 
     // What pictures and meshes show: radiance L = B/π (a Lambertian surface of radiosity B).
     std::vector<Vec3> radiance(scene.size());
@@ -291,6 +309,8 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     opts->exposure_option =
         sub->add_option("--exposure", opts->exposure, "PNG and PLY colours: display value = exposure x radiance (default: automatic)");
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
+    sub->add_flag("--allow-unconverged", opts->allow_unconverged,
+                  "write the results of a solve that stopped before its tolerance (else exit 5, report only)");
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);

@@ -1,6 +1,6 @@
 // ffcube: radiosity form factors by hemicubes. Only main() catches; errors map to exit codes:
 //   1 generic failure, 2 bad input (file, option), 3 I/O failure, 4 no usable OpenGL context,
-//   70 internal error (a bug in ffcube).
+//   5 a solve that did not reach its tolerance (docs/solvers.md), 70 internal error (a bug in ffcube).
 #include <CLI/CLI.hpp>
 
 #include <cstdio>
@@ -34,6 +34,9 @@ int main(int argc, char** argv) {
     } catch (const ffcube::GlError& e) {
         std::fprintf(stderr, "ffcube: error: %s\n", e.what());
         return 4;
+    } catch (const ffcube::NotConvergedError& e) {
+        std::fprintf(stderr, "ffcube: error: %s\n", e.what());
+        return 5;
     } catch (const ffcube::InternalError& e) {
         std::fprintf(stderr, "ffcube: %s\n", e.what());
         return 70;

@@ -87,7 +87,7 @@ std::array<RadiosityChannel, 3> channels(const RowMatrix& f, const PatchInputs& 
 // otherwise the rows' reciprocity error, so relative_error is reported but not enforced here.
 // Also returns Σ_i A_i |r_i| over channels.
 EnergyBalance gathered_energy(const RowMatrix& f, const PatchInputs& in, std::span<const Vec3> b,
-                              double& residual_abs) {
+                              double& residual_abs, Vec3* residual_channels = nullptr) {
     EnergyBalance e;
     e.emitted = in.emitted;
     Vec3 turnover = in.emitted;
@@ -102,12 +102,18 @@ EnergyBalance gathered_energy(const RowMatrix& f, const PatchInputs& in, std::sp
         e.unshot += a * r;
         turnover += a * glm::abs(b[i]);
         residual_abs += a * (std::abs(r.x) + std::abs(r.y) + std::abs(r.z));
+        if (residual_channels) *residual_channels += a * glm::abs(r);
     }
     for (int c = 0; c < 3; ++c)
         if (turnover[c] > 0.0)
             e.relative_error = std::max(
                 e.relative_error, std::abs(e.emitted[c] - e.absorbed[c] - e.escaped[c] - e.unshot[c]) / turnover[c]);
     return e;
+}
+
+void set_stiffness_figures(SolveResult& r, const RowMatrix& f, const PatchInputs& in) {
+    for (double s : f.sum) r.stiffness.max_row_sum = std::max(r.stiffness.max_row_sum, s);
+    for (const Vec3& rho : in.rho) r.stiffness.rho_max = std::max({r.stiffness.rho_max, rho.x, rho.y, rho.z});
 }
 
 }  // namespace
@@ -139,13 +145,19 @@ SolveResult solve_sweeps(const Scene& scene, RowProvider& provider, const Solver
     r.radiosity.resize(in.size());
     for (std::uint32_t i = 0; i < in.size(); ++i) r.radiosity[i] = Vec3(x[0][i], x[1][i], x[2][i]);
     double residual_abs = 0.0;
-    r.energy = gathered_energy(f, in, r.radiosity, residual_abs);
+    r.energy = gathered_energy(f, in, r.radiosity, residual_abs, &r.unshot_abs);
+    set_stiffness_figures(r, f, in);
     r.iterations = out.sweeps;
     r.unshot_fraction = out.residual_fraction;
     r.stop = out.stop;
     history.finish(r.timings.solve, out.residual_fraction);
     r.history = history.samples();
-    if (out.stop == StopReason::Diverged)
+    if (out.stop == StopReason::Diverged && out.stagnated)
+        r.warnings.push_back(fmt::format(
+            "{}: the residual did not decrease over {} sweeps: the spectral radius of the iteration is 1 or "
+            "more (ρF has no steady state here); stopped as diverged",
+            to_string(options.method), control.stagnation_window));
+    else if (out.stop == StopReason::Diverged)
         r.warnings.push_back(fmt::format("{}: the residual grew over {} sweeps: stopped as diverged",
                                          to_string(options.method), control.divergence_window));
     return r;
@@ -189,7 +201,8 @@ SolveResult solve_direct(const Scene& scene, RowProvider& provider, const Solver
         for (std::uint32_t i = 0; i < n; ++i) r.radiosity[i][c] = x[i];
     }
     r.timings.solve = watch.seconds();
-    r.energy = gathered_energy(f, in, r.radiosity, residual_abs);
+    r.energy = gathered_energy(f, in, r.radiosity, residual_abs, &r.unshot_abs);
+    set_stiffness_figures(r, f, in);
     r.iterations = 1;
     r.unshot_fraction = residual_abs / in.emitted_total;
     r.stop = StopReason::Converged;

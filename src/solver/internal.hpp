@@ -41,11 +41,17 @@ std::string describe_patch(const Scene& scene, std::uint32_t i);
 double check_row(const Scene& scene, const RowProvider& provider, std::uint32_t i, const SparseRow& row,
                  const Vec3& rho);
 
+// SolveResult::error_bound and error_bound_relative from unshot_abs, radiosity, the materials and
+// stiffness.max_row_sum (derivation in solver.cpp).
+void set_error_bound(SolveResult& r, const PatchInputs& in);
+
 // The result of a scene with no emitters: B = 0, stop reason nothing_to_do and its warning.
 SolveResult nothing_to_do(const Scene& scene, SolverMethod method);
 
 // Jacobi or Gauss–Seidel (options.method), and the dense LU solve.
 SolveResult solve_sweeps(const Scene& scene, RowProvider& provider, const SolverOptions& options);
 SolveResult solve_direct(const Scene& scene, RowProvider& provider, const SolverOptions& options);
+// Progressive refinement that switches to a GMRES finish on stiff scenes (stiff.cpp).
+SolveResult solve_shooting(const Scene& scene, RowProvider& provider, const SolverOptions& options);
 
 }  // namespace ffcube::detail

@@ -1,5 +1,6 @@
 #include "ffcube/solver/linear.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <utility>
@@ -55,6 +56,90 @@ void lu_solve(const DenseMatrix& lu, std::span<const std::uint32_t> perm, std::s
         scratch[i] = s / r[i];
     }
     std::copy(scratch.begin(), scratch.begin() + n, b.begin());
+}
+
+GmresOutcome gmres(const LinearOperator& a, std::span<const double> b, std::span<double> x, const GmresControl& c,
+                   const std::function<double(std::span<const double> r)>& measure) {
+    const std::size_t n = b.size();
+    const std::uint32_t m = std::max<std::uint32_t>(1, c.restart);
+    GmresOutcome out;
+    std::vector<double> r(n), w(n);
+    std::vector<std::vector<double>> v(m + 1, std::vector<double>(n));
+    std::vector<double> h(std::size_t(m + 1) * m), cs(m), sn(m), g(m + 1), y(m);
+    const auto H = [&](std::uint32_t i, std::uint32_t j) -> double& { return h[std::size_t(i) * m + j]; };
+    const auto dot = [&](std::span<const double> p, std::span<const double> q) {
+        double s = 0.0;
+        for (std::size_t i = 0; i < n; ++i) s += p[i] * q[i];
+        return s;
+    };
+    const auto true_residual = [&] {
+        a(x, r);
+        ++out.iterations;
+        for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - r[i];
+        out.measure = measure(r);
+    };
+    true_residual();
+    int stagnant = 0;
+    while (true) {
+        if (!std::isfinite(out.measure)) {
+            out.stagnated = true;
+            return out;
+        }
+        if (out.measure <= c.tolerance) {
+            out.converged = true;
+            return out;
+        }
+        if (out.iterations >= c.max_iterations) return out;
+        const double start = out.measure;
+        const double beta = std::sqrt(dot(r, r));
+        if (!(beta > 0.0)) {  // measure says not converged, yet r = 0: the measure is the caller's own
+            out.stagnated = true;
+            return out;
+        }
+        for (std::size_t i = 0; i < n; ++i) v[0][i] = r[i] / beta;
+        std::fill(g.begin(), g.end(), 0.0);
+        g[0] = beta;
+        std::uint32_t k = 0;
+        while (k < m && out.iterations < c.max_iterations) {
+            a(v[k], w);
+            ++out.iterations;
+            for (std::uint32_t i = 0; i <= k; ++i) {  // modified Gram–Schmidt
+                H(i, k) = dot(w, v[i]);
+                for (std::size_t j = 0; j < n; ++j) w[j] -= H(i, k) * v[i][j];
+            }
+            const double norm = std::sqrt(dot(w, w));
+            H(k + 1, k) = norm;
+            for (std::uint32_t i = 0; i < k; ++i) {  // earlier rotations on the new column
+                const double t = cs[i] * H(i, k) + sn[i] * H(i + 1, k);
+                H(i + 1, k) = -sn[i] * H(i, k) + cs[i] * H(i + 1, k);
+                H(i, k) = t;
+            }
+            const double d = std::hypot(H(k, k), H(k + 1, k));
+            cs[k] = d > 0.0 ? H(k, k) / d : 1.0;
+            sn[k] = d > 0.0 ? H(k + 1, k) / d : 0.0;
+            H(k, k) = d;
+            H(k + 1, k) = 0.0;
+            g[k + 1] = -sn[k] * g[k];
+            g[k] = cs[k] * g[k];
+            ++k;
+            if (!(norm > 0.0) || std::abs(g[k]) <= c.inner_tolerance) break;  // happy breakdown or small enough
+            for (std::size_t j = 0; j < n; ++j) v[k][j] = w[j] / norm;
+        }
+        // x += V y with H y = g (upper triangular k × k).
+        for (std::uint32_t i = k; i-- > 0;) {
+            double s = g[i];
+            for (std::uint32_t j = i + 1; j < k; ++j) s -= H(i, j) * y[j];
+            y[i] = H(i, i) != 0.0 ? s / H(i, i) : 0.0;
+        }
+        for (std::uint32_t j = 0; j < k; ++j)
+            for (std::size_t i = 0; i < n; ++i) x[i] += y[j] * v[j][i];
+        true_residual();
+        stagnant = out.measure < c.stagnation * start ? 0 : stagnant + 1;
+        if (stagnant >= 2 && !(out.measure <= c.tolerance)) {
+            out.stagnated = true;
+            return out;
+        }
+    }
 }
 
 }  // namespace ffcube

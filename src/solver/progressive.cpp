@@ -71,6 +71,7 @@ struct ProgressiveSolver::Impl {
     RowCache cache;
     std::vector<bool> ever_computed;
     RowCacheStats counters;
+    double max_row_sum = 0.0;
 
     // Per-batch scratch, reused so that shooting allocates nothing once warm.
     std::vector<Candidate> batch;
@@ -169,7 +170,7 @@ struct ProgressiveSolver::Impl {
         std::size_t next = 0;
         provider.compute_rows(misses, [&](std::uint32_t i, const SparseRow& row) {
             FFCUBE_CHECK(next < misses.size() && i == misses[next]);
-            detail::check_row(scene, provider, i, row, in.rho[i]);
+            max_row_sum = std::max(max_row_sum, detail::check_row(scene, provider, i, row, in.rho[i]));
             std::size_t slot = 0;
             while (batch[slot].patch != i) ++slot;
             staged[slot].col.assign(row.col.begin(), row.col.end());
@@ -291,6 +292,9 @@ Vec3 ProgressiveSolver::ambient() const { return impl_->ambient(); }
 std::uint64_t ProgressiveSolver::shots() const { return impl_->shots; }
 EnergyBalance ProgressiveSolver::energy() const { return impl_->energy(); }
 RowCacheStats ProgressiveSolver::cache_stats() const { return impl_->cache_stats(); }
+const SparseRow* ProgressiveSolver::cached_row(std::uint32_t i) { return impl_->cache.find(i); }
+bool ProgressiveSolver::row_ever_computed(std::uint32_t i) const { return impl_->ever_computed[i]; }
+double ProgressiveSolver::max_row_sum() const { return impl_->max_row_sum; }
 void ProgressiveSolver::reset() { impl_->restart(); }
 
 SolveResult ProgressiveSolver::result() const {
@@ -311,6 +315,8 @@ SolveResult ProgressiveSolver::result() const {
     h.finish(s.seconds, s.fraction());
     r.history = h.samples();
     r.cache = s.cache_stats();
+    for (std::size_t i = 0; i < s.db.size(); ++i) r.unshot_abs += s.in.area[i] * glm::abs(s.db[i]);
+    r.stiffness.max_row_sum = s.max_row_sum;
     if (s.status == StopReason::Diverged)
         r.warnings.push_back("progressive refinement diverged: the unshot energy grew; see docs/solvers.md");
     return r;

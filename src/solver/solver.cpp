@@ -140,6 +140,40 @@ double check_row(const Scene& scene, const RowProvider& provider, std::uint32_t 
     return sum;
 }
 
+// The error bound (SolveResult::error_bound). Notation: B* the exact solution for the rows at hand,
+// ΔB the unshot radiosity (shooting) or the residual r = E + ρFB − B (gathering, direct), U_c =
+// Σ_i A_i |ΔB_ic| the unshot power, q = ρ_max × max(1, max row sum), A = Σ_i A_i.
+//
+// Shooting: the state satisfies B = E + K y, y = B − ΔB, and B* = E + K B*, so B* − B = K (B* − y) =
+// K (B* − B) + K ΔB. In power variables (multiply by A_j) K becomes K' with K'_ji = ρ_j F_ij, whose
+// column i sums to Σ_j ρ_j F_ij ≤ ρ_max × rowsum_i ≤ q: ‖K'‖₁ ≤ q. With e = A∘(B* − B):
+// ‖e‖₁ ≤ q ‖e‖₁ + q U, so Σ_i A_i |B*_i − B_i| ≤ q/(1 − q) × U ≤ U/(1 − q). Physically: the unshot
+// power U, reflected on and on, adds at most qU + q²U + … to the scene, and U/(1 − q) also counts
+// U itself (the bound of the ambient term's reasoning, which adds U/(1 − ρ̄) spread evenly).
+// Gathering: (I − ρF)(B* − B) = r, so e = A∘r + A∘ρF(B* − B), and with reciprocal rows
+// (A_i F_ij = A_j F_ji) Σ_i A_i ρ_i |Σ_j F_ij x_j| ≤ ρ_max Σ_j A_j |x_j| rowsum_j ≤ q ‖A∘x‖₁, so again
+// ‖e‖₁ ≤ U + q ‖e‖₁ ≤ U/(1 − q); hemicube rows are reciprocal to a few percent, the bound is then
+// approximate to that degree.
+// Either way the area-weighted mean of |B* − B| is at most U/((1 − q) A), reported per channel. Rows
+// the solve never saw are assumed to sum to at most 1 (closed or open scene).
+void set_error_bound(SolveResult& r, const PatchInputs& in) {
+    r.error_bound = Vec3(0.0);
+    r.error_bound_relative = 0.0;
+    if (!(in.total_area > 0.0)) return;
+    Vec3 mean_b(0.0);
+    for (std::uint32_t i = 0; i < in.size(); ++i) mean_b += in.area[i] * r.radiosity[i];
+    mean_b /= in.total_area;
+    for (int c = 0; c < 3; ++c) {
+        double rho_max = 0.0;
+        for (const Vec3& rho : in.rho) rho_max = std::max(rho_max, rho[c]);
+        const double q = rho_max * std::max(1.0, r.stiffness.max_row_sum);
+        r.error_bound[c] = q < 1.0 ? r.unshot_abs[c] / ((1.0 - q) * in.total_area) : INFINITY;
+        if (r.unshot_abs[c] == 0.0) r.error_bound[c] = 0.0;
+        if (mean_b[c] > 0.0) r.error_bound_relative = std::max(r.error_bound_relative, r.error_bound[c] / mean_b[c]);
+        else if (r.error_bound[c] > 0.0) r.error_bound_relative = INFINITY;
+    }
+}
+
 SolveResult nothing_to_do(const Scene& scene, SolverMethod method) {
     SolveResult r;
     r.method = method;
@@ -158,17 +192,35 @@ SolveResult solve_radiosity(const Scene& scene, RowProvider& provider, const Sol
     const Stopwatch watch;
     SolveResult r;
     if (options.method == SolverMethod::Shoot) {
-        ProgressiveSolver solver(scene, provider, options);
-        solver.run();
-        r = solver.result();
+        r = detail::solve_shooting(scene, provider, options);
     } else if (options.method == SolverMethod::Direct) {
         r = detail::solve_direct(scene, provider, options);
     } else {
         r = detail::solve_sweeps(scene, provider, options);
     }
     r.timings.total = watch.seconds();
+    if (r.stop != StopReason::NothingToDo) detail::set_error_bound(r, detail::load_patches(scene, provider));
     for (const std::string& w : r.warnings) log_warning(w);
     return r;
+}
+
+std::string describe_unconverged(const SolveResult& r, const SolverOptions& o) {
+    const std::string what = r.stop == StopReason::Diverged ? "diverged" : "stopped at the iteration limit";
+    std::string bound = std::isfinite(r.error_bound_relative)
+                            ? fmt::format("{:.3g} of the mean radiosity", r.error_bound_relative)
+                            : std::string("unbounded (ρ_max × row sum ≥ 1)");
+    return fmt::format("the {} solve {} after {} {} without reaching its tolerance: unshot fraction {:.3e} > {:.1e}; "
+                       "error bound on B: {}",
+                       to_string(r.method), what, r.iterations,
+                       r.method == SolverMethod::Shoot ? "shots" : (r.method == SolverMethod::Direct ? "solve" : "sweeps"),
+                       r.unshot_fraction, o.tolerance, bound);
+}
+
+void require_converged(const SolveResult& r, const SolverOptions& o, bool allow_unconverged) {
+    if (r.converged()) return;
+    if (allow_unconverged && r.stop != StopReason::Diverged) return;
+    throw NotConvergedError(describe_unconverged(r, o) +
+                            (r.stop == StopReason::Diverged ? "" : " (--allow-unconverged writes it anyway)"));
 }
 
 std::vector<ObjectRadiosity> object_radiosity(const Scene& scene, std::span<const Vec3> radiosity) {

@@ -332,5 +332,72 @@ TEST(SolveCli, BadOptionsAreRefused) {
     }
 }
 
+
+// Issue 16: a stiff furnace (unit box, 96 patches, ρ = 0.999) converges by default, the report
+// says how (the GMRES finish) and bounds the error; a solve stopped before its tolerance exits 5
+// with only the report (converged: false), unless --allow-unconverged writes everything.
+TEST(SolveCli, StiffFurnaceConvergesAndUnconvergedExitsFive) {
+    TempDir dir;
+    const std::string scene = write_cube(dir, "0.999 0.999 0.999", "1 1 1");
+    const std::string mesh = " --max-patch-edge 0.25 --resolution 64 -q";
+    // γ as in SolveFurnace: the received sums of the same rows, so B* for them lies within
+    // E/(1 − ρ(1 ± γ)) of 1000.
+    ASSERT_EQ(run_ffcube("formfactors " + scene + mesh + " -o " + (dir / "F.ffm")).code, 0);
+    const FfmFile f = read_ffm(dir / "F.ffm");
+    std::vector<double> received(f.matrix.size(), 0.0);
+    for (std::uint32_t i = 0; i < f.matrix.size(); ++i) {
+        const RowView row = f.matrix.row(i);
+        for (std::size_t k = 0; k < row.col.size(); ++k) received[row.col[k]] += f.areas[i] * row.val[k];
+    }
+    double gamma = 1e-7;
+    for (std::uint32_t j = 0; j < f.matrix.size(); ++j) gamma = std::max(gamma, std::abs(received[j] / f.areas[j] - 1.0));
+
+    const auto ok = run_ffcube("solve " + scene + mesh + " --objects " + (dir / "o.csv") + " --report " + (dir / "r.json"));
+    ASSERT_EQ(ok.code, 0) << ok.output;
+    const auto rep = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    EXPECT_EQ(rep["patches"], 96);
+    EXPECT_EQ(rep["converged"], true);
+    EXPECT_EQ(rep["stop_reason"], "converged");
+    EXPECT_EQ(rep["stiffness"]["action"], "gmres");
+    EXPECT_EQ(rep["stiffness"]["stiff"], true);
+    EXPECT_EQ(rep["ambient_included"], false);
+    const double bound = rep["error_bound"]["relative"];
+    EXPECT_LE(bound, 1e-3);
+    // Mean radiosity of the box: 1000 up to the rows' γ and the reported bound.
+    std::istringstream in(test::read_text(dir / "o.csv"));
+    std::string line;
+    std::getline(in, line);
+    double sum_ab = 0.0, sum_a = 0.0;
+    while (std::getline(in, line)) {
+        std::vector<std::string> v;
+        std::stringstream ss(line);
+        for (std::string item; std::getline(ss, item, ',');) v.push_back(item);
+        ASSERT_EQ(v.size(), 5u) << line;
+        sum_a += std::stod(v[1]);
+        sum_ab += std::stod(v[1]) * std::stod(v[3]);
+    }
+    const double lo = 1.0 / (1.0 - 0.999 * (1.0 - gamma)), hi = 1.0 / (1.0 - 0.999 * (1.0 + gamma));
+    EXPECT_GE(sum_ab / sum_a, lo * (1.0 - bound) - 1e-6) << "gamma " << gamma;
+    EXPECT_LE(sum_ab / sum_a, hi * (1.0 + bound) + 1e-6) << "gamma " << gamma;
+
+    // Stopped after 50 shots: exit 5, the report only.
+    const std::string outputs = " --objects " + (dir / "u.csv") + " --report " + (dir / "u.json");
+    const auto refused = run_ffcube("solve " + scene + mesh + " --max-iterations 50" + outputs);
+    EXPECT_EQ(refused.code, 5) << refused.output;
+    EXPECT_NE(refused.output.find("iteration limit"), std::string::npos) << refused.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "u.csv"));
+    ASSERT_TRUE(std::filesystem::exists(dir / "u.json"));
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "u.json"))["converged"], false);
+
+    // --allow-unconverged: everything written, exit 0, the report marked.
+    const auto allowed = run_ffcube("solve " + scene + mesh + " --max-iterations 50 --allow-unconverged" + outputs);
+    EXPECT_EQ(allowed.code, 0) << allowed.output;
+    EXPECT_TRUE(std::filesystem::exists(dir / "u.csv"));
+    const auto urep = nlohmann::json::parse(test::read_text(dir / "u.json"));
+    EXPECT_EQ(urep["converged"], false);
+    EXPECT_EQ(urep["stop_reason"], "iteration_limit");
+    EXPECT_GT(double(urep["error_bound"]["relative"]), 0.5);  // 50 shots of 96 at ρ = 0.999: far off
+}
+
 }  // namespace
 }  // namespace ffcube

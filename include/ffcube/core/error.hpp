@@ -3,6 +3,8 @@
 //    names the file/line/object and the rule that was broken.
 //  - IoError: reading or writing a file failed for reasons outside the input's content.
 //  - GlError: no usable OpenGL context, or a GL object could not be created.
+//  - NotConvergedError: a solve stopped before its tolerance (iteration limit, divergence) and the
+//    user did not allow that (`--allow-unconverged`). Exit code 5.
 //  - InternalError: an invariant of ffcube itself failed (FFCUBE_CHECK). Always a bug.
 // Library code throws; only main() catches and maps to exit codes.
 #pragma once
@@ -28,6 +30,11 @@ public:
 };
 
 class GlError : public Error {
+public:
+    using Error::Error;
+};
+
+class NotConvergedError : public Error {
 public:
     using Error::Error;
 };

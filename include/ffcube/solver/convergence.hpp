@@ -79,12 +79,20 @@ struct SweepControl {
     std::uint64_t max_sweeps = 10000;
     std::uint64_t divergence_window = 3;  // sweeps (see DivergenceMonitor)
     double divergence_growth = 1e3;
+    // Stagnation: every stagnation_window sweeps the fraction must have fallen below
+    // (1 − stagnation_progress) × its value a window earlier, else the solve stops as diverged
+    // (stagnated). A spectral radius of exactly 1 (ρ = 1 in a closed scene) keeps the residual
+    // constant, which the growth test never sees; a converging iteration with spectral radius s
+    // falls by s^window, so only s > 1 − 1e-8 is mistaken for it.
+    std::uint64_t stagnation_window = 100;
+    double stagnation_progress = 1e-6;
 };
 
 struct SweepOutcome {
     StopReason stop = StopReason::Running;
     std::uint64_t sweeps = 0;
     double residual_fraction = 0.0;  // Σ_k Σ_i w_i |r_ki| / reference after the last sweep
+    bool stagnated = false;          // stopped as diverged by the stagnation rule
 };
 
 // Sweeps several independent systems of the same size together (radiosity's three channels share
@@ -110,6 +118,7 @@ SweepOutcome sweep_until(std::span<const S> systems, std::span<const std::span<d
     out.residual_fraction = fraction();
     if (on_sweep) on_sweep(0, out.residual_fraction);
     monitor.update(out.residual_fraction);
+    double checkpoint = out.residual_fraction;
     while (true) {
         if (out.residual_fraction <= control.tolerance) {
             out.stop = StopReason::Converged;
@@ -133,6 +142,15 @@ SweepOutcome sweep_until(std::span<const S> systems, std::span<const std::span<d
         if (monitor.update(out.residual_fraction)) {
             out.stop = StopReason::Diverged;
             return out;
+        }
+        if (control.stagnation_window > 0 && out.sweeps % control.stagnation_window == 0) {
+            if (!(out.residual_fraction < (1.0 - control.stagnation_progress) * checkpoint) &&
+                !(out.residual_fraction <= control.tolerance)) {
+                out.stop = StopReason::Diverged;
+                out.stagnated = true;
+                return out;
+            }
+            checkpoint = out.residual_fraction;
         }
     }
 }

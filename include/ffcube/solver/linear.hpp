@@ -6,6 +6,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -83,5 +84,36 @@ void lu_factor(DenseMatrix& a, std::vector<std::uint32_t>& perm, const char* wha
 // Solves A x = b with the factors of lu_factor; b is overwritten with x. scratch: n doubles.
 void lu_solve(const DenseMatrix& lu, std::span<const std::uint32_t> perm, std::span<double> b,
               std::span<double> scratch);
+
+// y = A x for a matrix given only by its action (x and y do not overlap).
+using LinearOperator = std::function<void(std::span<const double> x, std::span<double> y)>;
+
+struct GmresControl {
+    std::uint32_t restart = 30;           // Krylov vectors per cycle (memory: restart + 1 vectors of n)
+    std::uint64_t max_iterations = 3000;  // products with A in all, restarts' residuals included
+    // Converged when measure(r) ≤ tolerance for the true residual r = b − A x (recomputed after every
+    // cycle). Within a cycle, GMRES's running estimate of ‖r‖₂ is compared with inner_tolerance.
+    double tolerance = 0.0;
+    double inner_tolerance = 0.0;
+    // A cycle that does not bring measure(r) below stagnation × its value at the cycle's start
+    // counts as stagnant; two stagnant cycles in a row stop the solve (A singular or b outside its
+    // range, e.g. a spectral radius of ρF ≥ 1).
+    double stagnation = 0.999;
+};
+
+struct GmresOutcome {
+    bool converged = false;
+    bool stagnated = false;       // stopped for lack of progress (see GmresControl::stagnation)
+    std::uint64_t iterations = 0;  // products with A
+    double measure = 0.0;         // measure(r) of the final true residual
+};
+
+// Restarted GMRES(m) (Saad & Schultz 1986) with modified Gram–Schmidt and Givens rotations: x holds
+// the start vector and receives the result. measure(r) is the caller's stopping norm (radiosity:
+// the summed unshot power, an L1 norm); the 2-norm GMRES minimises bounds it through
+// inner_tolerance (‖r‖₁ ≤ √n ‖r‖₂). Never loops forever: max_iterations and the stagnation rule.
+// Non-finite values stop it (not converged, stagnated).
+GmresOutcome gmres(const LinearOperator& a, std::span<const double> b, std::span<double> x, const GmresControl& control,
+                   const std::function<double(std::span<const double> r)>& measure);
 
 }  // namespace ffcube

@@ -54,6 +54,12 @@ public:
     std::uint64_t shots() const;
     EnergyBalance energy() const;
     RowCacheStats cache_stats() const;
+    // The row of patch i if the row cache holds it (now most recently used), else nullptr; valid
+    // until the next step(). For solve_radiosity's stiff finish.
+    const SparseRow* cached_row(std::uint32_t i);
+    // Whether the provider was ever asked for row i, and the largest sum of any row received.
+    bool row_ever_computed(std::uint32_t i) const;
+    double max_row_sum() const;
     // Snapshot of everything in SolveResult form (history included).
     SolveResult result() const;
 

@@ -66,6 +66,11 @@ struct SolverOptions {
     // Called on the solving thread as SolveProgress says; may be empty. Seconds count time spent
     // solving (inside step() for the stepping API), not time between steps.
     std::function<void(const SolveProgress&)> progress;
+    // shoot through solve_radiosity only: when the measured decay of the unshot power predicts more
+    // than 300 × N further shots, or more than the shot limit, finish with GMRES on the rows
+    // (docs/solvers.md, "Stiff scenes"). false: plain shooting to the end (the stepping API, tests
+    // of shooting itself).
+    bool stiff_switch = true;
 };
 
 // InputError naming the option and the rule when an option is out of range.
@@ -104,6 +109,27 @@ struct SolveTimings {
     double solve = 0.0;  // seconds shooting, sweeping or factorising
 };
 
+// What the default solve found out about stiffness and did about it (docs/solvers.md, "Stiff
+// scenes"). Filled by shoot; the gathering methods fill rho_max and max_row_sum.
+struct StiffnessReport {
+    double rho_max = 0.0;      // largest reflectance of any patch, any channel
+    double max_row_sum = 0.0;  // largest sum of the rows the solve saw
+    // A priori: generations (every patch shooting once) plain shooting needs in a closed scene,
+    // ln τ / ln ρ_max (0 when not meaningful).
+    double predicted_generations = 0.0;
+    // Measured: unshot fraction at the end of the last window of plain shooting over its value at the
+    // start, the window's shots, and the shots plain shooting would need in all at that decay rate.
+    double decay_per_window = 0.0;
+    std::uint64_t window_shots = 0;
+    double predicted_shots = 0.0;
+    bool stiff = false;             // the decay was too slow for plain shooting
+    std::string action = "none";    // "none", "gmres", "gmres (rejected)"
+    std::string reason;             // why, in words (empty when nothing was done)
+    std::uint64_t switched_at_shot = 0;
+    std::uint64_t krylov_products = 0;       // products with the rows in the GMRES finish (all channels)
+    std::uint64_t finish_rows_computed = 0;  // rows the finish asked from the provider
+};
+
 struct SolveResult {
     SolverMethod method = SolverMethod::Shoot;
     std::vector<Vec3> radiosity;  // B per patch, RGB; the ambient term is never added in
@@ -119,6 +145,21 @@ struct SolveResult {
     std::vector<ConvergenceSample> history;  // sampled, at most options.history_capacity
     RowCacheStats cache;                     // shoot only
     std::vector<std::string> warnings;       // solve_radiosity also prints them with log_warning
+    StiffnessReport stiffness;
+    // Per channel Σ_i A_i |ΔB_i| (shoot) or Σ_i A_i |r_i| (gathering, direct): the unshot power.
+    Vec3 unshot_abs{0.0};
+    // Bound on the area-weighted mean of |B* − B| per channel, B* the exact solution for the rows at
+    // hand: unshot_abs / ((1 − q) Σ A), q = ρ_max × max(1, max_row_sum) (derivation in
+    // docs/solvers.md and solver.cpp; exact for shooting, for gathering when rows are reciprocal).
+    // Infinite when q ≥ 1. error_bound_relative: the largest bound over the area-weighted mean B
+    // of its channel.
+    Vec3 error_bound{0.0};
+    double error_bound_relative = 0.0;
+    // radiosity never includes Cohen's ambient term (display_radiosity adds it for display).
+    bool ambient_included = false;
+
+    // stop is converged or nothing_to_do.
+    bool converged() const { return stop == StopReason::Converged || stop == StopReason::NothingToDo; }
 };
 
 // Solves with options.method. Throws InputError when the scene or the rows break the stiffness
@@ -126,6 +167,13 @@ struct SolveResult {
 // provider's size differs from the scene's, for invalid options, and for direct above
 // kDirectMaxPatches. The provider must describe the scene's patches in the scene's order.
 SolveResult solve_radiosity(const Scene& scene, RowProvider& provider, const SolverOptions& options);
+
+// "stopped at the iteration limit after ... : unshot fraction ... > tolerance ..., error bound ...":
+// what a caller says when it refuses an unconverged result.
+std::string describe_unconverged(const SolveResult& result, const SolverOptions& options);
+// Throws NotConvergedError (exit code 5) with describe_unconverged unless result.converged(), or
+// allow_unconverged and the solve did not diverge (a diverged B is never a usable answer).
+void require_converged(const SolveResult& result, const SolverOptions& options, bool allow_unconverged);
 
 // Area-weighted mean radiosity per object: Σ_{i∈o} A_i B_i / Σ_{i∈o} A_i (0 for an object with no
 // patches), in Scene::objects order.
