@@ -1,11 +1,14 @@
 // CorrectedRowProvider: wraps a RowProvider and corrects each row as it is handed on, planning
-// each row (sub-hemicubes, skip) from its analysis when the inner provider asks. Owns the
+// each row (sub-hemicubes, skip) from its analysis before the inner provider is asked for it. Owns the
 // scratch space the corrector works in, so that rows allocate nothing in the steady state.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <atomic>
+#include <future>
 #include <mutex>
+#include <thread>
 
 #include "accuracy/scratch.hpp"
 #include "ffcube/accuracy/near_field.hpp"
@@ -56,7 +59,11 @@ struct CorrectedRowProvider::Pools {
 };
 
 CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options)
-    : inner_(inner), corrector_(scene, options), options_(options), pools_(std::make_unique<Pools>()) {
+    : inner_(inner),
+      corrector_(scene, options),
+      options_(options),
+      pools_(std::make_unique<Pools>()),
+      plan_threads_(std::max(1u, std::thread::hardware_concurrency())) {
     if (inner.size() != scene.size())
         throw InputError(fmt::format("near-field correction: the provider has {} rows, the scene {} patches", inner.size(),
                                      scene.size()));
@@ -65,9 +72,9 @@ CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inne
 CorrectedRowProvider::~CorrectedRowProvider() = default;
 
 void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
-    // Near analysis per listed row, made when the inner provider asks how to make the row (from
-    // its own threads: each slot is written once, by one of them, before its row exists) or,
-    // failing that, when the row arrives.
+    // Near analysis per listed row, made when its row is planned (below: each slot is written
+    // once, by one planning thread, before its row is asked for) or, without plans, when the row
+    // arrives.
     analyses_.assign(rows.size(), NearAnalysis{});
     std::size_t position = 0;
     const bool sample = options_.sub_hemicubes && inner_.can_sample_sender();
@@ -100,17 +107,39 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         return;
     }
     // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
-    // quadrature points: the pair keeps a value with its own visibility and sender quadrature.
-    inner_.compute_rows_sampled(
-        rows,
-        [&](std::size_t pos) {
-            NearAnalysis& a = analyses_[pos];
-            std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
-            const RowPlan plan = corrector_.plan_row(rows[pos], a, *scratch);
-            pools_->give_back(std::move(scratch));
-            return plan;
-        },
-        correct_row);
+    // quadrature points (the pair keeps a value with its own visibility and sender quadrature);
+    // rows whose every pair is known are not measured. Each row's plan comes from its analysis,
+    // worked out here before the inner provider is asked: in batches, the next batch's analyses
+    // (on this machine's cores) overlapping the inner provider's work on the current one. A plan
+    // depends only on its row, so the rows do not depend on the batching or the thread count.
+    plans_.assign(rows.size(), RowPlan::centre);
+    const auto plan_batch = [&](std::size_t begin, std::size_t end) {
+        std::atomic<std::size_t> next{begin};
+        const auto work = [&] {
+            for (std::size_t pos; (pos = next++) < end;) {
+                NearAnalysis& a = analyses_[pos];
+                std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
+                plans_[pos] = corrector_.plan_row(rows[pos], a, *scratch);
+                pools_->give_back(std::move(scratch));
+            }
+        };
+        const std::size_t helpers = std::min<std::size_t>(plan_threads_, end - begin) - 1;
+        std::vector<std::jthread> threads;
+        threads.reserve(helpers);
+        for (std::size_t t = 0; t < helpers; ++t) threads.emplace_back(work);
+        work();
+    };
+    const std::size_t n = rows.size();
+    plan_batch(0, std::min(kPlanBatch, n));
+    for (std::size_t begin = 0; begin < n; begin += kPlanBatch) {
+        const std::size_t end = std::min(begin + kPlanBatch, n);
+        // Destroyed (joined) before this iteration ends, also when the inner provider throws.
+        std::future<void> next_batch;
+        if (end < n) next_batch = std::async(std::launch::async, plan_batch, end, std::min(end + kPlanBatch, n));
+        inner_.compute_rows_planned(rows.subspan(begin, end - begin), std::span(plans_).subspan(begin, end - begin),
+                                    correct_row);
+        if (next_batch.valid()) next_batch.get();
+    }
 }
 
 }  // namespace ffcube

@@ -11,6 +11,12 @@ void RowProvider::compute_row(std::uint32_t i, SparseRow& out) {
     compute_rows(rows, [&](std::uint32_t, const SparseRow& r) { out = r; });
 }
 
+void RowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                                       const RowSink& sink) {
+    FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
+    compute_rows(rows, sink);
+}
+
 void MatrixRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     SparseRow tmp;
     for (std::uint32_t i : rows) {

@@ -58,13 +58,13 @@ struct HemicubeRowProvider::Impl {
     Impl(const Scene& s, const HemicubeOptions& o) : scene(s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {}
     ~Impl() { pool.reset(); }
 
-    // Rows through the pool; 'query' (compute_rows_sampled's, or null) runs on the worker
-    // threads and says how to make each row.
-    void run(std::span<const std::uint32_t> rows, const RowProvider::SampleQuery* query, const RowSink& sink) {
+    // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
+    // how to make each row.
+    void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowPlan> plans, const RowSink& sink) {
         const OrderedRowPool::Compute compute = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
             using RowPlan = RowProvider::RowPlan;
             HemicubeStats local;
-            const RowPlan plan = query ? (*query)(k) : RowPlan::centre;
+            const RowPlan plan = plans.empty() ? RowPlan::centre : plans[k];
             if (plan == RowPlan::skip) {
                 out.clear();
                 ++local.skipped_rows;
@@ -121,13 +121,14 @@ std::uint32_t HemicubeRowProvider::size() const { return static_cast<std::uint32
 
 void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
-    impl_->run(rows, nullptr, sink);
+    impl_->run(rows, {}, sink);
 }
 
-void HemicubeRowProvider::compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
+void HemicubeRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                                const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
-    impl_->run(rows, &sampled, sink);
+    FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
+    impl_->run(rows, plans, sink);
 }
 
 std::vector<std::uint32_t> HemicubeRowProvider::item_buffer(std::uint32_t i) {

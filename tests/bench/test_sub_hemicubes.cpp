@@ -52,9 +52,10 @@ TEST(SubHemicubes, SampledRowMeasuresTheSenderQuadrature) {
     HemicubeRowProvider provider(s, o);
     const std::vector<std::uint32_t> rows = {0, 1, 0};
     std::vector<double> got;
-    provider.compute_rows_sampled(
-        rows,
-        [](std::size_t pos) { return pos != 1 ? RowProvider::RowPlan::sampled : RowProvider::RowPlan::centre; },
+    using RowPlan = RowProvider::RowPlan;
+    const std::vector<RowPlan> plans = {RowPlan::sampled, RowPlan::centre, RowPlan::sampled};
+    provider.compute_rows_planned(
+        rows, plans,
         [&](std::uint32_t, const SparseRow& r) { got.push_back(r.nnz() ? r.val[0] : 0.0); });
     ASSERT_EQ(got.size(), 3u);
     EXPECT_NEAR(got[0], Q, 2e-3 * Q);

@@ -62,7 +62,7 @@ struct NearFieldOptions {
     double pixel_delta_ff = 0;
     double rays = 0;
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
-    // rows (RowProvider::compute_rows_sampled), when it can make them.
+    // rows (RowProvider::compute_rows_planned), when it can make them.
     bool sub_hemicubes = true;
     // Far field: every facing pair beyond the near range whose visibility the plane test proves
     // (NearFieldCorrector::far_unoccluded) gets its analytic value too (docs/accuracy.md, "Far
@@ -231,10 +231,17 @@ private:
     std::vector<float> row_error_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
-    // Scratch space reused across rows: the sink's, one per plan callback running at once (on
-    // the inner provider's threads), and the analyses' buffers (corrected_row_provider.cpp).
+    std::vector<RowPlan> plans_;          // likewise
+    // Scratch space reused across rows: the sink's, one per planning thread running at once,
+    // and the analyses' buffers (corrected_row_provider.cpp).
     struct Pools;
     std::unique_ptr<Pools> pools_;
+    // Rows are planned in batches of kPlanBatch on plan_threads_ threads, the next batch while the
+    // inner provider measures the current one. 64: long enough that the inner provider's workers
+    // rarely wait at a batch's end, short enough that the analyses held at once (with the far
+    // field up to a whole row each) stay small: 128 rows of 20,000 entries are 40 MB.
+    static constexpr std::size_t kPlanBatch = 64;
+    unsigned plan_threads_ = 1;
 };
 
 }  // namespace ffcube

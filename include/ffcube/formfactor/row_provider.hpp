@@ -26,23 +26,19 @@ public:
     // One row, for convenience.
     void compute_row(std::uint32_t i, SparseRow& out);
 
-    // Sender sampling. A provider that measures F from one point of the sender (the hemicube:
-    // its centre) may be able to measure some rows as the average over the sender's quadrature
-    // points instead (geometry/quadrature.hpp, patch_quadrature with 2 points per axis), each
-    // with its own visibility ("sub-hemicubes"), and to leave out rows its caller can make
-    // without it. compute_rows_sampled asks plan(position in rows) once per listed row before
-    // computing it, possibly from several threads at once (so it must be thread-safe): centre
-    // (as compute_rows), sampled (sub-hemicubes) or skip (nothing measured: the row handed to
-    // sink is empty). Rows go to sink in list order like compute_rows. The default never asks,
-    // samples nothing and skips nothing.
+    // Planned rows. A provider that measures F from one point of the sender (the hemicube: its
+    // centre) may be able to measure some rows as the average over the sender's quadrature points
+    // instead (geometry/quadrature.hpp, patch_quadrature with 2 points per axis), each with its
+    // own visibility ("sub-hemicubes"), and to leave out rows its caller can make without it.
+    // compute_rows_planned takes one plan per listed row, worked out by the caller before it asks
+    // (the provider never calls back into its caller): centre (as compute_rows), sampled
+    // (sub-hemicubes) or skip (nothing measured: the row handed to sink is empty). Rows go to
+    // sink in list order like compute_rows. plans.size() == rows.size(). The default samples
+    // nothing and skips nothing.
     enum class RowPlan : std::uint8_t { centre, sampled, skip };
-    using SampleQuery = std::function<RowPlan(std::size_t position)>;
     virtual bool can_sample_sender() const { return false; }
-    virtual void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
-                                      const RowSink& sink) {
-        (void)sampled;
-        compute_rows(rows, sink);
-    }
+    virtual void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                                      const RowSink& sink);
 };
 
 // Rows of a matrix already in memory (loaded from .ffm, or made by hand in a test).

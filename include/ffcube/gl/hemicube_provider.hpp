@@ -45,7 +45,7 @@ struct HemicubeStats {
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
-    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_sampled)
+    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_planned)
     std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
 };
 
@@ -63,7 +63,7 @@ public:
     // points (3 on a triangle), weights by area, each with its own visibility, rendered at half
     // the resolution (when that is even and ≥ 8): about the cost and pixel noise of one hemicube.
     bool can_sample_sender() const override { return true; }
-    void compute_rows_sampled(std::span<const std::uint32_t> rows, const SampleQuery& sampled,
+    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                               const RowSink& sink) override;
 
     // The item buffer of patch i's hemicube: the atlas (3N × N, row 0 at the bottom; see
