@@ -109,7 +109,56 @@ double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<c
 // for surfaces facing each other (1e-15 relative at D/L = 1e3) down to O((L/D)³) for surfaces
 // seen edge-on (1e-10 relative at D/L = 1e3).
 // Returns 0 when nothing of one polygon is in front of the other.
+// Bounded work (docs/robustness.md): every call evaluates at most
+// ff_polygon_polygon_budget(k1, k2) integrands, k1, k2 the vertex counts after clipping (≤ n + 1
+// for a convex n-gon, ≤ 2n in general); see AnalyticCallInfo for what one call did.
 double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2);
+
+// ---- Work bounds and accounting ----------------------------------------------------------
+// The contour integral's quadrature, per pair of edges: adaptive Gauss–Kronrod 7/15 bisects a
+// cut of edge 2 (≤ 4 cuts) only while a panel is wider than 4ε of the edge (so ≤ 50 levels) and
+// its |K15 − G7| exceeds its tolerance, the integrand's rounding and 50ε of its magnitude. With
+// the singularities at cut ends, at most 2 panels per level are split (one at each end), so
+// ≤ 4 evaluated: ≤ 4 cuts × 50 levels × 4 panels × 15 = 12,000 evaluations, the split budget. Once it is spent nothing more is split:
+// each panel then evaluated or pending (≤ 50 on the stack + 3 cuts) keeps its K15 value — the
+// fallback, counted with |K15 − G7| as its error bound — so a pair never exceeds
+// kContourEvalsPerEdgePair evaluations (an evaluation: ∫ ln r along edge 1 in closed form).
+inline constexpr int kMaxQuadDepth = 50;
+inline constexpr std::uint64_t kEdgePairSplitBudget = 4 * 50 * 4 * 15;
+inline constexpr std::uint64_t kContourEvalsPerEdgePair = kEdgePairSplitBudget + 15 * (kMaxQuadDepth + 3);
+// The far-field rule (fixed 20 × 20 Gauss points per edge of the smaller polygon, each one
+// Lambert sum over the other polygon): no adaptivity, no fallback.
+inline constexpr std::uint64_t kFarFieldEvalsPerEdge = 400;
+// The most integrand evaluations one ff_polygon_polygon call may make, given the vertex counts
+// k1, k2 of the clipped polygons: max(k1 k2 kContourEvalsPerEdgePair, max(k1, k2) kFarField…).
+std::uint64_t ff_polygon_polygon_budget(std::size_t k1, std::size_t k2);
+
+// What one ff_polygon_polygon call did (the optional out-parameter overload below).
+struct AnalyticCallInfo {
+    enum class Method { zero, contour, far_field };
+    Method method = Method::zero;      // zero: nothing in front / edge-on, no integral evaluated
+    std::size_t clipped_vertices1 = 0;  // vertex counts after clipping (0 when not clipped)
+    std::size_t clipped_vertices2 = 0;
+    std::uint64_t evaluations = 0;  // integrand evaluations (ln-r edge integrals or Lambert sums)
+    std::uint64_t budget = 0;       // ff_polygon_polygon_budget(clipped counts): evaluations ≤ budget
+    std::uint64_t fallbacks = 0;    // quadrature panels accepted unconverged (budget or depth spent)
+    double error_bound = 0.0;       // bound on |F12 error| from those panels (0 when none)
+};
+// The same value as ff_polygon_polygon(p1, p2), with its work reported in `info`.
+double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info);
+
+// Process-wide totals of ff_polygon_polygon calls since the last reset (relaxed atomics: any
+// thread may call, totals are exact, reads are a snapshot). For the run report: "analytic
+// fallbacks: N" = fallback_calls.
+struct AnalyticStats {
+    std::uint64_t calls = 0;
+    std::uint64_t evaluations = 0;
+    std::uint64_t fallbacks = 0;       // panels accepted unconverged, all calls
+    std::uint64_t fallback_calls = 0;  // calls with at least one such panel
+    std::uint64_t max_evaluations_per_call = 0;
+};
+AnalyticStats analytic_stats();
+void reset_analytic_stats();
 
 // Monte Carlo reference for tests: `samples` points uniform on polygon 1 (convex polygons only:
 // fan triangulation), each shooting one cosine-distributed ray from its front; F12 = fraction
