@@ -175,11 +175,11 @@ private:
         const Vec3 t = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? Vec3(1, 0, 0) : Vec3(0, 1, 0)));
         const Vec3 b = glm::cross(n, t);
         const int k = 3 + pick(3);
+        // One vertex in each of k equal sectors, at least 0.3 rad from the next sector: increasing
+        // angles within one turn, so the polygon is convex and never wraps onto itself.
+        const double sector = 2.0 * std::numbers::pi / k, start = uniform(0.0, sector);
         std::vector<double> angles(static_cast<std::size_t>(k));
-        for (double& a : angles) a = uniform(0.0, 2.0 * std::numbers::pi);
-        std::sort(angles.begin(), angles.end());
-        // Keep the vertices apart (an angle gap of at least 0.3 rad) so the polygon has area.
-        for (std::size_t i = 1; i < angles.size(); ++i) angles[i] = std::max(angles[i], angles[i - 1] + 0.3);
+        for (int i = 0; i < k; ++i) angles[static_cast<std::size_t>(i)] = start + i * sector + uniform(0.0, sector - 0.3);
         std::vector<Vec3> poly;
         for (double a : angles) poly.push_back(c + 0.5 * size * (std::cos(a) * t + aspect * std::sin(a) * b));
         return poly;  // counter-clockwise about n

@@ -406,5 +406,59 @@ TEST(AnalyticRobustness, StatsCountCallsAndEvaluations) {
     EXPECT_EQ(analytic_stats().calls, 0u);
 }
 
+// Issue 13's hang: a 400-face UV sphere as Blender writes it (20 segments × 20 rings, coordinates
+// printed with 6 decimals, so its quads are bent by ~1e-7 and its triangles meet at rounded
+// edges). Split into 760 triangles facing inwards, it is a convex enclosure: no pair occludes
+// another, so every row of exact form factors sums to 1. Checked on 8 rows (pole fans, equator,
+// a mid ring), every call within its budget; the row sums within the sum of the stated errors
+// of their terms (stated_error_area / A_i, ~1e-12 per term) plus the closure error of the
+// rounded mesh: the rounded triangles still close the surface exactly (shared vertices), so none.
+TEST(AnalyticRobustness, BlenderUvSphereRowsSumToOneWithinBudget) {
+    const int seg = 20, rings = 20;
+    const auto round6 = [](double x) { return std::round(x * 1e6) / 1e6; };
+    std::vector<Vec3> v;
+    v.push_back({0, 0, 1});
+    for (int r = 1; r < rings; ++r)
+        for (int k = 0; k < seg; ++k) {
+            const double th = std::numbers::pi * r / rings, ph = 2 * std::numbers::pi * k / seg;
+            v.push_back({round6(std::sin(th) * std::cos(ph)), round6(std::sin(th) * std::sin(ph)), round6(std::cos(th))});
+        }
+    v.push_back({0, 0, -1});
+    const auto idx = [&](int r, int k) { return static_cast<std::size_t>(1 + (r - 1) * seg + (k % seg)); };
+    const std::size_t south = v.size() - 1;
+    std::vector<std::vector<Vec3>> tris;  // counter-clockwise seen from inside
+    for (int k = 0; k < seg; ++k) tris.push_back({v[0], v[idx(1, k + 1)], v[idx(1, k)]});
+    for (int r = 1; r < rings - 1; ++r)
+        for (int k = 0; k < seg; ++k) {
+            tris.push_back({v[idx(r, k)], v[idx(r, k + 1)], v[idx(r + 1, k + 1)]});
+            tris.push_back({v[idx(r, k)], v[idx(r + 1, k + 1)], v[idx(r + 1, k)]});
+        }
+    for (int k = 0; k < seg; ++k) tris.push_back({v[south], v[idx(rings - 1, k)], v[idx(rings - 1, k + 1)]});
+    ASSERT_EQ(tris.size(), 760u);
+    // Inward: the normal points to the centre.
+    ASSERT_LT(glm::dot(polygon_normal(tris[0]), polygon_centroid(tris[0])), 0.0);
+    reset_analytic_stats();
+    for (std::size_t i : {std::size_t{0}, std::size_t{7}, std::size_t{20}, std::size_t{21}, std::size_t{380},
+                          std::size_t{381}, std::size_t{600}, std::size_t{759}}) {
+        double sum = 0.0, err = 0.0;
+        for (std::size_t j = 0; j < tris.size(); ++j) {
+            if (j == i) continue;
+            AnalyticCallInfo info;
+            const double f = ff_polygon_polygon(tris[i], tris[j], info);
+            ASSERT_TRUE(std::isfinite(f));
+            ASSERT_LE(info.evaluations, ff_polygon_polygon_budget(4, 4));
+            sum += f;
+            err += stated_error_area(tris[i], tris[j], f, info) /
+                   (polygon_area(tris[i]) / std::pow(std::max(polygon_max_edge(tris[i]), polygon_max_edge(tris[j])), 2));
+        }
+        EXPECT_NEAR(sum, 1.0, err + 64 * kEps) << "row " << i;
+    }
+    const AnalyticStats st = analytic_stats();
+    std::printf("UV sphere: %llu calls, %llu evaluations, max %llu per call, %llu fallbacks\n",
+                static_cast<unsigned long long>(st.calls), static_cast<unsigned long long>(st.evaluations),
+                static_cast<unsigned long long>(st.max_evaluations_per_call),
+                static_cast<unsigned long long>(st.fallbacks));
+}
+
 }  // namespace
 }  // namespace ffcube

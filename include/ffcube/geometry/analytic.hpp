@@ -72,8 +72,9 @@ struct SphereFactors {
 SphereFactors ff_concentric_spheres(double r1, double r2);
 
 // ---- Polygons ----------------------------------------------------------------------------
-// Polygons are planar (InputError when a vertex is off the best-fit plane by more than 1e-9 of
-// the polygon's size), have ≥ 3 vertices and non-zero area, may be non-convex but not
+// Polygons are planar (InputError when a vertex is off the best-fit plane by more than
+// geometric_tolerance(1e-9, size, max |coordinate|): 1e-9 of the polygon's size, or the rounding
+// of its coordinates far from the origin, geometry/tolerance.hpp), have ≥ 3 vertices and non-zero area, may be non-convex but not
 // self-intersecting, and are counter-clockwise seen from their front (polygon.hpp).
 
 // Differential area at p with unit normal n to a polygon: Lambert's contour formula,
@@ -82,7 +83,8 @@ SphereFactors ff_concentric_spheres(double r1, double r2);
 // (Sutherland–Hodgman) because it cannot receive; without the clip the formula would count it
 // negatively. The value does not depend on which side of the polygon faces p (F is the
 // projected solid angle fraction; one-sidedness is the caller's affair). A point in the
-// polygon's plane (to 1e-12 of its size), its boundary included, sees it edge-on: 0.
+// polygon's plane (to geometric_tolerance(1e-12, size, max |coordinate|)), its boundary
+// included, sees it edge-on: 0.
 double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly);
 
 // The same for the common case in inner loops, without checks or clipping: the caller knows
@@ -101,7 +103,10 @@ double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<c
 // edge 1, where the log singularity or near-singularity is. So shared edges, shared vertices
 // and near-touching polygons (gap 1e-3 or less) stay exact to ~1e-12 relative.
 // Coordinates are shifted to polygon 1's centroid and scaled by the size of the pair first, so
-// offsets of 1e5 and scales of 1e-4 or 1e4 give the same F.
+// offsets of 1e5 and scales of 1e-4 or 1e4 give the same F. Vertices within
+// geometric_tolerance(1e-12, 1, max |coordinate| / size) of the other polygon's plane count as
+// on it (not clipped), and a polygon whose front part lies within that of the other's plane
+// sees it edge-on: 0.
 // Far apart (bounding spheres separated by at least 2 radii of the smaller polygon) the
 // contour integral's O(L² ln D) terms would cancel to O(L⁴/D²) and lose 2·log10(D/L) digits;
 // there F is instead Lambert's formula integrated over the smaller polygon (reciprocity) by a
