@@ -1,6 +1,7 @@
 #include "ffcube/geometry/analytic.hpp"
 
 #include "ffcube/geometry/quadrature.hpp"
+#include "ffcube/geometry/tolerance.hpp"
 
 #include "ffcube/core/error.hpp"
 
@@ -9,7 +10,9 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -37,23 +40,37 @@ void validate_polygon(const char* fn, const char* which, std::span<const Vec3> p
     const double size = polygon_max_edge(poly);
     if (!(polygon_area(poly) > 0.0) || !(size > 0.0))
         throw InputError(fmt::format("{}: {} has zero area", fn, which));
-    // 1e-9 of the size: far above the rounding of planar input at offsets of 1e5 (1e-11
-    // relative), far below any face a mesher would call planar.
-    if (polygon_planarity_deviation(poly) > 1e-9 * size)
+    // 1e-9 of the size: far below any face a mesher would call planar; and never below the
+    // rounding of the coordinates (geometric_tolerance): a planar polygon 2.8e-4 wide at 1e5 is
+    // 7e-12 = 2.6e-8 of its size off its plane by rounding alone, and is planar.
+    const double deviation = polygon_planarity_deviation(poly);
+    const double allowed = geometric_tolerance(1e-9, size, max_abs_coordinate(poly));
+    if (deviation > allowed)
         throw InputError(fmt::format("{}: {} is not planar (a vertex is {:.3g} off its plane, "
-                                     "more than 1e-9 of its size {:.3g})",
-                                     fn, which, polygon_planarity_deviation(poly), size));
+                                     "more than {:.3g}: 1e-9 of its size {:.3g}, or the rounding "
+                                     "of its coordinates if larger)",
+                                     fn, which, deviation, allowed, size));
 }
 
 // Sutherland–Hodgman against one plane: keeps the part of `in` where dot(v − o, m) ≥ 0.
-// Vertices on the plane are kept, so a polygon touching the plane along an edge keeps it.
-void clip_to_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out) {
+// Vertices on the plane are kept, so a polygon touching the plane along an edge keeps it. A
+// vertex within `on_plane` of the plane counts as on it (geometric_tolerance: the plane and the
+// vertex are known only to rounding). Without that, a shared hinge edge whose two ends round to
+// ±1e-15 of the other plane was cut at its midpoint, and the cut ran along the polygon for
+// 1e-15 / sin α of its length: at a fold angle α of 1e-6 a sliver 1e-9 wide next to the hinge,
+// where the kernel is strongest, was lost (A1 F12 off by 6e-9 relative, and reciprocity too).
+void clip_to_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out,
+                   double on_plane = 0.0) {
     out.clear();
     const std::size_t k = in.size();
+    const auto side = [&](const Vec3& v) {
+        const double d = glm::dot(v - o, m);
+        return std::abs(d) <= on_plane ? 0.0 : d;
+    };
     for (std::size_t i = 0; i < k; ++i) {
         const Vec3& a = in[i];
         const Vec3& b = in[(i + 1) % k];
-        const double da = glm::dot(a - o, m), db = glm::dot(b - o, m);
+        const double da = side(a), db = side(b);
         if (da >= 0.0) out.push_back(a);
         if ((da > 0.0 && db < 0.0) || (da < 0.0 && db > 0.0))
             out.push_back(a + (da / (da - db)) * (b - a));
@@ -109,28 +126,59 @@ constexpr std::array<double, 4> kWg = {
     0.129484966168869693270611432679082, 0.279705391489276667901467771423780,
     0.381830050505118944950369775488975, 0.417959183673469387755102040816327};
 
+// Work of the adaptive quadrature of one edge pair, and what was left unconverged.
+struct QuadWork {
+    std::uint64_t evaluations = 0;
+    std::uint64_t fallbacks = 0;  // panels accepted unconverged (budget or depth spent)
+    double fallback_error = 0.0;  // Σ |K15 − G7| over those panels: a bound on their error
+};
+
 // Adaptive Gauss–Kronrod on [a,b]: bisect until |K15 − G7| ≤ tol (halved per level). The log
 // singularities here sit at interval ends (the callers split there), where bisection converges
-// geometrically; 50 levels reach intervals of 1e-15 of the edge, below double resolution.
+// geometrically: at most 2 panels per level. Every panel is accepted, whatever its tolerance, when
+//  - |K − G| ≤ noise × (b − a): the integrand's absolute rounding (the caller's estimate), or
+//  - |K − G| ≤ 50 ε × resabs (resabs = ∫|f| by the same rule; QUADPACK's roundoff test): the
+//    difference is then rounding of the values themselves, relative to their magnitude, or
+//  - b − a ≤ min_width = 4 ε × (the edge's length): the panel is below the resolution of the
+//    edge's points. The integrand is bounded (g is continuous), so such a panel holds less than
+//    the rounding of the edge's whole integral. Cuts are at most one edge long, so this alone
+//    stops every branch by depth log2(1/(4ε)) = 50 = kMaxQuadDepth.
+// So no bisection relies on rounding noise to stop. Two more stops count as fallbacks (the
+// panel keeps its K15 value and |K − G| is added to the error bound): depth 0, and the
+// evaluation budget `limit` spent (panels still on the stack are then integrated by K15 once
+// each, unsplit: the fixed rule on what remains).
 template <class F>
-double integrate(const F& f, double a, double b, double tol, double noise, int depth = 50) {
+double integrate(const F& f, double a, double b, double tol, double noise, double min_width, int depth,
+                 std::uint64_t limit, QuadWork& work) {
     const double c = 0.5 * (a + b), hl = 0.5 * (b - a);
     const double fc = f(c);
-    double k = kWgk[7] * fc, g = kWg[3] * fc;
+    double k = kWgk[7] * fc, g = kWg[3] * fc, resabs = kWgk[7] * std::abs(fc);
     for (int i = 0; i < 7; ++i) {
         const double dx = hl * kXgk[i];
-        const double s = f(c - dx) + f(c + dx);
-        k += kWgk[i] * s;
-        if (i % 2 == 1) g += kWg[i / 2] * s;
+        const double f1 = f(c - dx), f2 = f(c + dx);
+        k += kWgk[i] * (f1 + f2);
+        resabs += kWgk[i] * (std::abs(f1) + std::abs(f2));
+        if (i % 2 == 1) g += kWg[i / 2] * (f1 + f2);
     }
+    work.evaluations += 15;
     k *= hl;
     g *= hl;
+    resabs *= std::abs(hl);
     FFCUBE_CHECK_MSG(std::isfinite(k), "non-finite integrand in the contour integral");
+    constexpr double eps = std::numeric_limits<double>::epsilon();
+    const double err = std::abs(k - g);
     // 'noise' is the integrand's absolute rounding error: |K − G| below noise × (b − a) cannot be
     // told from rounding, and bisecting further would split noise in both halves at every level
     // (2^depth evaluations: a sliver clipped 1e-16 thick by an ulp of rounding did exactly that).
-    if (std::abs(k - g) <= std::max(tol, noise * (b - a)) || depth == 0) return k;
-    return integrate(f, a, c, 0.5 * tol, noise, depth - 1) + integrate(f, c, b, 0.5 * tol, noise, depth - 1);
+    if (err <= std::max({tol, noise * (b - a), 50.0 * eps * resabs})) return k;
+    if (b - a <= min_width) return k;
+    if (depth == 0 || work.evaluations >= limit) {
+        ++work.fallbacks;
+        work.fallback_error += err;
+        return k;
+    }
+    return integrate(f, a, c, 0.5 * tol, noise, min_width, depth - 1, limit, work) +
+           integrate(f, c, b, 0.5 * tol, noise, min_width, depth - 1, limit, work);
 }
 
 // Parameter t ∈ [0, lq] of the point of segment q0 + t e closest to the segment p0 + s d,
@@ -139,15 +187,21 @@ double closest_on_q(const Vec3& p0, const Vec3& d, double lp, const Vec3& q0, co
                     double lq) {
     const Vec3 r = p0 - q0;
     const double b = glm::dot(d, e), c = glm::dot(d, r), f = glm::dot(e, r);
-    const double denom = 1.0 - b * b;
-    const double s = std::clamp((b * f - c) / denom, 0.0, lp);
+    // sin² of the angle. 1 − b² cancels for nearly parallel edges (b rounds to 1 below an angle
+    // of 1e-8, and the division then gave NaN cuts that silently dropped parts of the integral):
+    // there |d × e|² is used, which keeps its relative precision.
+    double denom = 1.0 - b * b;
+    if (denom < 1e-8) denom = glm::dot(glm::cross(d, e), glm::cross(d, e));
+    const double s = denom > 0.0 ? std::clamp((b * f - c) / denom, 0.0, lp) : 0.0;
     const double t = b * s + f;
-    // Ericson then re-clamps s for a clamped t; t itself is final, and only t is needed.
-    return std::clamp(t, 0.0, lq);
+    // Ericson then re-clamps s for a clamped t; t itself is final, and only t is needed. Any
+    // finite t is a valid cut (cuts only speed up the quadrature), so a non-finite one is
+    // replaced by the point nearest p0.
+    return std::isfinite(t) ? std::clamp(t, 0.0, lq) : std::clamp(f, 0.0, lq);
 }
 
 // ∫_{edge P} ∫_{edge Q} ln|x1 − x2| dx1 · dx2 for P = p0→p1, Q = q0→q1.
-double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1) {
+double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1, QuadWork& work) {
     const Vec3 dp = p1 - p0, dq = q1 - q0;
     const double lp = glm::length(dp), lq = glm::length(dq);
     if (lp == 0.0 || lq == 0.0) return 0.0;
@@ -178,6 +232,8 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1)
     std::array<double, 5> cuts = {0.0, closest_on_q(p0, d, lp, q0, e, lq),
                                   std::clamp(glm::dot(p0 - q0, e), 0.0, lq),
                                   std::clamp(glm::dot(p1 - q0, e), 0.0, lq), lq};
+    FFCUBE_CHECK_MSG(std::all_of(cuts.begin(), cuts.end(), [](double x) { return std::isfinite(x); }),
+                     "contour integral: a non-finite cut would drop part of the edge");
     std::sort(cuts.begin(), cuts.end());
     // Absolute tolerance 1e-13 of the pair's scale lp·lq: the sum over all pairs of a polygon
     // pair then carries ≲ 1e-13 × perimeter1 × perimeter2 of quadrature error.
@@ -188,9 +244,15 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1)
     // noise accepted over all of Q is then 1e-14 S lq: the floor that doubles allow.
     const double extent = lp + lq + glm::length(q0 - p0);
     const double noise = 1e-14 * extent;
+    // Budget: see kContourEvalsPerEdgePair (analytic.hpp). Splitting stops once kEdgePairSplitBudget
+    // evaluations are spent; the panels then pending (≤ kMaxQuadDepth per cut, ≤ 4 cuts) cost 15
+    // each, so the pair never exceeds kContourEvalsPerEdgePair.
+    const std::uint64_t limit = work.evaluations + kEdgePairSplitBudget;
+    const double min_width = 4.0 * std::numeric_limits<double>::epsilon() * lq;
     double integral = 0.0;
     for (std::size_t i = 0; i + 1 < cuts.size(); ++i)
-        if (cuts[i + 1] > cuts[i]) integral += integrate(g, cuts[i], cuts[i + 1], tol, noise);
+        if (cuts[i + 1] > cuts[i])
+            integral += integrate(g, cuts[i], cuts[i + 1], tol, noise, min_width, kMaxQuadDepth, limit, work);
     return cos_angle * integral;
 }
 
@@ -249,7 +311,8 @@ double bounding_radius(std::span<const Vec3> poly, const Vec3& c) {
 // ≥ 2R + R − √2 R ≥ 1.59 R from the points used, and the spans integrated are ≤ 2R long.
 // Used where the contour integral would cancel: Lambert's terms are O(L/D) and their sum
 // O((L/D)²), so it loses only log10(D/L) digits instead of the contour form's 2·log10(D/L).
-double far_field_integral(std::span<const Vec3> poly, const Vec3& n, std::span<const Vec3> q) {
+double far_field_integral(std::span<const Vec3> poly, const Vec3& n, std::span<const Vec3> q,
+                          std::uint64_t& evaluations) {
     Vec3 t1, t2;
     tangents(n, t1, t2);
     const Vec3 c = polygon_centroid(poly);
@@ -263,6 +326,7 @@ double far_field_integral(std::span<const Vec3> poly, const Vec3& n, std::span<c
         const double xa = glm::dot(a, t1), ya = glm::dot(a, t2);
         const double xb = glm::dot(b, t1), yb = glm::dot(b, t2);
         if (yb == ya) continue;
+        evaluations += g.x.size() * g.x.size();
         double edge = 0.0;
         for (std::size_t i = 0; i < g.x.size(); ++i) {
             const double tau = 0.5 * (1.0 + g.x[i]);
@@ -418,9 +482,12 @@ double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly
         throw InputError(fmt::format("{}: the normal must be non-zero and finite", fn));
     const Vec3 un = n / len;
     // A point in the polygon's plane sees it edge-on: F = 0. Within 1e-12 of the size of that
-    // plane the directions to the vertices are rounding noise, so the same answer is given.
+    // plane, or within the rounding of the coordinates (geometric_tolerance), the directions to
+    // the vertices are rounding noise, so the same answer is given.
     const double size = polygon_max_edge(poly);
-    if (std::abs(glm::dot(p - polygon_centroid(poly), polygon_normal(poly))) <= 1e-12 * size)
+    const double coord = std::max({max_abs_coordinate(poly), std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+    if (std::abs(glm::dot(p - polygon_centroid(poly), polygon_normal(poly))) <=
+        geometric_tolerance(1e-12, size, coord))
         return 0.0;
     std::vector<Vec3> front;
     clip_to_front(poly, p, un, front);
@@ -432,7 +499,29 @@ double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<c
     return std::abs(lambert_sum(p, unit_n, poly)) / (2.0 * kPi);
 }
 
-double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
+std::uint64_t ff_polygon_polygon_budget(std::size_t k1, std::size_t k2) {
+    const std::uint64_t a = k1, b = k2;
+    return std::max(a * b * kContourEvalsPerEdgePair, std::max(a, b) * kFarFieldEvalsPerEdge);
+}
+
+namespace {
+
+std::atomic<std::uint64_t> g_calls{0}, g_evaluations{0}, g_fallbacks{0}, g_fallback_calls{0}, g_max_evaluations{0};
+
+void record(const AnalyticCallInfo& info) {
+    g_calls.fetch_add(1, std::memory_order_relaxed);
+    g_evaluations.fetch_add(info.evaluations, std::memory_order_relaxed);
+    if (info.fallbacks > 0) {
+        g_fallbacks.fetch_add(info.fallbacks, std::memory_order_relaxed);
+        g_fallback_calls.fetch_add(1, std::memory_order_relaxed);
+    }
+    std::uint64_t m = g_max_evaluations.load(std::memory_order_relaxed);
+    while (info.evaluations > m &&
+           !g_max_evaluations.compare_exchange_weak(m, info.evaluations, std::memory_order_relaxed)) {
+    }
+}
+
+double polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info) {
     const char* fn = "ff_polygon_polygon";
     validate_polygon(fn, "polygon 1", p1);
     validate_polygon(fn, "polygon 2", p2);
@@ -440,6 +529,7 @@ double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
     // keep their digits, and ln r stays O(1). F is invariant under both.
     const Vec3 origin = polygon_centroid(p1);
     const double scale = std::max(polygon_max_edge(p1), polygon_max_edge(p2));
+    const double coord = std::max(max_abs_coordinate(p1), max_abs_coordinate(p2));
     std::vector<Vec3> a(p1.size()), b(p2.size());
     for (std::size_t i = 0; i < p1.size(); ++i) a[i] = (p1[i] - origin) / scale;
     for (std::size_t i = 0; i < p2.size(); ++i) b[i] = (p2[i] - origin) / scale;
@@ -450,16 +540,21 @@ double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
     // cosθ1 > 0 only in front of plane 1 and cosθ2 > 0 only in front of plane 2, and the two
     // conditions are independent, so clipping each polygon by the other's plane keeps exactly
     // the pairs of points that exchange energy front to front.
+    // Vertices within rounding of the other's plane count as on it (see clip_to_front).
+    const double in_plane = geometric_tolerance(1e-12, 1.0, coord / scale);
     std::vector<Vec3> a_front, b_front;
-    clip_to_front(a, c2, n2, a_front);
-    clip_to_front(b, c1, n1, b_front);
+    clip_to_front(a, c2, n2, a_front, in_plane);
+    clip_to_front(b, c1, n1, b_front, in_plane);
     if (a_front.size() < 3 || b_front.size() < 3) return 0.0;
-    // A polygon lying in the other's plane (to 1e-12 of the size, the planarity rounding)
-    // sees it at cosθ = 0.
+    info.clipped_vertices1 = a_front.size();
+    info.clipped_vertices2 = b_front.size();
+    info.budget = ff_polygon_polygon_budget(a_front.size(), b_front.size());
+    // A polygon lying in the other's plane (to 1e-12 of the size, the planarity rounding, or to
+    // the rounding of the input coordinates, in units of the pair's size) sees it at cosθ = 0.
     double height1 = 0.0, height2 = 0.0;
     for (const Vec3& v : a_front) height1 = std::max(height1, glm::dot(v - c2, n2));
     for (const Vec3& v : b_front) height2 = std::max(height2, glm::dot(v - c1, n1));
-    if (height1 <= 1e-12 || height2 <= 1e-12) return 0.0;
+    if (height1 <= in_plane || height2 <= in_plane) return 0.0;
 
     // Far apart (the bounding spheres at least 2 radii of the smaller one apart): integrate
     // Lambert's formula over the smaller polygon (reciprocity: A1 F12 = A2 F21) instead of the
@@ -467,20 +562,61 @@ double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
     const Vec3 ca = polygon_centroid(a_front), cb = polygon_centroid(b_front);
     const double ra = bounding_radius(a_front, ca), rb = bounding_radius(b_front, cb);
     if (glm::length(ca - cb) - ra - rb >= 2.0 * std::min(ra, rb)) {
-        const double a1f12 = ra <= rb ? far_field_integral(a_front, n1, b_front)
-                                      : far_field_integral(b_front, n2, a_front);
+        info.method = AnalyticCallInfo::Method::far_field;
+        const double a1f12 = ra <= rb ? far_field_integral(a_front, n1, b_front, info.evaluations)
+                                      : far_field_integral(b_front, n2, a_front, info.evaluations);
         return std::max(0.0, a1f12 / area1);
     }
 
+    info.method = AnalyticCallInfo::Method::contour;
+    QuadWork work;
     double sum = 0.0;
     const std::size_t ka = a_front.size(), kb = b_front.size();
     for (std::size_t i = 0; i < ka; ++i)
         for (std::size_t j = 0; j < kb; ++j)
-            sum += edge_pair(a_front[i], a_front[(i + 1) % ka], b_front[j], b_front[(j + 1) % kb]);
+            sum += edge_pair(a_front[i], a_front[(i + 1) % ka], b_front[j], b_front[(j + 1) % kb], work);
+    info.evaluations = work.evaluations;
+    info.fallbacks = work.fallbacks;
+    // |cos| ≤ 1 per edge pair, so the panels' error bounds add up to one on the double integral.
+    info.error_bound = work.fallback_error / (2.0 * kPi * area1);
     // Both contours counter-clockwise seen from their fronts, facing each other: the double
     // contour integral is then +2π A1 F12. Rounding can leave −1e-17 for F = 0 exactly.
     return std::max(0.0, sum / (2.0 * kPi * area1));
 }
+
+}  // namespace
+
+double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info) {
+    info = AnalyticCallInfo{};
+    const double f = polygon_polygon(p1, p2, info);
+    FFCUBE_CHECK_MSG(info.evaluations <= info.budget, "ff_polygon_polygon exceeded its evaluation budget");
+    record(info);
+    return f;
+}
+
+double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
+    AnalyticCallInfo info;
+    return ff_polygon_polygon(p1, p2, info);
+}
+
+AnalyticStats analytic_stats() {
+    AnalyticStats s;
+    s.calls = g_calls.load(std::memory_order_relaxed);
+    s.evaluations = g_evaluations.load(std::memory_order_relaxed);
+    s.fallbacks = g_fallbacks.load(std::memory_order_relaxed);
+    s.fallback_calls = g_fallback_calls.load(std::memory_order_relaxed);
+    s.max_evaluations_per_call = g_max_evaluations.load(std::memory_order_relaxed);
+    return s;
+}
+
+void reset_analytic_stats() {
+    g_calls.store(0, std::memory_order_relaxed);
+    g_evaluations.store(0, std::memory_order_relaxed);
+    g_fallbacks.store(0, std::memory_order_relaxed);
+    g_fallback_calls.store(0, std::memory_order_relaxed);
+    g_max_evaluations.store(0, std::memory_order_relaxed);
+}
+
 
 double ff_polygon_polygon_mc(std::span<const Vec3> p1, std::span<const Vec3> p2,
                              std::uint64_t samples, std::uint64_t seed) {

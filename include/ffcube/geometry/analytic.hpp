@@ -72,8 +72,9 @@ struct SphereFactors {
 SphereFactors ff_concentric_spheres(double r1, double r2);
 
 // ---- Polygons ----------------------------------------------------------------------------
-// Polygons are planar (InputError when a vertex is off the best-fit plane by more than 1e-9 of
-// the polygon's size), have ≥ 3 vertices and non-zero area, may be non-convex but not
+// Polygons are planar (InputError when a vertex is off the best-fit plane by more than
+// geometric_tolerance(1e-9, size, max |coordinate|): 1e-9 of the polygon's size, or the rounding
+// of its coordinates far from the origin, geometry/tolerance.hpp), have ≥ 3 vertices and non-zero area, may be non-convex but not
 // self-intersecting, and are counter-clockwise seen from their front (polygon.hpp).
 
 // Differential area at p with unit normal n to a polygon: Lambert's contour formula,
@@ -82,7 +83,8 @@ SphereFactors ff_concentric_spheres(double r1, double r2);
 // (Sutherland–Hodgman) because it cannot receive; without the clip the formula would count it
 // negatively. The value does not depend on which side of the polygon faces p (F is the
 // projected solid angle fraction; one-sidedness is the caller's affair). A point in the
-// polygon's plane (to 1e-12 of its size), its boundary included, sees it edge-on: 0.
+// polygon's plane (to geometric_tolerance(1e-12, size, max |coordinate|)), its boundary
+// included, sees it edge-on: 0.
 double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly);
 
 // The same for the common case in inner loops, without checks or clipping: the caller knows
@@ -101,7 +103,10 @@ double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<c
 // edge 1, where the log singularity or near-singularity is. So shared edges, shared vertices
 // and near-touching polygons (gap 1e-3 or less) stay exact to ~1e-12 relative.
 // Coordinates are shifted to polygon 1's centroid and scaled by the size of the pair first, so
-// offsets of 1e5 and scales of 1e-4 or 1e4 give the same F.
+// offsets of 1e5 and scales of 1e-4 or 1e4 give the same F. Vertices within
+// geometric_tolerance(1e-12, 1, max |coordinate| / size) of the other polygon's plane count as
+// on it (not clipped), and a polygon whose front part lies within that of the other's plane
+// sees it edge-on: 0.
 // Far apart (bounding spheres separated by at least 2 radii of the smaller polygon) the
 // contour integral's O(L² ln D) terms would cancel to O(L⁴/D²) and lose 2·log10(D/L) digits;
 // there F is instead Lambert's formula integrated over the smaller polygon (reciprocity) by a
@@ -109,7 +114,56 @@ double ff_point_polygon_unclipped(const Vec3& p, const Vec3& unit_n, std::span<c
 // for surfaces facing each other (1e-15 relative at D/L = 1e3) down to O((L/D)³) for surfaces
 // seen edge-on (1e-10 relative at D/L = 1e3).
 // Returns 0 when nothing of one polygon is in front of the other.
+// Bounded work (docs/robustness.md): every call evaluates at most
+// ff_polygon_polygon_budget(k1, k2) integrands, k1, k2 the vertex counts after clipping (≤ n + 1
+// for a convex n-gon, ≤ 2n in general); see AnalyticCallInfo for what one call did.
 double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2);
+
+// ---- Work bounds and accounting ----------------------------------------------------------
+// The contour integral's quadrature, per pair of edges: adaptive Gauss–Kronrod 7/15 bisects a
+// cut of edge 2 (≤ 4 cuts) only while a panel is wider than 4ε of the edge (so ≤ 50 levels) and
+// its |K15 − G7| exceeds its tolerance, the integrand's rounding and 50ε of its magnitude. With
+// the singularities at cut ends, at most 2 panels per level are split (one at each end), so
+// ≤ 4 evaluated: ≤ 4 cuts × 50 levels × 4 panels × 15 = 12,000 evaluations, the split budget. Once it is spent nothing more is split:
+// each panel then evaluated or pending (≤ 50 on the stack + 3 cuts) keeps its K15 value — the
+// fallback, counted with |K15 − G7| as its error bound — so a pair never exceeds
+// kContourEvalsPerEdgePair evaluations (an evaluation: ∫ ln r along edge 1 in closed form).
+inline constexpr int kMaxQuadDepth = 50;
+inline constexpr std::uint64_t kEdgePairSplitBudget = 4 * 50 * 4 * 15;
+inline constexpr std::uint64_t kContourEvalsPerEdgePair = kEdgePairSplitBudget + 15 * (kMaxQuadDepth + 3);
+// The far-field rule (fixed 20 × 20 Gauss points per edge of the smaller polygon, each one
+// Lambert sum over the other polygon): no adaptivity, no fallback.
+inline constexpr std::uint64_t kFarFieldEvalsPerEdge = 400;
+// The most integrand evaluations one ff_polygon_polygon call may make, given the vertex counts
+// k1, k2 of the clipped polygons: max(k1 k2 kContourEvalsPerEdgePair, max(k1, k2) kFarField…).
+std::uint64_t ff_polygon_polygon_budget(std::size_t k1, std::size_t k2);
+
+// What one ff_polygon_polygon call did (the optional out-parameter overload below).
+struct AnalyticCallInfo {
+    enum class Method { zero, contour, far_field };
+    Method method = Method::zero;      // zero: nothing in front / edge-on, no integral evaluated
+    std::size_t clipped_vertices1 = 0;  // vertex counts after clipping (0 when not clipped)
+    std::size_t clipped_vertices2 = 0;
+    std::uint64_t evaluations = 0;  // integrand evaluations (ln-r edge integrals or Lambert sums)
+    std::uint64_t budget = 0;       // ff_polygon_polygon_budget(clipped counts): evaluations ≤ budget
+    std::uint64_t fallbacks = 0;    // quadrature panels accepted unconverged (budget or depth spent)
+    double error_bound = 0.0;       // bound on |F12 error| from those panels (0 when none)
+};
+// The same value as ff_polygon_polygon(p1, p2), with its work reported in `info`.
+double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info);
+
+// Process-wide totals of ff_polygon_polygon calls since the last reset (relaxed atomics: any
+// thread may call, totals are exact, reads are a snapshot). For the run report: "analytic
+// fallbacks: N" = fallback_calls.
+struct AnalyticStats {
+    std::uint64_t calls = 0;
+    std::uint64_t evaluations = 0;
+    std::uint64_t fallbacks = 0;       // panels accepted unconverged, all calls
+    std::uint64_t fallback_calls = 0;  // calls with at least one such panel
+    std::uint64_t max_evaluations_per_call = 0;
+};
+AnalyticStats analytic_stats();
+void reset_analytic_stats();
 
 // Monte Carlo reference for tests: `samples` points uniform on polygon 1 (convex polygons only:
 // fan triangulation), each shooting one cosine-distributed ray from its front; F12 = fraction
