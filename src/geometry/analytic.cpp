@@ -21,6 +21,9 @@ namespace ffcube {
 
 namespace {
 
+// Polygons projected onto their plane by planar_polygon (all calls; analytic_stats()).
+std::atomic<std::uint64_t> g_flattened{0};
+
 constexpr double kPi = std::numbers::pi;
 
 void require_positive(const char* fn, const char* name, double v) {
@@ -30,7 +33,17 @@ void require_positive(const char* fn, const char* name, double v) {
 
 // ---- polygon checks and clipping ---------------------------------------------------------
 
-void validate_polygon(const char* fn, const char* which, std::span<const Vec3> poly) {
+// Validates a polygon and returns it as the kernels use it. Planar up to rounding (1e-9 of its
+// size, or the rounding of its coordinates far from the origin: a planar polygon 2.8e-4 wide at
+// 1e5 is 7e-12 = 2.6e-8 of its size off its plane by rounding alone): the polygon itself,
+// untouched. Off its plane by up to kPlanarityTolerance of its size (what the mesher calls planar,
+// so its patches of such a face come here; a UV sphere written with 6 decimals has quads 1e-7 of
+// their size off): projected onto its Newell plane through its centroid, in `storage`. The
+// value is then that of the projected polygon; a vertex moves by at most 1e-6 of the size, which
+// changes F by about as much relative (docs/accuracy.md), far below every other error. Beyond:
+// InputError naming the rule.
+std::span<const Vec3> planar_polygon(const char* fn, const char* which, std::span<const Vec3> poly,
+                                     std::vector<Vec3>& storage) {
     if (poly.size() < 3)
         throw InputError(fmt::format("{}: {} has {} vertices; a polygon needs at least 3", fn,
                                      which, poly.size()));
@@ -40,16 +53,20 @@ void validate_polygon(const char* fn, const char* which, std::span<const Vec3> p
     const double size = polygon_max_edge(poly);
     if (!(polygon_area(poly) > 0.0) || !(size > 0.0))
         throw InputError(fmt::format("{}: {} has zero area", fn, which));
-    // 1e-9 of the size: far below any face a mesher would call planar; and never below the
-    // rounding of the coordinates (geometric_tolerance): a planar polygon 2.8e-4 wide at 1e5 is
-    // 7e-12 = 2.6e-8 of its size off its plane by rounding alone, and is planar.
     const double deviation = polygon_planarity_deviation(poly);
-    const double allowed = geometric_tolerance(1e-9, size, max_abs_coordinate(poly));
+    const double coord = max_abs_coordinate(poly);
+    if (deviation <= geometric_tolerance(1e-9, size, coord)) return poly;
+    const double allowed = geometric_tolerance(kPlanarityTolerance, size, coord);
     if (deviation > allowed)
         throw InputError(fmt::format("{}: {} is not planar (a vertex is {:.3g} off its plane, "
-                                     "more than {:.3g}: 1e-9 of its size {:.3g}, or the rounding "
+                                     "more than {:.3g}: {:g} of its size {:.3g}, or the rounding "
                                      "of its coordinates if larger)",
-                                     fn, which, deviation, allowed, size));
+                                     fn, which, deviation, allowed, kPlanarityTolerance, size));
+    const Vec3 n = polygon_normal(poly), c = polygon_centroid(poly);
+    storage.assign(poly.begin(), poly.end());
+    for (Vec3& v : storage) v -= glm::dot(v - c, n) * n;
+    g_flattened.fetch_add(1, std::memory_order_relaxed);
+    return storage;
 }
 
 // Sutherland–Hodgman against one plane: keeps the part of `in` where dot(v − o, m) ≥ 0.
@@ -474,9 +491,10 @@ SphereFactors ff_concentric_spheres(double r1, double r2) {
 
 // ---- polygons ----------------------------------------------------------------------------
 
-double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> poly) {
+double ff_point_polygon(const Vec3& p, const Vec3& n, std::span<const Vec3> given) {
     const char* fn = "ff_point_polygon";
-    validate_polygon(fn, "the polygon", poly);
+    std::vector<Vec3> flat;
+    const std::span<const Vec3> poly = planar_polygon(fn, "the polygon", given, flat);
     const double len = glm::length(n);
     if (!(len > 0.0) || !std::isfinite(len))
         throw InputError(fmt::format("{}: the normal must be non-zero and finite", fn));
@@ -521,10 +539,11 @@ void record(const AnalyticCallInfo& info) {
     }
 }
 
-double polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info) {
+double polygon_polygon(std::span<const Vec3> given1, std::span<const Vec3> given2, AnalyticCallInfo& info) {
     const char* fn = "ff_polygon_polygon";
-    validate_polygon(fn, "polygon 1", p1);
-    validate_polygon(fn, "polygon 2", p2);
+    std::vector<Vec3> flat1, flat2;
+    const std::span<const Vec3> p1 = planar_polygon(fn, "polygon 1", given1, flat1);
+    const std::span<const Vec3> p2 = planar_polygon(fn, "polygon 2", given2, flat2);
     // Work relative to polygon 1's centroid and in units of the pair's size: offsets of 1e5
     // keep their digits, and ln r stays O(1). F is invariant under both.
     const Vec3 origin = polygon_centroid(p1);
@@ -606,6 +625,7 @@ AnalyticStats analytic_stats() {
     s.fallbacks = g_fallbacks.load(std::memory_order_relaxed);
     s.fallback_calls = g_fallback_calls.load(std::memory_order_relaxed);
     s.max_evaluations_per_call = g_max_evaluations.load(std::memory_order_relaxed);
+    s.flattened_polygons = g_flattened.load(std::memory_order_relaxed);
     return s;
 }
 
@@ -615,14 +635,16 @@ void reset_analytic_stats() {
     g_fallbacks.store(0, std::memory_order_relaxed);
     g_fallback_calls.store(0, std::memory_order_relaxed);
     g_max_evaluations.store(0, std::memory_order_relaxed);
+    g_flattened.store(0, std::memory_order_relaxed);
 }
 
 
-double ff_polygon_polygon_mc(std::span<const Vec3> p1, std::span<const Vec3> p2,
+double ff_polygon_polygon_mc(std::span<const Vec3> given1, std::span<const Vec3> given2,
                              std::uint64_t samples, std::uint64_t seed) {
     const char* fn = "ff_polygon_polygon_mc";
-    validate_polygon(fn, "polygon 1", p1);
-    validate_polygon(fn, "polygon 2", p2);
+    std::vector<Vec3> flat1, flat2;
+    const std::span<const Vec3> p1 = planar_polygon(fn, "polygon 1", given1, flat1);
+    const std::span<const Vec3> p2 = planar_polygon(fn, "polygon 2", given2, flat2);
     if (samples == 0) throw InputError(fmt::format("{}: samples must be at least 1", fn));
     const Vec3 n1 = polygon_normal(p1), n2 = polygon_normal(p2);
     Vec3 t1, t2;

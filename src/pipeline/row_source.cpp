@@ -8,6 +8,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/analytic.hpp"
 
 namespace ffcube {
 
@@ -157,7 +158,22 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
 void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     r.set("time.setup", rows.setup_seconds());
-    if (const CorrectedRowProvider* c = rows.corrected()) report_correction(r, *c);
+    if (const CorrectedRowProvider* c = rows.corrected()) {
+        report_correction(r, *c);
+        // The analytic kernels' work (geometry/analytic.hpp), summed over this process: every
+        // call has a budget, and a fallback is a panel accepted at its fixed rule's value when
+        // the budget was spent (its error is within the call's stated bound).
+        const AnalyticStats a = analytic_stats();
+        r.set("analytic.calls", a.calls);
+        r.set("analytic.evaluations", a.evaluations);
+        r.set("analytic.max_evaluations_per_call", a.max_evaluations_per_call);
+        r.set("analytic.fallbacks", a.fallbacks);
+        r.set("analytic.fallback_calls", a.fallback_calls);
+        r.set("analytic.flattened_polygons", a.flattened_polygons);
+        if (a.fallback_calls > 0)
+            info("analytic form factors: {} of {} calls spent their budget and took the fallback rule on {} panels",
+                 a.fallback_calls, a.calls, a.fallbacks);
+    }
     if (const RaycastRowProvider* rc = rows.raycast()) {
         r.set("rays_per_patch", rc->rays());
         r.set("rays_traced", rc->rays_traced());

@@ -7,6 +7,8 @@
 
 #include <unistd.h>
 
+#include "ffcube/geometry/tolerance.hpp"
+
 #include <fmt/format.h>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -31,7 +33,7 @@ namespace {
 // ratio would exceed 1e12). The same bound decides collinear vertices in convexity tests.
 constexpr double kDegenerate = 1e-12;
 // A face is non-planar when a vertex lies more than kPlanar × (longest edge) off its Newell plane.
-constexpr double kPlanar = 1e-6;
+constexpr double kPlanar = kPlanarityTolerance;  // geometry/tolerance.hpp
 // Divisions per edge are ceil(e/L × (1 − kEdgeSlack)): an edge that is L times an integer up to
 // rounding is not split once more. Lengths carry relative errors of a few 1e-16 × (coordinate
 // magnitude / edge): a unit edge at 1e5 from the origin is off by ~1e-11, hence 1e-9. Patch

@@ -373,11 +373,24 @@ TEST(AnalyticRobustness, GeometricToleranceScalesWithCoordinates) {
     EXPECT_DOUBLE_EQ(geometric_tolerance(1e-9, 2.8e-4, 1e5), 16.0 * kEps * 1e5);  // 3.6e-10 > 2.8e-13
     const std::vector<Vec3> p = {{1e5, 0, -3}, {1e5, 2, 0}, {-4, 1e5, 0}};
     EXPECT_EQ(max_abs_coordinate(p), 1e5);
-    // Still refused: a quad bent by 1e-6 of its size far from the origin is not rounding.
+    // Still refused: a quad bent by 1e-5 of its size (one corner lifted: 2.5e-6 off the Newell
+    // plane, beyond kPlanarityTolerance) far from the origin is not rounding.
     const Vec3 o(1e5, 1e5, 1e5);
-    const std::vector<Vec3> bent = {o, o + Vec3(1, 0, 0), o + Vec3(1, 1, 1e-6), o + Vec3(0, 1, 0)};
+    const std::vector<Vec3> bent = {o, o + Vec3(1, 0, 0), o + Vec3(1, 1, 1e-5), o + Vec3(0, 1, 0)};
     const std::vector<Vec3> other = {o + Vec3(0, 0, 1), o + Vec3(0, 1, 1), o + Vec3(1, 1, 1), o + Vec3(1, 0, 1)};
     EXPECT_THROW(ff_polygon_polygon(bent, other), InputError);
+    // Accepted and projected onto its plane: bent by 1e-7 (2.5e-8 off its plane), what the
+    // mesher calls planar (a UV sphere written with 6 decimals has such quads). Moving vertices
+    // by 2.5e-8 of the size moves F (0.19982 for the unit squares at distance 1) by about as much
+    // relative, 5e-9; 1e-7 leaves room for the tilt of the projected plane (1e-7 rad), which
+    // changes F to first order by less than that.
+    const std::vector<Vec3> slight = {o, o + Vec3(1, 0, 0), o + Vec3(1, 1, 1e-7), o + Vec3(0, 1, 0)};
+    const std::vector<Vec3> flat = {o, o + Vec3(1, 0, 0), o + Vec3(1, 1, 0), o + Vec3(0, 1, 0)};
+    reset_analytic_stats();
+    const double f_slight = ff_polygon_polygon(slight, other), f_flat = ff_polygon_polygon(flat, other);
+    EXPECT_EQ(analytic_stats().flattened_polygons, 1u);
+    EXPECT_NEAR(f_slight, f_flat, 1e-7);
+    EXPECT_NEAR(f_flat, 0.19982, 1e-5);
 }
 
 // The process-wide counters count calls and evaluations, and per-call info adds up to them.

@@ -72,10 +72,13 @@ struct SphereFactors {
 SphereFactors ff_concentric_spheres(double r1, double r2);
 
 // ---- Polygons ----------------------------------------------------------------------------
-// Polygons are planar (InputError when a vertex is off the best-fit plane by more than
-// geometric_tolerance(1e-9, size, max |coordinate|): 1e-9 of the polygon's size, or the rounding
-// of its coordinates far from the origin, geometry/tolerance.hpp), have ≥ 3 vertices and non-zero area, may be non-convex but not
-// self-intersecting, and are counter-clockwise seen from their front (polygon.hpp).
+// Polygons are planar: up to rounding (geometric_tolerance(1e-9, size, max |coordinate|): 1e-9
+// of the polygon's size, or the rounding of its coordinates far from the origin,
+// geometry/tolerance.hpp) they are used as given; up to kPlanarityTolerance (1e-6) of their size,
+// what the mesher calls planar, they are projected onto their Newell plane through their
+// centroid first (counted in AnalyticStats::flattened_polygons; F moves by about that relative
+// amount); beyond, InputError. They have ≥ 3 vertices and non-zero area, may be non-convex but
+// not self-intersecting, and are counter-clockwise seen from their front (polygon.hpp).
 
 // Differential area at p with unit normal n to a polygon: Lambert's contour formula,
 //   F = 1/(2π) Σ_k β_k (n · γ̂_k),  γ̂_k = unit(r_{k+1} × r_k), β_k = angle(r_k, r_{k+1}),
@@ -161,6 +164,7 @@ struct AnalyticStats {
     std::uint64_t fallbacks = 0;       // panels accepted unconverged, all calls
     std::uint64_t fallback_calls = 0;  // calls with at least one such panel
     std::uint64_t max_evaluations_per_call = 0;
+    std::uint64_t flattened_polygons = 0;  // slightly non-planar polygons projected onto their plane
 };
 AnalyticStats analytic_stats();
 void reset_analytic_stats();

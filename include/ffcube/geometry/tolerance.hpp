@@ -23,6 +23,11 @@ double max_abs_coordinate(std::span<const Vec3> poly);
 // the size-relative rule decides alone. Other layers (near-field plane tests, hemicube
 // T-junctions) call this so that every layer agrees on what counts as rounding.
 inline constexpr double kCoordinateRoundingUlps = 16.0;
+
+// The one rule for "planar": a polygon whose vertices lie within kPlanarityTolerance × (longest
+// edge) of its Newell plane. The mesher keeps such a face whole (a quad grid); the analytic
+// kernels project it onto its plane (analytic.hpp). Beyond it, the mesher triangulates the face.
+inline constexpr double kPlanarityTolerance = 1e-6;
 double geometric_tolerance(double rel_tol, double size, double coord_max);
 
 }  // namespace ffcube
