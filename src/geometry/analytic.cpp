@@ -273,14 +273,6 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     return cos_angle * integral;
 }
 
-// Orthonormal tangents of a unit normal (Duff et al. 2017).
-void tangents(const Vec3& n, Vec3& t1, Vec3& t2) {
-    const double sign = std::copysign(1.0, n.z);
-    const double a = -1.0 / (sign + n.z);
-    const double b = n.x * n.y * a;
-    t1 = Vec3(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    t2 = Vec3(b, sign + n.y * n.y * a, -n.y);
-}
 
 // Crossing-number test of a point already in the polygon's plane, in the 2D projection that
 // drops the normal's largest component.
@@ -331,7 +323,7 @@ double bounding_radius(std::span<const Vec3> poly, const Vec3& c) {
 double far_field_integral(std::span<const Vec3> poly, const Vec3& n, std::span<const Vec3> q,
                           std::uint64_t& evaluations) {
     Vec3 t1, t2;
-    tangents(n, t1, t2);
+    orthonormal_basis(n, t1, t2);
     const Vec3 c = polygon_centroid(poly);
     const GaussRule& g = gauss20();
     const std::size_t k = poly.size();
@@ -648,7 +640,7 @@ double ff_polygon_polygon_mc(std::span<const Vec3> given1, std::span<const Vec3>
     if (samples == 0) throw InputError(fmt::format("{}: samples must be at least 1", fn));
     const Vec3 n1 = polygon_normal(p1), n2 = polygon_normal(p2);
     Vec3 t1, t2;
-    tangents(n1, t1, t2);
+    orthonormal_basis(n1, t1, t2);
     // Fan triangles of polygon 1 with their cumulative areas, for area-uniform sampling.
     const std::size_t tris = p1.size() - 2;
     std::vector<double> cdf(tris);

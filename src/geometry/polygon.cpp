@@ -63,4 +63,12 @@ double polygon_max_edge(std::span<const Vec3> poly) {
     return m;
 }
 
+void orthonormal_basis(const Vec3& n, Vec3& t, Vec3& b) {
+    const double sign = std::copysign(1.0, n.z);
+    const double a = -1.0 / (sign + n.z);
+    const double c = n.x * n.y * a;
+    t = Vec3(1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = Vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
 }  // namespace ffcube

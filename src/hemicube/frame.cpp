@@ -21,12 +21,8 @@ HemicubeFrame make_frame(const Vec3& normal, double angle) {
     FFCUBE_CHECK_MSG(std::isfinite(big) && big > 0.0, "hemicube normal must be non-zero and finite");
     const Vec3 m = normal / big;
     const Vec3 n = m / glm::length(m);
-    // Duff et al. 2017, listing 3.
-    const double sign = std::copysign(1.0, n.z);
-    const double a = -1.0 / (sign + n.z);
-    const double b = n.x * n.y * a;
-    const Vec3 b1(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-    const Vec3 b2(b, sign + n.y * n.y * a, -n.y);
+    Vec3 b1, b2;
+    orthonormal_basis(n, b1, b2);
     const double c = std::cos(angle), s = std::sin(angle);
     // Rotating both tangents by the same angle in their plane keeps b1 × b2 = n.
     return {c * b1 + s * b2, c * b2 - s * b1, n};

@@ -38,14 +38,6 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
     return r;
 }
 
-// Orthonormal basis with n as third axis (Duff et al. 2017, branchless).
-void basis(const Vec3& n, Vec3& t, Vec3& b) {
-    const double sign = std::copysign(1.0, n.z);
-    const double a = -1.0 / (sign + n.z);
-    const double c = n.x * n.y * a;
-    t = Vec3(1.0 + sign * n.x * n.x * a, sign * c, -sign * n.x);
-    b = Vec3(c, sign + n.y * n.y * a, -n.y);
-}
 
 struct EmbreeHandles {
     RTCDevice device = nullptr;
@@ -143,7 +135,7 @@ struct RaycastRowProvider::Impl {
         const std::uint64_t m = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::sqrt(static_cast<double>(N))));
         const std::uint64_t strata = m * m;
         Vec3 tu, tv;
-        basis(p.normal, tu, tv);
+        orthonormal_basis(p.normal, tu, tv);
         const double offset = std::max(kOriginOffset * p.size * scale, kMinOffset);
         const Vec3 nrm = p.normal;
         double wsum = 0.0;

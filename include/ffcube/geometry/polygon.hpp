@@ -24,4 +24,9 @@ double polygon_planarity_deviation(std::span<const Vec3> poly);
 // Longest edge length in scene units.
 double polygon_max_edge(std::span<const Vec3> poly);
 
+// Orthonormal tangents t, b of a unit normal n, with t × b = n (Duff et al. 2017, "Building an
+// Orthonormal Basis, Revisited", listing 3: branchless, accurate for every n). The one copy: the
+// hemicube frame, the ray caster's directions and the analytic kernels all use it.
+void orthonormal_basis(const Vec3& n, Vec3& t, Vec3& b);
+
 }  // namespace ffcube
