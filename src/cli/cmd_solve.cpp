@@ -19,6 +19,7 @@
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/render/renderer.hpp"
+#include "ffcube/render/solved_scene.hpp"
 #include "ffcube/solver/solver.hpp"
 
 namespace ffcube::cli {
@@ -199,16 +200,10 @@ int run(const Options& o) {
              describe_unconverged(res, so));
     }
 
-    // What pictures and meshes show: radiance L = B/π (a Lambertian surface of radiosity B).
-    std::vector<Vec3> radiance(scene.size());
-    std::vector<double> lum(scene.size()), area(scene.size());
-    for (std::size_t i = 0; i < scene.size(); ++i) {
-        radiance[i] = res.radiosity[i] / std::numbers::pi;
-        lum[i] = luminance(radiance[i]);
-        area[i] = scene.patches[i].area;
-    }
+    // What pictures and meshes show (render/solved_scene.hpp).
+    const std::vector<Vec3> radiance = patch_radiance(res.radiosity);
     const bool exposure_given = o.exposure_option && o.exposure_option->count() > 0;
-    const double exposure = exposure_given ? o.exposure : auto_exposure(lum, area);
+    const double exposure = scene_exposure(scene, radiance, exposure_given ? std::optional(o.exposure) : std::nullopt);
     const Shading shading = o.flat ? Shading::Flat : Shading::Smooth;
 
     std::optional<Image> image;
@@ -252,21 +247,15 @@ int run(const Options& o) {
     }
     if (!o.radiosity.empty()) {
         std::vector<std::uint32_t> object(scene.size());
-        for (std::size_t i = 0; i < scene.size(); ++i) object[i] = scene.patches[i].object;
+        std::vector<double> area(scene.size());
+        for (std::size_t i = 0; i < scene.size(); ++i) {
+            object[i] = scene.patches[i].object;
+            area[i] = scene.patches[i].area;
+        }
         write_patch_radiosity_csv(o.radiosity, object, area, res.radiosity, scene.objects);
     }
     if (!o.mesh.empty()) {
-        const ShadedMesh shaded = shade_patches(scene, res.radiosity, shading);
-        PlyMesh ply;
-        ply.positions = shaded.positions;
-        ply.values = shaded.values;
-        for (const Vec3& b : shaded.values) {
-            const Vec3 l = b / std::numbers::pi;
-            ply.colors.push_back({encode_srgb8(l.r, exposure), encode_srgb8(l.g, exposure), encode_srgb8(l.b, exposure)});
-        }
-        ply.face_sizes = shaded.face_sizes;
-        ply.face_indices = shaded.face_indices;
-        write_ply(o.mesh, ply,
+        write_ply(o.mesh, solved_ply_mesh(scene, res.radiosity, shading, exposure),
                   fmt::format("ffcube solve of {}: colours = sRGB of exposure {:.6g} x radiosity / pi; radiosity_* = B", scene.source,
                               exposure));
     }
