@@ -160,10 +160,19 @@ TEST(BenchRun, TinyRunWritesCsvAndHemicubeErrorIsBounded) {
     EXPECT_EQ(lines[0].rfind("parallel_d1,basic,hemicube,N=32,", 0), 0u);
     EXPECT_EQ(lines[1].rfind("parallel_d1,basic,hemicube+near,N=32,", 0), 0u);
     EXPECT_EQ(lines[2].rfind("parallel_d1,basic,raycast,rays=256,", 0), 0u);
-    for (const BenchResult& r : results) {
+    for (std::size_t k = 0; k < results.size(); ++k) {
+        const BenchResult& r = results[k];
         EXPECT_TRUE(std::isfinite(r.errors.max_abs_error) && std::isfinite(r.errors.max_rel_error) &&
                     std::isfinite(r.errors.row_sum_dev) && std::isfinite(r.errors.reciprocity_dev));
-        EXPECT_GE(r.seconds, 0.0);
+        // Rows were computed, so time passed (the steady clock counts nanoseconds; a row is
+        // microseconds at least), and the CSV's seconds column (the fifth) is that time, written
+        // with 6 significant digits.
+        EXPECT_GT(r.seconds, 0.0);
+        std::size_t at = 0;
+        for (int comma = 0; comma < 4; ++comma) at = lines[k].find(',', at) + 1;
+        const double written = std::stod(lines[k].substr(at, lines[k].find(',', at) - at));
+        EXPECT_NEAR(written, r.seconds, 1e-5 * r.seconds) << lines[k];
+        EXPECT_EQ(r.patches, build_bench_scene(one[0]).size());
     }
     // PNG signature and SVG root.
     std::ifstream png(dir / "error_vs_time.png", std::ios::binary);
