@@ -12,6 +12,8 @@
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 
+#include "ffcube/geometry/tolerance.hpp"
+
 namespace ffcube::accuracy {
 
 FarField::FarField(const PatchSet& patches, const SpatialGrid& grid, const NearFieldOptions& options)
@@ -40,9 +42,9 @@ FarField::FarField(const PatchSet& patches, const SpatialGrid& grid, const NearF
     }
     const double coord = std::max({std::abs(scene.bbox_min.x), std::abs(scene.bbox_min.y), std::abs(scene.bbox_min.z),
                                    std::abs(scene.bbox_max.x), std::abs(scene.bbox_max.y), std::abs(scene.bbox_max.z)});
-    // In a plane: within 1e-9 of the scene's extent, plus the rounding of far-off coordinates (as
-    // plane_tolerance).
-    tol_ = 1e-9 * scene.extent() + 16 * std::numeric_limits<double>::epsilon() * coord;
+    // In a plane: within 1e-9 of the scene's extent, or the rounding of far-off coordinates if
+    // larger (geometry/tolerance.hpp, as plane_tolerance).
+    tol_ = geometric_tolerance(1e-9, scene.extent(), coord);
     if (!group_planes()) {  // curved or cluttered: the far field stays off
         planes_.clear();
         status_ = fmt::format("off: more than {} planes", kMaxPlanes);

@@ -7,12 +7,14 @@
 #include <cmath>
 #include <limits>
 
+#include "ffcube/geometry/tolerance.hpp"
+
 namespace ffcube::accuracy {
 
 double plane_tolerance(const Patch& a, const Patch& b) {
     const double coord = std::max({std::abs(a.centroid.x), std::abs(a.centroid.y), std::abs(a.centroid.z),
                                    std::abs(b.centroid.x), std::abs(b.centroid.y), std::abs(b.centroid.z)});
-    return 1e-9 * std::max(a.size, b.size) + 16 * std::numeric_limits<double>::epsilon() * coord;
+    return geometric_tolerance(1e-9, std::max(a.size, b.size), coord);
 }
 
 PatchSet::PatchSet(const Scene& s) : scene(s) {

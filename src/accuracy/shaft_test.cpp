@@ -7,6 +7,8 @@
 #include <array>
 #include <cmath>
 
+#include "ffcube/geometry/tolerance.hpp"
+
 namespace ffcube::accuracy {
 
 namespace {
@@ -43,8 +45,12 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
     const Box pair = patches.pair_box(i, j);
     const double scale = glm::length(pair.hi - pair.lo);
     // Relative tolerance of touching: a q that enters the hull by less than 1e-9 of the pair's
-    // size blocks at most a sliver of that relative width (documented in docs/accuracy.md).
-    const double tol = 1e-9 * scale;
+    // size blocks at most a sliver of that relative width (documented in docs/accuracy.md); far
+    // from the origin, never less than the rounding of the coordinates (geometry/tolerance.hpp),
+    // or a neighbour touching the pair would count as entering the shaft by rounding alone.
+    const double coord = std::max({std::abs(pair.lo.x), std::abs(pair.lo.y), std::abs(pair.lo.z), std::abs(pair.hi.x),
+                                   std::abs(pair.hi.y), std::abs(pair.hi.z)});
+    const double tol = geometric_tolerance(1e-9, scale, coord);
     const Box inflated{pair.lo - Vec3(tol), pair.hi + Vec3(tol)};
     std::vector<std::uint32_t>& candidates = scratch.candidates;
     grid.query(inflated, candidates);
