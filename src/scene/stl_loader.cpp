@@ -30,7 +30,6 @@ constexpr std::size_t kFacet = 50;     // 12 float32 (normal, 3 vertices) and a 
 constexpr std::size_t kMaxToken = 4096;
 // The mesher's degeneracy bound (mesher.cpp): area at most 1e-12 × (longest edge)².
 constexpr double kDegenerate = 1e-12;
-constexpr std::size_t kMaxWarnings = 10;
 
 struct PositionKey {
     double x, y, z;
