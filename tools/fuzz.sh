@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Fuzzes the OBJ/MTL loader and the .ffm reader with libFuzzer under AddressSanitizer and
+# Fuzzes the OBJ/MTL, STL and View3D loaders and the .ffm reader with libFuzzer under AddressSanitizer and
 # UndefinedBehaviorSanitizer (docs/robustness.md).
 #   1. installs clang-14, libclang-rt-14-dev (libFuzzer and the sanitizer runtimes) and llvm-14
 #      (llvm-symbolizer, for readable stacks) when missing;

@@ -26,13 +26,26 @@ CLI::Option* add_word_option(CLI::App& app, const std::string& name, E& target, 
 }  // namespace
 
 void add_scene_options(CLI::App& app, SceneFlags& o) {
-    app.add_option("scene", o.scene.path, "Wavefront OBJ scene (default: the built-in Cornell box)");
+    app.add_option("scene", o.scene.path,
+                   "scene file: OBJ, STL, View3D .vs3, PLY, glTF (.gltf/.glb) or another format assimp reads "
+                   "(default: the built-in Cornell box)");
     auto* edge =
         app.add_option("--max-patch-edge", o.scene.max_patch_edge, "split faces so that no patch edge exceeds L (scene units)")
             ->check(CLI::PositiveNumber);
-    app.add_option("--patches", o.scene.patches, "mesh to about N patches (default: 2000)")
-        ->check(CLI::PositiveNumber)
-        ->excludes(edge);
+    auto* patches = app.add_option("--patches", o.scene.patches, "mesh to about N patches (default: 2000)")
+                        ->check(CLI::PositiveNumber)
+                        ->excludes(edge);
+    add_word_option(app, "--format", o.scene.format, parse_scene_format,
+                    {"auto", "obj", "stl", "vs3", "ply", "gltf", "glb", "assimp"},
+                    "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp)", "auto");
+    app.add_option("--materials", o.scene.materials,
+                   "CSV of Kd and Ke per object (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b) for formats without materials")
+        ->check(CLI::ExistingFile);
+    app.add_flag_function(
+           "--no-subdivide", [&o](std::int64_t) { o.scene.subdivide = false; },
+           "every input face is one patch (triangles and convex planar quads only)")
+        ->excludes(edge)
+        ->excludes(patches);
     add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
                     {"auto", "o", "g", "material"},
                     "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto");

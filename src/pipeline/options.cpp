@@ -61,6 +61,8 @@ void validate(const SceneOptions& o) {
         throw InputError("--max-patch-edge and --patches: give one of the two");
     if (o.max_patch_edge < 0 || !std::isfinite(o.max_patch_edge))
         throw InputError(fmt::format("--max-patch-edge {}: must be a finite length > 0", o.max_patch_edge));
+    if (!o.subdivide && (o.max_patch_edge > 0 || o.patches > 0))
+        throw InputError("--no-subdivide keeps every face as one patch: give neither --max-patch-edge nor --patches with it");
 }
 
 void validate(const RowOptions& o) {

@@ -5,6 +5,8 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/scene/builtin.hpp"
+#include "ffcube/scene/load_model.hpp"
+#include "ffcube/scene/material_map.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 
@@ -13,7 +15,8 @@ namespace ffcube {
 Scene load_and_mesh(const SceneOptions& o, Report& report) {
     validate(o);
     Stopwatch watch;
-    ObjModel model = o.path.empty() ? load_cornell_box() : load_obj(o.path, {o.objects_by});
+    ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by});
+    if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
     const double load_s = watch.seconds();
     watch.restart();
@@ -21,12 +24,15 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     mo.max_patch_edge = o.max_patch_edge;
     mo.target_patches = o.patches;
     mo.max_patches = patch_limit_for_physical_memory(mo.max_patches);
+    mo.subdivide = o.subdivide;
     Scene scene = build_scene(model, mo);
     const double mesh_s = watch.seconds();
     for (const auto& w : scene.stats.warnings) log_warning(w);
     info("scene {}: {} faces, {} objects -> {} patches ({})", scene.source, scene.stats.input_faces, scene.objects.size(),
          scene.size(), scene.stats.how);
     if (scene.stats.dropped_degenerate) info("dropped {} degenerate (zero-area) faces", scene.stats.dropped_degenerate);
+    if (model.dropped_degenerate) info("the loader dropped {} degenerate facets", model.dropped_degenerate);
+    if (model.merged_vertices) info("the loader merged {} coinciding vertex references", model.merged_vertices);
     report.set("scene", scene.source);
     report.set("patches", scene.size());
     report.set("objects", scene.objects.size());
@@ -36,6 +42,10 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("meshing.dropped_degenerate", scene.stats.dropped_degenerate);
     report.set("meshing.non_planar", scene.stats.non_planar);
     report.set("meshing.triangulated_ngons", scene.stats.triangulated_ngons);
+    const SceneFormat format = o.path.empty() ? SceneFormat::Obj : o.format == SceneFormat::Auto ? format_for_path(o.path) : o.format;
+    report.set("loading.format", to_string(format));
+    report.set("loading.dropped_degenerate", model.dropped_degenerate);
+    report.set("loading.merged_vertices", model.merged_vertices);
     report.set("fingerprint", fmt::format("{:016x}", scene.fingerprint));
     report.set("time.loading", load_s);
     report.set("time.meshing", mesh_s);

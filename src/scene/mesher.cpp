@@ -381,7 +381,24 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
 
     double max_edge = 0.0;
     std::string how;
-    if (options.max_patch_edge != 0.0) {
+    if (!options.subdivide) {
+        FFCUBE_CHECK_MSG(options.max_patch_edge == 0.0 && options.target_patches == 0,
+                         "--no-subdivide takes no edge bound or patch target");
+        // One patch per piece (L = the longest piece measure), and one piece per face.
+        for (std::size_t i = 0; i < d.pieces.size(); ++i) {
+            if (i + 1 < d.pieces.size() && d.pieces[i + 1].face == d.pieces[i].face) {
+                const ObjFace& face = model.faces[d.pieces[i].face];
+                const auto pieces = std::count_if(d.pieces.begin() + static_cast<std::ptrdiff_t>(i), d.pieces.end(),
+                                                  [&](const Piece& p) { return p.face == d.pieces[i].face; });
+                throw InputError(fmt::format("{}:{}: --no-subdivide: this face of {} vertices is not a triangle or a convex planar "
+                                             "quad, so it cannot be one patch (it would be {} triangles); split it in the "
+                                             "input, or mesh without --no-subdivide",
+                                             model.source, face.line, face.v.size(), pieces));
+            }
+        }
+        max_edge = d.longest;
+        how = "--no-subdivide";
+    } else if (options.max_patch_edge != 0.0) {
         check_max_edge(options.max_patch_edge);
         max_edge = options.max_patch_edge;
         how = fmt::format("--max-patch-edge {}", max_edge);

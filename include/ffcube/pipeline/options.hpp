@@ -15,6 +15,7 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/obj_loader.hpp"
+#include "ffcube/scene/load_model.hpp"
 
 namespace ffcube {
 
@@ -24,6 +25,9 @@ struct SceneOptions {
     double max_patch_edge = 0;   // > 0: split faces so that no patch edge exceeds it
     std::size_t patches = 0;     // > 0: mesh to about this many patches (default of the mesher otherwise)
     ObjObjectsBy objects_by = ObjObjectsBy::automatic;  // OBJ: what names objects (--objects-by)
+    SceneFormat format = SceneFormat::Auto;  // --format: Auto = by the file's extension
+    std::string materials;       // --materials: CSV of Kd and Ke per object (scene/material_map.hpp)
+    bool subdivide = true;       // false (--no-subdivide): one patch per input face
 };
 
 enum class RowMethod { Hemicube, Raycast };

@@ -16,6 +16,10 @@ struct MeshOptions {
     static constexpr std::size_t kDefaultPatches = 2000;
     // Refuse meshes larger than this before allocating anything (the estimate is in the message).
     std::size_t max_patches = 50'000'000;
+    // false (--no-subdivide): every face is one patch, whatever its size; the edge and target
+    // above must then be 0. A patch is a triangle or a convex planar quad, so a face that is
+    // neither (an n-gon, a non-convex or non-planar quad) is refused, naming its line.
+    bool subdivide = true;
 };
 
 // Number of patches meshing would produce with edge bound L, without building anything.

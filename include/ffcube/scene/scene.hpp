@@ -35,6 +35,10 @@ struct ObjModel {
     std::vector<std::string> objects;   // ObjObjectsBy: 'o' names, else 'g', else materials; else "default"
     std::vector<Material> materials;    // [0] is the default material
     std::vector<std::string> warnings;  // also printed with log_warning when loaded from the CLI
+    // Counted by loaders that clean their input (STL): facets dropped as degenerate before
+    // meshing, and vertex references merged into an exactly coinciding earlier vertex.
+    std::size_t dropped_degenerate = 0;
+    std::size_t merged_vertices = 0;
 };
 
 // A patch: a planar triangle or convex quad, the unit of the form-factor matrix.

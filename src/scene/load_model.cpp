@@ -1,0 +1,86 @@
+// The format dispatcher: one ObjModel from any scene file ffcube reads.
+#include "ffcube/scene/load_model.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/scene/assimp_loader.hpp"
+#include "ffcube/scene/obj_loader.hpp"
+#include "ffcube/scene/stl_loader.hpp"
+#include "ffcube/scene/vs3_loader.hpp"
+
+namespace ffcube {
+
+SceneFormat parse_scene_format(std::string_view word) {
+    if (word == "auto") return SceneFormat::Auto;
+    if (word == "obj") return SceneFormat::Obj;
+    if (word == "stl") return SceneFormat::Stl;
+    if (word == "vs3") return SceneFormat::View3d;
+    if (word == "assimp" || word == "ply" || word == "gltf" || word == "glb") return SceneFormat::Assimp;
+    throw InputError(fmt::format("--format {}: unknown format (auto, obj, stl, vs3, ply, gltf, glb or assimp)", word));
+}
+
+std::string_view to_string(SceneFormat f) {
+    switch (f) {
+    case SceneFormat::Auto: return "auto";
+    case SceneFormat::Obj: return "obj";
+    case SceneFormat::Stl: return "stl";
+    case SceneFormat::View3d: return "vs3";
+    case SceneFormat::Assimp: return "assimp";
+    }
+    return "?";
+}
+
+SceneFormat format_for_path(const std::filesystem::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".obj") return SceneFormat::Obj;
+    if (ext == ".stl") return SceneFormat::Stl;
+    if (ext == ".vs3") return SceneFormat::View3d;
+    if (!ext.empty() && assimp_reads_extension(ext)) return SceneFormat::Assimp;
+    // No extension, or one nobody reads: OBJ, as ffcube has always read it (its messages then say
+    // "is this an OBJ file?"; --format names another format).
+    return SceneFormat::Obj;
+}
+
+ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj) {
+    if (format == SceneFormat::Auto) format = format_for_path(path);
+    switch (format) {
+    case SceneFormat::Obj: return load_obj(path, obj);
+    case SceneFormat::Stl: return load_stl(path);
+    case SceneFormat::View3d: return load_vs3(path);
+    case SceneFormat::Assimp: return load_with_assimp(path);
+    case SceneFormat::Auto: break;
+    }
+    throw InternalError("load_model: no format");
+}
+
+std::string read_scene_file(const std::filesystem::path& path, const char* kind) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(path, ec);
+    if (!std::filesystem::exists(status))
+        throw InputError(fmt::format("{}: cannot read the scene: no such file", path.string()));
+    if (std::filesystem::is_directory(status)) throw InputError(fmt::format("{}: is a directory, not {}", path.string(), kind));
+    if (!std::filesystem::is_regular_file(status))
+        throw InputError(fmt::format("{}: is not a regular file, not {}", path.string(), kind));
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr)
+        throw InputError(fmt::format("{}: cannot open for reading: {}", path.string(), std::strerror(errno)));
+    std::string data;
+    char buffer[1 << 16];
+    std::size_t n = 0;
+    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) data.append(buffer, n);
+    const bool failed = std::ferror(f) != 0;
+    const int err = errno;
+    std::fclose(f);
+    if (failed) throw InputError(fmt::format("{}: cannot read: {}", path.string(), std::strerror(err)));
+    return data;
+}
+
+}  // namespace ffcube

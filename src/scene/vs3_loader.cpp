@@ -1,0 +1,256 @@
+// NIST View3D's input format (.vs3), geometry format 3, as its manual describes it
+// (../shared/formats/view3d.md): one element per line, named by the line's first character.
+#include "ffcube/scene/vs3_loader.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <map>
+#include <unordered_map>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/scene/load_model.hpp"
+#include "text_number.hpp"
+
+namespace ffcube {
+namespace {
+
+using detail::fail_at;
+using detail::shown;
+
+constexpr std::size_t kMaxToken = 4096;
+
+bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+
+class Vs3Parser {
+public:
+    Vs3Parser(std::string_view text, const std::string& source) : rest_(text), source_(source) {
+        model_.source = source;
+        model_.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
+    }
+
+    ObjModel run() {
+        if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
+        std::string_view line;
+        while (next_line(line)) {
+            std::string_view element;
+            if (!token(line, element)) continue;
+            const char kind = static_cast<char>(std::toupper(static_cast<unsigned char>(element.front())));
+            if (kind == 'E' || kind == '*') break;  // end of data: nothing after it is read
+            if (element.size() != 1 && kind != 'E')
+                fail_at(source_, number_, fmt::format("unknown element {} (View3D lines begin with T, C, F, V, S, O, M, N or E)",
+                                                      shown(element)));
+            switch (kind) {
+            case 'T': break;  // title: ignored
+            case 'C': control(line); break;
+            case 'F': geometry_format(line); break;
+            case 'V': vertex(line); break;
+            case 'S': surface(line); break;
+            case 'O':
+                fail_at(source_, number_,
+                        "obstruction surfaces (O) are not supported yet: ffcube's scene has no surface that blocks views "
+                        "without a row and a column of its own (model it as an S surface, or leave it out)");
+            case 'M':
+            case 'N':
+                fail_at(source_, number_, fmt::format("{} surfaces ({}) are not supported yet", kind == 'M' ? "masking" : "null",
+                                                      kind));
+            default:
+                fail_at(source_, number_, fmt::format("unknown element {} (View3D lines begin with T, C, F, V, S, O, M, N or E)",
+                                                      shown(element)));
+            }
+        }
+        if (model_.faces.empty()) throw InputError(fmt::format("{}: no S surfaces: the scene has no geometry", source_));
+        if (!saw_format_)
+            model_.warnings.push_back(fmt::format("{}: no F line: read as geometry format F 3 (vertices, then surfaces)", source_));
+        for (const ObjFace& f : model_.faces)
+            for (const std::uint32_t v : f.v)
+                if (v >= model_.positions.size())
+                    fail_at(source_, f.line,
+                            fmt::format("vertex {} is not defined (the file defines {} vertices)", v + 1, model_.positions.size()));
+        return std::move(model_);
+    }
+
+private:
+    bool next_line(std::string_view& line) {
+        if (done_) return false;
+        const std::size_t eol = rest_.find('\n');
+        line = rest_.substr(0, eol);
+        if (eol == std::string_view::npos)
+            done_ = true;
+        else
+            rest_.remove_prefix(eol + 1);
+        ++number_;
+        // '!' or '/' starts a comment, also after data on a line.
+        if (const std::size_t c = line.find_first_of("!/"); c != std::string_view::npos) line = line.substr(0, c);
+        for (const char c : line) {
+            const auto u = static_cast<unsigned char>(c);
+            if ((u < 0x20 && !is_space(c)) || u == 0x7F)
+                fail_at(source_, number_, "not a View3D file (control bytes: binary data?)");
+        }
+        return true;
+    }
+
+    bool token(std::string_view& line, std::string_view& out) {
+        while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
+        if (line.empty()) return false;
+        std::size_t n = 0;
+        while (n < line.size() && !is_space(line[n])) ++n;
+        if (n > kMaxToken) fail_at(source_, number_, fmt::format("a token of {} bytes is longer than the limit of 4096 bytes", n));
+        out = line.substr(0, n);
+        line.remove_prefix(n);
+        return true;
+    }
+
+    std::string_view required(std::string_view& line, const char* what) {
+        std::string_view t;
+        if (!token(line, t)) fail_at(source_, number_, fmt::format("missing {}", what));
+        return t;
+    }
+
+    long long integer(std::string_view& line, const char* what) {
+        const std::string_view t = required(line, what);
+        long long v = 0;
+        const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
+        if (ec != std::errc() || end != t.data() + t.size() || v < 0 || v > 0x7fffffff)
+            fail_at(source_, number_, fmt::format("{} is not a valid {} (a whole number >= 0)", shown(t), what));
+        return v;
+    }
+
+    void control(std::string_view line) {
+        std::string_view pair;
+        while (token(line, pair)) {
+            const std::size_t eq = pair.find('=');
+            if (eq == std::string_view::npos || eq == 0 || eq + 1 == pair.size())
+                fail_at(source_, number_, fmt::format("control {} is not name=value", shown(pair)));
+            const std::string key(pair.substr(0, eq));
+            const double value = detail::parse_number(pair.substr(eq + 1), source_, number_, "a control value");
+            std::string lower = key;
+            std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+            static const std::map<std::string, std::string> kIgnored = {
+                {"eps", "ffcube's accuracy is set by --resolution and --correct"},
+                {"maxu", "ffcube's accuracy is set by --resolution and --correct"},
+                {"maxo", "ffcube's accuracy is set by --resolution and --correct"},
+                {"mino", "ffcube's accuracy is set by --resolution and --correct"},
+                {"maxv", "ffcube's accuracy is set by --resolution and --correct"},
+                {"row", "ffcube computes every row"},
+                {"col", "ffcube computes every column"},
+                {"encl", "rows are not adjusted; ffcube's --enforce closure is the analogue"},
+                {"emit", "ffcube computes black form factors; the emissivities only set Kd = 1 - emissivity for solve"},
+                {"out", "ffcube's outputs are chosen by its own options"},
+                {"list", "ffcube's log is set by --quiet"},
+                {"prjd", "ffcube does not project"},
+                {"prjreverse", "ffcube does not project"},
+            };
+            const auto it = kIgnored.find(lower);
+            model_.warnings.push_back(
+                it != kIgnored.end()
+                    ? fmt::format("{}:{}: control {}={} is ignored: {}", source_, number_, key, value, it->second)
+                    : fmt::format("{}:{}: unknown control {}={} is ignored", source_, number_, detail::shown(key), value));
+        }
+    }
+
+    void geometry_format(std::string_view line) {
+        const std::string_view f = required(line, "the geometry format (F 3)");
+        if (f != "3")
+            fail_at(source_, number_, fmt::format("geometry format {} is not supported (only F 3: vertices, then surfaces)", shown(f)));
+        saw_format_ = true;
+    }
+
+    void vertex(std::string_view line) {
+        const long long n = integer(line, "vertex number");
+        if (n != static_cast<long long>(model_.positions.size()) + 1)
+            fail_at(source_, number_, fmt::format("vertex number {} is out of order (expected {}: vertices are numbered 1, 2, ... "
+                                                  "in order)",
+                                                  n, model_.positions.size() + 1));
+        Vec3 p;
+        for (int i = 0; i < 3; ++i) p[i] = detail::parse_number(required(line, "a vertex coordinate (V n x y z)"), source_, number_,
+                                                                "a vertex coordinate");
+        model_.positions.push_back(p);
+    }
+
+    void surface(std::string_view line) {
+        const long long n = integer(line, "surface number");
+        if (n != static_cast<long long>(surface_object_.size()) + 1)
+            fail_at(source_, number_, fmt::format("surface number {} is out of order (expected {}: surfaces are numbered 1, 2, "
+                                                  "... in order)",
+                                                  n, surface_object_.size() + 1));
+        ObjFace face;
+        face.line = number_;
+        for (int i = 0; i < 4; ++i) {
+            const long long v = integer(line, "vertex index (S n v1 v2 v3 v4 base cmb emit name)");
+            if (v == 0 && i < 3) fail_at(source_, number_, fmt::format("vertex {} of the surface is 0 (only v4 may be 0, for a triangle)", i + 1));
+            if (v != 0) face.v.push_back(static_cast<std::uint32_t>(v - 1));
+        }
+        for (std::size_t a = 0; a < face.v.size(); ++a)
+            for (std::size_t b = a + 1; b < face.v.size(); ++b)
+                if (face.v[a] == face.v[b])
+                    fail_at(source_, number_, fmt::format("vertex {} appears twice in the surface", face.v[a] + 1));
+        const long long base = integer(line, "base surface (S n v1 v2 v3 v4 base cmb emit name)");
+        const long long cmb = integer(line, "combine surface (S n v1 v2 v3 v4 base cmb emit name)");
+        const double emit = detail::parse_number(required(line, "the emissivity (S n v1 v2 v3 v4 base cmb emit name)"), source_,
+                                                 number_, "the emissivity");
+        const std::string_view name = required(line, "the surface name (S n v1 v2 v3 v4 base cmb emit name)");
+        std::string_view extra;
+        if (token(line, extra)) fail_at(source_, number_, fmt::format("unexpected {} after the surface name", shown(extra)));
+        if (base != 0)
+            fail_at(source_, number_, "subsurfaces (base != 0) are not supported yet: give the surface and its base as separate "
+                                      "surfaces that do not overlap");
+        if (!(emit >= 0.0 && emit <= 1.0))
+            fail_at(source_, number_, fmt::format("emissivity {} must be within [0,1]", emit));
+        std::uint32_t object = 0;
+        if (cmb != 0) {
+            if (cmb >= n)
+                fail_at(source_, number_, fmt::format("cmb {} must name an earlier surface (this is surface {})", cmb, n));
+            if (surface_cmb_[static_cast<std::size_t>(cmb - 1)] != 0)
+                fail_at(source_, number_, fmt::format("cmb {} names a surface that is itself combined with surface {} (name the "
+                                                      "lowest-numbered surface of the group: no chains)",
+                                                      cmb, surface_cmb_[static_cast<std::size_t>(cmb - 1)]));
+            object = surface_object_[static_cast<std::size_t>(cmb - 1)];
+        } else {
+            const auto [it, inserted] = object_of_name_.try_emplace(std::string(name), static_cast<std::uint32_t>(model_.objects.size()));
+            if (!inserted)
+                fail_at(source_, number_, fmt::format("surface name {} is already used on line {} (names must be unique; combine "
+                                                      "surfaces with cmb)",
+                                                      shown(name), line_of_object_[it->second]));
+            model_.objects.emplace_back(name);
+            line_of_object_.push_back(number_);
+            object = it->second;
+        }
+        face.object = object;
+        face.material = material(emit);
+        surface_object_.push_back(object);
+        surface_cmb_.push_back(cmb);
+        model_.faces.push_back(std::move(face));
+    }
+
+    // An opaque grey surface of emissivity ε reflects ρ = 1 − ε (Kirchhoff), emits nothing itself.
+    std::uint32_t material(double emissivity) {
+        const auto [it, inserted] = material_of_emissivity_.try_emplace(emissivity, static_cast<std::uint32_t>(model_.materials.size()));
+        if (inserted) model_.materials.push_back(Material{fmt::format("emissivity {}", emissivity), Vec3(1.0 - emissivity), Vec3(0.0)});
+        return it->second;
+    }
+
+    std::string_view rest_;
+    const std::string& source_;
+    ObjModel model_;
+    std::uint32_t number_ = 0;
+    bool done_ = false;
+    bool saw_format_ = false;
+    std::vector<std::uint32_t> surface_object_;
+    std::vector<long long> surface_cmb_;
+    std::unordered_map<std::string, std::uint32_t> object_of_name_;
+    std::vector<std::uint32_t> line_of_object_;
+    std::map<double, std::uint32_t> material_of_emissivity_;
+};
+
+}  // namespace
+
+ObjModel parse_vs3(std::string_view text, const std::string& source) { return Vs3Parser(text, source).run(); }
+
+ObjModel load_vs3(const std::filesystem::path& path) {
+    return parse_vs3(read_scene_file(path, "a View3D file"), path.string());
+}
+
+}  // namespace ffcube

@@ -1,0 +1,475 @@
+// The readers beside OBJ (STL ASCII and binary, View3D .vs3, PLY and glTF through assimp), the
+// format dispatcher, --materials and meshing with --no-subdivide. Every file is written here, in
+// a temporary directory.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/scene/load_model.hpp"
+#include "ffcube/scene/material_map.hpp"
+#include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/stl_loader.hpp"
+#include "ffcube/scene/vs3_loader.hpp"
+
+namespace ffcube {
+namespace {
+
+namespace fs = std::filesystem;
+
+class Temp {
+public:
+    Temp() {
+        char tmpl[] = "/tmp/ffcube_formats_XXXXXX";
+        path_ = mkdtemp(tmpl);
+    }
+    ~Temp() {
+        std::error_code ec;
+        fs::remove_all(path_, ec);
+    }
+    fs::path write(const std::string& name, const std::string& bytes) const {
+        const fs::path p = path_ / name;
+        std::ofstream(p, std::ios::binary) << bytes;
+        return p;
+    }
+
+private:
+    fs::path path_;
+};
+
+std::string read(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+std::string error_of(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const InputError& e) {
+        return e.what();
+    }
+    return "(no InputError)";
+}
+
+#define EXPECT_CONTAINS(haystack, needle) EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
+
+using Tri = std::array<std::array<float, 3>, 3>;
+
+// Two unit squares, 'a' at z = 0 facing up, 'b' at z = 1 facing down; coordinates exact in float.
+const std::vector<Tri> kSquareA = {{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}}}, {{{0, 0, 0}, {1, 1, 0}, {0, 1, 0}}}};
+const std::vector<Tri> kSquareB = {{{{0, 0, 1}, {1, 1, 1}, {1, 0, 1}}}, {{{0, 0, 1}, {0, 1, 1}, {1, 1, 1}}}};
+
+std::array<float, 3> winding_normal(const Tri& t) {
+    const float ux = t[1][0] - t[0][0], uy = t[1][1] - t[0][1], uz = t[1][2] - t[0][2];
+    const float vx = t[2][0] - t[0][0], vy = t[2][1] - t[0][1], vz = t[2][2] - t[0][2];
+    return {uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx};
+}
+
+std::string ascii_solid(const std::string& name, const std::vector<Tri>& tris) {
+    std::string s = "solid " + name + "\n";
+    for (const Tri& t : tris) {
+        const auto n = winding_normal(t);
+        s += "  facet normal " + std::to_string(n[0]) + " " + std::to_string(n[1]) + " " + std::to_string(n[2]) + "\n";
+        s += "    outer loop\n";
+        for (const auto& v : t) s += "      vertex " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
+        s += "    endloop\n  endfacet\n";
+    }
+    return s + "endsolid " + name + "\n";
+}
+
+std::string binary_stl(const std::vector<Tri>& tris, std::string header = "binary stl written by ffcube's tests") {
+    header.resize(80, ' ');
+    std::string s = header;
+    const auto n = static_cast<std::uint32_t>(tris.size());
+    s.append(reinterpret_cast<const char*>(&n), 4);
+    for (const Tri& t : tris) {
+        const auto normal = winding_normal(t);
+        s.append(reinterpret_cast<const char*>(normal.data()), 12);
+        for (const auto& v : t) s.append(reinterpret_cast<const char*>(v.data()), 12);
+        s.append(2, '\0');
+    }
+    return s;
+}
+
+std::vector<Tri> both_squares() {
+    std::vector<Tri> all = kSquareA;
+    all.insert(all.end(), kSquareB.begin(), kSquareB.end());
+    return all;
+}
+
+void expect_same_geometry(const ObjModel& a, const ObjModel& b) {
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    for (std::size_t i = 0; i < a.positions.size(); ++i) EXPECT_EQ(a.positions[i], b.positions[i]) << i;
+    ASSERT_EQ(a.faces.size(), b.faces.size());
+    for (std::size_t i = 0; i < a.faces.size(); ++i) {
+        EXPECT_EQ(a.faces[i].v, b.faces[i].v) << i;
+        EXPECT_EQ(a.faces[i].material, b.faces[i].material) << i;
+    }
+}
+
+TEST(Stl, AsciiTwoSolidsAreTwoObjectsWithMergedVertices) {
+    Temp t;
+    const fs::path p = t.write("two.stl", ascii_solid("a", kSquareA) + ascii_solid("b", kSquareB));
+    const ObjModel m = load_model(p);
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"a", "b"}));
+    ASSERT_EQ(m.faces.size(), 4u);
+    EXPECT_EQ(m.positions.size(), 8u);
+    EXPECT_EQ(m.merged_vertices, 4u);  // 12 vertex references, 8 distinct points
+    EXPECT_EQ(m.faces[0].object, 0u);
+    EXPECT_EQ(m.faces[3].object, 1u);
+    EXPECT_EQ(m.faces[0].line, 2u);  // the 'facet' line
+    EXPECT_EQ(m.materials.size(), 1u);
+    EXPECT_EQ(m.materials[0].kd, Vec3(0.5));
+    EXPECT_TRUE(m.warnings.empty());
+    // Winding kept: 'a' faces +z, 'b' faces -z.
+    MeshOptions o;
+    o.subdivide = false;
+    const Scene s = build_scene(m, o);
+    ASSERT_EQ(s.size(), 4u);
+    EXPECT_NEAR(s.patches[0].normal.z, 1.0, 1e-15);
+    EXPECT_NEAR(s.patches[3].normal.z, -1.0, 1e-15);
+    EXPECT_NEAR(s.total_area(), 2.0, 1e-15);
+}
+
+TEST(Stl, BinaryGivesTheSameModelAsAscii) {
+    Temp t;
+    const ObjModel ascii_two = load_model(t.write("two.stl", ascii_solid("a", kSquareA) + ascii_solid("b", kSquareB)));
+    const ObjModel binary = load_model(t.write("pair.stl", binary_stl(both_squares())));
+    EXPECT_EQ(binary.objects, (std::vector<std::string>{"pair"}));  // a binary file is one object, named by its stem
+    expect_same_geometry(ascii_two, binary);
+    EXPECT_EQ(binary.merged_vertices, 4u);
+    // One ASCII solid named like the stem: the whole model is identical.
+    const ObjModel ascii_one = load_model(t.write("one.stl", ascii_solid("pair", both_squares())));
+    expect_same_geometry(ascii_one, binary);
+    EXPECT_EQ(ascii_one.objects, binary.objects);
+}
+
+TEST(Stl, BinaryWhoseHeaderBeginsWithSolid) {
+    Temp t;
+    const std::string bytes = binary_stl(both_squares(), "solid exported by a CAD program");
+    EXPECT_TRUE(is_binary_stl(bytes));
+    const ObjModel m = load_model(t.write("cad.stl", bytes));
+    EXPECT_EQ(m.faces.size(), 4u);
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"cad"}));
+}
+
+TEST(Stl, DegenerateFacetsAreDroppedAndCounted) {
+    std::vector<Tri> tris = kSquareA;
+    tris.push_back({{{0, 0, 0}, {1, 0, 0}, {1, 0, 0}}});  // repeated vertex
+    tris.push_back({{{0, 0, 0}, {1, 0, 0}, {2, 0, 0}}});  // collinear: no area
+    tris.push_back({{{0, 0, 0}, {0, 0, 0}, {0, 0, 0}}});  // a point
+    Temp t;
+    for (const std::string& bytes : {binary_stl(tris), ascii_solid("x", tris)}) {
+        const ObjModel m = load_model(t.write("d.stl", bytes));
+        EXPECT_EQ(m.faces.size(), 2u);
+        EXPECT_EQ(m.dropped_degenerate, 3u);
+        ASSERT_EQ(m.warnings.size(), 1u);
+        EXPECT_CONTAINS(m.warnings[0], "dropped 3 degenerate facets");
+    }
+    // Only degenerate facets: refused.
+    const std::vector<Tri> bad = {tris[2], tris[3]};
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("bad.stl", binary_stl(bad))); }),
+                    "bad.stl: no faces with non-zero area (all 2 facets are degenerate)");
+}
+
+TEST(Stl, StoredNormalOppositeToTheWindingIsIgnoredWithAWarning) {
+    std::string s = ascii_solid("a", kSquareA);
+    const std::size_t at = s.find("facet normal ") + 13;
+    s.replace(at, s.find('\n', at) - at, "0 0 -1");
+    const ObjModel m = parse_stl(s, "n.stl", "n");
+    ASSERT_EQ(m.warnings.size(), 1u);
+    EXPECT_CONTAINS(m.warnings[0], "1 facets have a stored normal opposite to their vertex order (the first at line 2)");
+    MeshOptions o;
+    o.subdivide = false;
+    EXPECT_GT(build_scene(m, o).patches[0].normal.z, 0.0);  // the winding decides
+}
+
+TEST(Stl, TruncatedAndGarbageFilesAreRefusedWithFileAndPlace) {
+    Temp t;
+    const std::string good = binary_stl(both_squares());
+    // Cut inside facet 3 of 4.
+    const std::string cut = good.substr(0, 84 + 2 * 50 + 20);
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("cut.stl", cut)); }),
+                    "cut.stl: binary STL cut short (or not an STL file): the header says 4 facets (284 bytes), the file has "
+                    "204 bytes; facet 3 is incomplete or missing");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("short.stl", good.substr(0, 40))); }),
+                    "short.stl: not an STL file: it does not begin with 'solid' (ASCII) and is 40 bytes");
+    std::string garbage(300, '\x7f');
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("garbage.stl", garbage)); }), "garbage.stl: binary STL cut short (or not an STL file)");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("empty.stl", "")); }), "empty.stl: not an STL file");
+    // NaN in a binary facet names the facet.
+    std::string nan_file = good;
+    const float nan = std::nanf("");
+    std::memcpy(nan_file.data() + 84 + 50 + 12 + 4, &nan, 4);
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("nan.stl", nan_file)); }),
+                    "nan.stl: facet 2 of 4: vertex 1 has a coordinate that is not a finite number");
+    // ASCII cut inside a facet, or before 'endsolid', names the line.
+    const std::string ascii = ascii_solid("a", kSquareA);
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("acut.stl", ascii.substr(0, ascii.find("endloop")))); }),
+                    "acut.stl:7: the file ends inside the facet begun on line 2 (truncated?)");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("noend.stl", ascii.substr(0, ascii.find("endsolid")))); }),
+                    "noend.stl:16: the file ends inside the solid begun on line 1 (no 'endsolid': truncated?)");
+    std::string bad_number = ascii;
+    bad_number.replace(bad_number.find("vertex 1.000000"), 15, "vertex nan");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("anan.stl", bad_number)); }), "anan.stl:5: 'nan' is not a finite number");
+    std::string four = ascii;
+    four.insert(four.find("    endloop"), "      vertex 0 0 0\n");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("four.stl", four)); }),
+                    "four.stl:7: a facet needs exactly 3 vertices, the one begun on line 2 has more");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("words.stl", "solid x\nhello\n")); }),
+                    "words.stl:2: expected 'facet' or 'endsolid', found 'hello'");
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("ctl.stl", std::string("solid x\n\x01\x02\x03\n", 12))); }),
+                    "ctl.stl:2: not an ASCII STL file (control bytes");
+}
+
+TEST(Stl, AHundredThousandFacetBinaryFileLoadsQuickly) {
+    // A 100 x 500 grid of unit squares, two facets each: 100,000 facets, 50,601 distinct vertices.
+    std::vector<Tri> tris;
+    tris.reserve(100'000);
+    for (int j = 0; j < 100; ++j)
+        for (int i = 0; i < 500; ++i) {
+            const float x = static_cast<float>(i), y = static_cast<float>(j);
+            tris.push_back({{{x, y, 0}, {x + 1, y, 0}, {x + 1, y + 1, 0}}});
+            tris.push_back({{{x, y, 0}, {x + 1, y + 1, 0}, {x, y + 1, 0}}});
+        }
+    Temp t;
+    const fs::path p = t.write("big.stl", binary_stl(tris));
+    const auto start = std::chrono::steady_clock::now();
+    const ObjModel m = load_model(p);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    EXPECT_EQ(m.faces.size(), 100'000u);
+    EXPECT_EQ(m.positions.size(), 101u * 501u);
+    EXPECT_EQ(m.merged_vertices, 300'000u - 101u * 501u);
+    RecordProperty("load_seconds", std::to_string(seconds));
+    std::printf("100k-facet binary STL loaded in %.3f s\n", seconds);
+    EXPECT_LT(seconds, 5.0);  // a generous bound for a loaded machine (about 0.05 s when idle)
+}
+
+// --- View3D ---
+
+const char* kTwoSquaresVs3 = R"(T two parallel unit squares at distance 1 ! exact F = 0.19982
+C encl=0 emit=0 eps=1e-6
+F 3
+V 1 0 0 0
+V 2 1 0 0
+V 3 1 1 0
+V 4 0 1 0
+V 5 0 0 1 / a comment after data
+V 6 1 0 1
+V 7 1 1 1
+V 8 0 1 1
+S 1 1 2 3 4 0 0 0.9 lower
+S 2 5 8 7 6 0 0 0.5 upper
+End of data
+anything here is not read
+)";
+
+TEST(View3d, TwoSquaresAreTwoObjectsWithEmissivityMaterials) {
+    const ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"lower", "upper"}));
+    ASSERT_EQ(m.faces.size(), 2u);
+    EXPECT_EQ(m.faces[0].v, (std::vector<std::uint32_t>{0, 1, 2, 3}));
+    EXPECT_EQ(m.faces[1].line, 13u);
+    EXPECT_NEAR(m.materials[m.faces[0].material].kd.x, 0.1, 1e-15);  // 1 - 0.9
+    EXPECT_NEAR(m.materials[m.faces[1].material].kd.y, 0.5, 1e-15);
+    EXPECT_EQ(m.materials[m.faces[1].material].ke, Vec3(0.0));
+    // Every control key is reported: honoured or ignored.
+    ASSERT_EQ(m.warnings.size(), 3u);
+    EXPECT_CONTAINS(m.warnings[0], "pair.vs3:2: control encl=0 is ignored");
+    EXPECT_CONTAINS(m.warnings[2], "pair.vs3:2: control eps=1e-06 is ignored");
+    MeshOptions o;
+    o.subdivide = false;
+    const Scene s = build_scene(m, o);
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_NEAR(s.patches[0].normal.z, 1.0, 1e-15);   // counter-clockwise from the front
+    EXPECT_NEAR(s.patches[1].normal.z, -1.0, 1e-15);
+}
+
+TEST(View3d, CombinedSurfacesAreOneObjectNamedByTheBase) {
+    const ObjModel m = parse_vs3(R"(F 3
+V 1 0 0 0
+V 2 1 0 0
+V 3 1 1 0
+V 4 0 1 0
+V 5 2 0 0
+V 6 2 1 0
+S 1 1 2 3 4 0 0 0.9 floor
+S 2 2 5 6 3 0 1 0.9 floor_part
+S 3 2 5 6 0 0 0 0.9 tri
+)",
+                                 "c.vs3");
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"floor", "tri"}));
+    EXPECT_EQ(m.faces[1].object, 0u);
+    EXPECT_EQ(m.faces[2].v.size(), 3u);  // v4 = 0: a triangle
+    EXPECT_EQ(m.faces[0].material, m.faces[1].material);
+}
+
+TEST(View3d, RefusalsNameTheLine) {
+    const std::string head = "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nV 4 0 1 0\n";
+    const auto err = [&](const std::string& tail) { return error_of([&] { parse_vs3(head + tail, "r.vs3"); }); };
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\n"), "r.vs3:6: obstruction surfaces (O) are not supported yet");
+    EXPECT_CONTAINS(err("S 1 1 2 3 9 0 0 0.9 a\n"), "r.vs3:6: vertex 9 is not defined (the file defines 4 vertices)");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 1.5 a\n"), "r.vs3:6: emissivity 1.5 must be within [0,1]");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 1 0 0.9 a\n"), "r.vs3:6: subsurfaces (base != 0) are not supported yet");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 2 0.9 a\n"), "r.vs3:6: cmb 2 must name an earlier surface");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9\n"), "r.vs3:6: missing the surface name");
+    EXPECT_CONTAINS(err("S 2 1 2 3 4 0 0 0.9 a\n"), "r.vs3:6: surface number 2 is out of order (expected 1");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nS 2 1 2 3 0 0 0 0.9 a\n"), "r.vs3:7: surface name 'a' is already used on line 6");
+    EXPECT_CONTAINS(err("S 1 1 2 2 4 0 0 0.9 a\n"), "r.vs3:6: vertex 2 appears twice in the surface");
+    EXPECT_CONTAINS(err("V 6 0 0 0\n"), "r.vs3:6: vertex number 6 is out of order (expected 5");
+    EXPECT_CONTAINS(err("V 5 0 inf 0\n"), "r.vs3:6: 'inf' is not a finite number");
+    EXPECT_CONTAINS(err("Q 1\n"), "r.vs3:6: unknown element 'Q'");
+    EXPECT_CONTAINS(err(""), "r.vs3: no S surfaces");
+    EXPECT_CONTAINS(error_of([] { parse_vs3("F 2\n", "f.vs3"); }), "f.vs3:1: geometry format '2' is not supported");
+    EXPECT_CONTAINS(error_of([] { parse_vs3(std::string("T x\n\0\0", 6), "b.vs3"); }), "b.vs3:2: not a View3D file");
+}
+
+// --- the dispatcher, --materials, --no-subdivide ---
+
+TEST(LoadModel, FormatsByExtensionAndByName) {
+    EXPECT_EQ(format_for_path("a.STL"), SceneFormat::Stl);
+    EXPECT_EQ(format_for_path("a.vs3"), SceneFormat::View3d);
+    EXPECT_EQ(format_for_path("a.obj"), SceneFormat::Obj);
+    EXPECT_EQ(format_for_path("a.ply"), SceneFormat::Assimp);
+    EXPECT_EQ(format_for_path("a.gltf"), SceneFormat::Assimp);
+    EXPECT_EQ(format_for_path("a.glb"), SceneFormat::Assimp);
+    EXPECT_EQ(format_for_path("scene"), SceneFormat::Obj);  // as before: no extension is OBJ
+    EXPECT_EQ(parse_scene_format("ply"), SceneFormat::Assimp);
+    EXPECT_CONTAINS(error_of([] { parse_scene_format("dxf"); }), "--format dxf: unknown format");
+    Temp t;
+    const fs::path p = t.write("pair.txt", kTwoSquaresVs3);
+    EXPECT_EQ(load_model(p, SceneFormat::View3d).faces.size(), 2u);
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("x.stl", "solid")); }), "x.stl:1: the file ends inside the solid");
+    EXPECT_CONTAINS(error_of([] { load_model("/nonexistent/x.stl"); }), "/nonexistent/x.stl: cannot read the scene: no such file");
+}
+
+TEST(MaterialMap, SetsKdAndKePerObject) {
+    ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
+    apply_material_map(m, "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\n# the lamp\nupper,0.8,0.7,0.6,10,10,10\nghost,0,0,0,0,0,0\n",
+                       "m.csv");
+    const Material& upper = m.materials[m.faces[1].material];
+    EXPECT_EQ(upper.name, "upper");
+    EXPECT_EQ(upper.kd, Vec3(0.8, 0.7, 0.6));
+    EXPECT_EQ(upper.ke, Vec3(10.0));
+    EXPECT_NEAR(m.materials[m.faces[0].material].kd.x, 0.1, 1e-15);  // not named: unchanged
+    EXPECT_CONTAINS(m.warnings.back(), "m.csv:4: the scene has no object 'ghost'");
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,1.5,0,0,0,0,0\n", "m.csv"); }), "m.csv:1: Kd 1.5 must be within [0,1]");
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0,0,-1,0,0\n", "m.csv"); }), "m.csv:1: Ke -1 must be >= 0");
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0\n", "m.csv"); }), "m.csv:1: expected 7 fields");
+}
+
+TEST(NoSubdivide, EveryFaceIsOnePatchOrTheFaceIsRefused) {
+    const ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
+    MeshOptions o;
+    o.subdivide = false;
+    const Scene s = build_scene(m, o);
+    EXPECT_EQ(s.size(), 2u);
+    EXPECT_EQ(s.patches[0].count, 4u);
+    EXPECT_EQ(s.stats.how, "--no-subdivide (2 patches)");
+    // A large triangle stays one patch too.
+    Temp t;
+    const ObjModel big = load_model(t.write("big.stl", binary_stl({{{{0, 0, 0}, {1000, 0, 0}, {0, 1000, 0}}}})));
+    EXPECT_EQ(build_scene(big, o).size(), 1u);
+    // A pentagon cannot be one patch (a patch is a triangle or a convex quad).
+    const ObjModel pentagon = load_model(t.write("p.obj", "v 0 0 0\nv 1 0 0\nv 1.5 1 0\nv 0.5 1.7 0\nv -0.5 1 0\nf 1 2 3 4 5\n"));
+    EXPECT_CONTAINS(error_of([&] { build_scene(pentagon, o); }), "p.obj:6: --no-subdivide: this face of 5 vertices is not a triangle");
+}
+
+// --- assimp: PLY and glTF ---
+
+TEST(Assimp, AsciiPlyKeepsQuads) {
+    Temp t;
+    const fs::path p = t.write("q.ply", R"(ply
+format ascii 1.0
+comment a unit square and a triangle beside it
+element vertex 5
+property float x
+property float y
+property float z
+element face 2
+property list uchar int vertex_indices
+end_header
+0 0 0
+1 0 0
+1 1 0
+0 1 0
+2 0 0
+4 0 1 2 3
+3 1 4 2
+)");
+    const ObjModel m = load_model(p);
+    ASSERT_EQ(m.faces.size(), 2u);
+    EXPECT_EQ(m.faces[0].v.size(), 4u);  // not triangulated
+    EXPECT_EQ(m.faces[1].v.size(), 3u);
+    EXPECT_EQ(m.materials.size(), 1u);
+    MeshOptions o;
+    o.subdivide = false;
+    const Scene s = build_scene(m, o);
+    ASSERT_EQ(s.size(), 2u);
+    EXPECT_NEAR(s.patches[0].area, 1.0, 1e-12);
+    EXPECT_NEAR(s.patches[1].area, 0.5, 1e-12);
+    EXPECT_NEAR(s.patches[0].normal.z, 1.0, 1e-12);
+    // A header cut short (assimp 5.2.5 would loop forever on it) and a body cut short.
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("bad.ply", "ply\nformat ascii 1.0\nelement vertex 2\n")); }),
+                    "bad.ply: PLY header without 'end_header'");
+    const std::string text = read(p);
+    EXPECT_CONTAINS(error_of([&] { load_model(t.write("cut.ply", text.substr(0, text.find("4 0 1")))); }), "cut.ply: ");
+}
+
+std::string base64(const std::string& bytes) {
+    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    std::size_t i = 0;
+    for (; i + 2 < bytes.size(); i += 3) {
+        const auto n = (std::uint32_t(std::uint8_t(bytes[i])) << 16) | (std::uint32_t(std::uint8_t(bytes[i + 1])) << 8) |
+                       std::uint8_t(bytes[i + 2]);
+        for (int s = 18; s >= 0; s -= 6) out += k[(n >> s) & 63];
+    }
+    if (i < bytes.size()) {
+        std::uint32_t n = std::uint32_t(std::uint8_t(bytes[i])) << 16;
+        if (i + 1 < bytes.size()) n |= std::uint32_t(std::uint8_t(bytes[i + 1])) << 8;
+        out += k[(n >> 18) & 63];
+        out += k[(n >> 12) & 63];
+        out += i + 1 < bytes.size() ? k[(n >> 6) & 63] : '=';
+        out += '=';
+    }
+    return out;
+}
+
+TEST(Assimp, GltfWithAnEmbeddedBufferAndANodeTransform) {
+    // A unit square as two triangles, scaled by 2 in x by its node: area 2, object "roof".
+    const float pos[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    const std::uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
+    std::string buffer(reinterpret_cast<const char*>(pos), 48);
+    buffer.append(reinterpret_cast<const char*>(idx), 12);
+    const std::string gltf = R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],
+ "nodes":[{"name":"roof","mesh":0,"scale":[2,1,1]}],
+ "meshes":[{"name":"square","primitives":[{"attributes":{"POSITION":0},"indices":1}]}],
+ "buffers":[{"byteLength":60,"uri":"data:application/octet-stream;base64,)" +
+                             base64(buffer) + R"("}],
+ "bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":48},{"buffer":0,"byteOffset":48,"byteLength":12}],
+ "accessors":[{"bufferView":0,"componentType":5126,"count":4,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},
+              {"bufferView":1,"componentType":5123,"count":6,"type":"SCALAR"}]})";
+    Temp t;
+    const ObjModel m = load_model(t.write("roof.gltf", gltf));
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"roof"}));
+    ASSERT_EQ(m.faces.size(), 2u);
+    MeshOptions o;
+    o.subdivide = false;
+    const Scene s = build_scene(m, o);
+    EXPECT_NEAR(s.total_area(), 2.0, 1e-12);
+    EXPECT_NEAR(s.patches[0].normal.z, 1.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace ffcube
