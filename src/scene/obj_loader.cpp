@@ -4,6 +4,8 @@
 // per face (ObjFace owns its index vector).
 #include "ffcube/scene/obj_loader.hpp"
 
+#include "ffcube/scene/load_model.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -477,18 +479,7 @@ namespace {
 std::optional<std::string> read_file(const std::filesystem::path& path) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) return std::nullopt;
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr)
-        throw InputError(fmt::format("{}: cannot open for reading: {}", path.string(), std::strerror(errno)));
-    std::string data;
-    char buffer[1 << 16];
-    std::size_t n = 0;
-    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) data.append(buffer, n);
-    const bool failed = std::ferror(f) != 0;
-    const int err = errno;
-    std::fclose(f);
-    if (failed) throw InputError(fmt::format("{}: cannot read: {}", path.string(), std::strerror(err)));
-    return data;
+    return read_scene_file(path, "a scene file");
 }
 
 }  // namespace
