@@ -14,6 +14,7 @@ packages=(
   libopenexr-dev libglfw3-dev libimgui-dev libembree-dev libstb-dev
   libgtest-dev libbenchmark-dev libassimp-dev
   xvfb xauth python3 python3-numpy python3-scipy
+  libzstd-dev python3-dev pybind11-dev python3-pybind11 libopenmpi-dev openmpi-bin
 )
 
 missing=()
