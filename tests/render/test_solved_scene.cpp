@@ -13,7 +13,10 @@ namespace {
 TEST(SolvedScene, RadianceExposureAndPlyColours) {
     const Scene scene = test::make_scene({test::square_z("a", 0, true), test::square_z("b", 1, false, 2.0)}, 0.5);
     std::vector<Vec3> B(scene.size());
-    for (std::size_t i = 0; i < B.size(); ++i) B[i] = Vec3(1.0 + i, 2.0, 0.5 * i);
+    for (std::size_t i = 0; i < B.size(); ++i) {
+        const double x = static_cast<double>(i);
+        B[i] = Vec3(1.0 + x, 2.0, 0.5 * x);
+    }
     const std::vector<Vec3> L = patch_radiance(B);
     ASSERT_EQ(L.size(), B.size());
     for (std::size_t i = 0; i < B.size(); ++i) EXPECT_DOUBLE_EQ(L[i].r * std::numbers::pi, B[i].r);
