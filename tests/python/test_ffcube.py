@@ -212,8 +212,14 @@ class Solve(unittest.TestCase):
             ffcube.solve(None, patches=200, resolution=16, max_iterations=1, quiet=True)
         self.assertIsInstance(e.exception, RuntimeError)
         self.assertIn("shot", str(e.exception))
-        B, report = ffcube.solve(None, patches=200, resolution=16, max_iterations=1, allow_unconverged=True, quiet=True)
+        B, report = ffcube.solve(None, patches=200, resolution=16, max_iterations=1, allow_unconverged=True,
+                                 overshoot=True, quiet=True)
         self.assertFalse(report["converged"])
+        self.assertEqual(report["iterations"], 1)
+        self.assertEqual(report["solver"]["overshoot"], 1.2)  # True: the command line's --overshoot alone
+        self.assertTrue(np.isfinite(B).all())
+        with self.assertRaises(TypeError):
+            ffcube.solve(None, enforce="both")  # acts on a finished matrix: form_factors only
 
 
 class Errors(unittest.TestCase):
