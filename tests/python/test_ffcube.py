@@ -3,6 +3,7 @@ with PYTHONPATH=<build>/python, FFCUBE_BINARY (the command line) and FFCUBE_SOUR
 Small scenes, llvmpipe, no GPU. References: the command line's own output for the same options
 (the module must give its rows), closed forms, and counts."""
 
+import json
 import math
 import os
 import subprocess
@@ -68,7 +69,6 @@ class Scene(unittest.TestCase):
             r = run_cli("formfactors", "--patches", 200, "--method", "raycast", "--rays", 1, "-q", "--report",
                         os.path.join(d, "r.json"))
             self.assertEqual(r.returncode, 0, r.stderr)
-            import json
             with open(os.path.join(d, "r.json")) as f:
                 report = json.load(f)
         self.assertEqual(len(s), report["patches"])
@@ -101,7 +101,9 @@ class FormFactors(unittest.TestCase):
                                 max_patch_edge=0.5, resolution=32, threads=2)
 
     def test_options_reach_the_pipeline(self):
-        # Each option changes F; the same options on both sides still give the same F.
+        # Non-default options on both sides. Each of these changes F on its own (correct, rotate,
+        # enforce, resolution; rays, seed, near_k: checked when this test was written), so an
+        # option the module dropped or misread would make its F differ from the command line's.
         self.assert_same_as_cli(CUBE, ["--max-patch-edge", 0.5, "--resolution", 16, "--correct", "none", "--no-rotate",
                                        "--enforce", "both", "--threads", 1],
                                 max_patch_edge=0.5, resolution=16, correct="none", rotate=False, enforce="both", threads=1)
