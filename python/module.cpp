@@ -12,6 +12,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -19,6 +20,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/row_source.hpp"
@@ -84,8 +86,16 @@ SceneArgument scene_argument(const py::object& what, Kwargs& kw, const char* fun
     return a;
 }
 
-// Loads the scene unless it is loaded (with the GIL released).
-std::shared_ptr<const Scene> scene_of(const SceneArgument& a, bool quiet) { return a.scene ? a.scene : load(a.options, quiet).scene; }
+// The scene, loaded and meshed into the report as the command line does unless it was given
+// loaded (then only its name, size and fingerprint are recorded). Call with the GIL released.
+std::shared_ptr<const Scene> scene_of(const SceneArgument& a, Report& report) {
+    if (!a.scene) return std::make_shared<const Scene>(load_and_mesh(a.options, report));
+    report.set("scene", a.scene->source);
+    report.set("patches", a.scene->size());
+    report.set("objects", a.scene->objects.size());
+    report.set("fingerprint", fmt::format("{:016x}", a.scene->fingerprint));
+    return a.scene;
+}
 
 template <typename T>
 py::array_t<T> vector_array(std::size_t n, auto&& value) {
@@ -131,20 +141,36 @@ py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
     RowOptions ro;
     kw.read_row_options(ro, /*enforce=*/true);
     const bool quiet = kw.flag("quiet", false);
+    const bool want_report = kw.flag("report", false);
     const SceneArgument arg = scene_argument(what, kw, "form_factors");
     kw.finish();
     validate(ro);
-    const std::shared_ptr<const Scene> scene = scene_of(arg, quiet);
     CsrMatrix F;
+    std::string report_json;
     {
         py::gil_scoped_release nogil;
         LogScope log(quiet);
         Report report;
+        report.set("command", "formfactors");
+        const std::shared_ptr<const Scene> scene = scene_of(arg, report);
         RowSource rows = make_row_source(*scene, ro);
         for (const std::string& line : describe(rows)) info("{}", line);
-        F = apply_enforcement(rows, compute_all_rows(rows.provider()), *scene, report);
+        Stopwatch watch;
+        CsrMatrix computed = compute_all_rows(rows.provider());
+        const double seconds = watch.seconds();
+        F = apply_enforcement(rows, std::move(computed), *scene, report);
+        if (want_report) {  // the keys of `ffcube formfactors --report`, but for writing and checkpoints
+            report.set("seconds", seconds);
+            report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
+                       static_cast<double>(scene->size()) / std::max(seconds, 1e-9));
+            report_row_source(report, rows);
+            report_matrix_checks(report, F, *scene, false);
+            report_json = report.dump();
+        }
     }
-    return to_csr(F);
+    py::object csr = to_csr(F);
+    if (!want_report) return csr;
+    return py::make_tuple(csr, json_loads(report_json));
 }
 
 py::tuple solve(const py::object& what, const py::kwargs& kwargs) {
@@ -159,7 +185,6 @@ py::tuple solve(const py::object& what, const py::kwargs& kwargs) {
     kw.finish();
     validate(so);
     validate(ro);
-    const std::shared_ptr<const Scene> scene = scene_of(arg, quiet);
     SolveResult res;
     std::string report_json;
     {
@@ -167,10 +192,7 @@ py::tuple solve(const py::object& what, const py::kwargs& kwargs) {
         LogScope log(quiet);
         Report report;
         report.set("command", "solve");
-        report.set("scene", scene->source);
-        report.set("patches", scene->size());
-        report.set("objects", scene->objects.size());
-        report.set("fingerprint", fmt::format("{:016x}", scene->fingerprint));
+        const std::shared_ptr<const Scene> scene = scene_of(arg, report);
         RowSource rows = make_row_source(*scene, ro);
         for (const std::string& line : describe(rows)) info("{}", line);
         report.set("rows", rows.provider().name());
@@ -254,7 +276,8 @@ PYBIND11_MODULE(ffcube, m) {
           "form_factors(scene_or_path=None, **options) -> scipy.sparse.csr_matrix (float32): F[i, j] = fraction of "
           "the energy leaving patch i that arrives at patch j; the rows `ffcube formfactors` writes for the same "
           "options. Options: method, resolution, backend, threads, rotate/no_rotate, seed, rays, correct, near_k, "
-          "far_field, enforce, quiet, and the mesh options when given a path.");
+          "far_field, enforce, quiet, and the mesh options when given a path. report=True: (F, report dict) with the "
+          "keys of `ffcube formfactors --report`.");
     m.def("solve", &solve, py::arg("scene_or_path") = py::none(),
           "solve(scene_or_path=None, **options) -> (radiosity float64 n x 3, report dict), as `ffcube solve`. "
           "Options: those of form_factors (but enforce), and solver, tolerance, max_iterations, overshoot, "

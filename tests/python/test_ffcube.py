@@ -142,23 +142,49 @@ class FormFactors(unittest.TestCase):
         code = ("import sys, threading, ffcube\n"
                 "done = threading.Event()\n"
                 "if sys.argv[1] == 'thread': threading.Thread(target=done.wait).start()\n"
-                "F = ffcube.form_factors(sys.argv[2], max_patch_edge=0.5, resolution=32, threads=2)\n"
+                "F, report = ffcube.form_factors(sys.argv[2], max_patch_edge=0.5, resolution=32, threads=2, "
+                "report=True, quiet=True)\n"
                 "done.set()\n"
                 "import numpy as np\n"  # after the call: numpy's BLAS may start threads
-                "np.save(sys.argv[3], F.toarray())\n")
+                "np.save(sys.argv[3], F.toarray())\n"
+                "print(report['workers'], report['threads'])\n")
         results = {}
         with tempfile.TemporaryDirectory() as d:
             for mode in ("alone", "thread"):
                 out = os.path.join(d, mode + ".npy")
                 r = subprocess.run([sys.executable, "-c", code, mode, CUBE, out], capture_output=True, text=True)
                 self.assertEqual(r.returncode, 0, r.stderr)
-                results[mode] = (np.load(out), r.stderr)
-        self.assertIn("2 processes", results["alone"][1])
-        self.assertIn("2 threads", results["thread"][1])
+                results[mode] = (np.load(out), r.stdout.split())
+        self.assertEqual(results["alone"][1], ["processes", "2"])
+        self.assertEqual(results["thread"][1], ["threads", "2"])
         np.testing.assert_array_equal(results["alone"][0], results["thread"][0])
         F = self.assert_same_as_cli(CUBE, ["--max-patch-edge", 0.5, "--resolution", 32, "--threads", 2],
                                     max_patch_edge=0.5, resolution=32, threads=2)
         np.testing.assert_array_equal(F.toarray(), results["alone"][0])
+
+    def test_report_is_the_command_lines(self):
+        F, report = ffcube.form_factors(CUBE, max_patch_edge=0.5, resolution=16, enforce="closure", report=True,
+                                        quiet=True)
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "r.json")
+            r = run_cli("formfactors", CUBE, "--max-patch-edge", 0.5, "--resolution", 16, "--enforce", "closure", "-q",
+                        "--report", out)
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(out) as f:
+                cli = json.load(f)
+        # The same matrix: the same counts and checks, to the last bit (both are doubles computed
+        # the same way from the same float32 entries).
+        for r in (report, cli):
+            del r["enforce"]["seconds"]
+        for key in ("command", "patches", "fingerprint", "nnz", "row_sums", "reciprocity", "enforce", "method"):
+            self.assertEqual(report[key], cli[key], key)
+        self.assertEqual(report["nnz"], F.nnz)
+        # The cube is closed and closure was enforced: rows sum to 1 up to float32 storage,
+        # 2^-24 relative per entry, at most n entries per row.
+        n = F.shape[0]
+        self.assertAlmostEqual(report["row_sums"]["min"], 1.0, delta=n * 2.0**-24)
+        # The report's row sums are F's (double sums of n terms <= 1 in another order: n x 2^-53).
+        self.assertAlmostEqual(report["row_sums"]["min"], float(F.astype(np.float64).sum(axis=1).min()), delta=n * 2.0**-53)
 
     def test_gil_is_released(self):
         # A Python thread counts while form_factors runs. Holding the GIL, the call would let it
