@@ -18,8 +18,20 @@ namespace {
 
 constexpr const char* kSceneKeywords[] = {"max_patch_edge", "patches", "format", "materials", "no_subdivide", "objects_by"};
 
-bool is_bool(const py::handle& v) { return PyBool_Check(v.ptr()); }
-bool is_int(const py::handle& v) { return PyLong_Check(v.ptr()) && !is_bool(v); }
+// bool or numpy.bool_ (told by its type's name, so that no call imports numpy: an import can
+// start threads, and a process with threads gets thread workers instead of forked ones).
+bool is_bool(const py::handle& v) {
+    if (PyBool_Check(v.ptr())) return true;
+    const py::handle type = reinterpret_cast<PyObject*>(Py_TYPE(v.ptr()));
+    return std::string(py::str(type.attr("__module__"))) == "numpy" && std::string(py::str(type.attr("__name__"))) == "bool_";
+}
+// int, or an integer type that says so with __index__ (numpy.int64 ...); not bool.
+bool is_int(const py::handle& v) { return PyIndex_Check(v.ptr()) && !is_bool(v); }
+// float, or any real number type (__float__: numpy.float32 ...); not bool, not complex.
+bool is_real(const py::handle& v) {
+    return is_int(v) || PyFloat_Check(v.ptr()) ||
+           (!is_bool(v) && !PyComplex_Check(v.ptr()) && py::hasattr(v, "__float__") && !py::isinstance<py::str>(v));
+}
 
 std::string fspath(const py::object& value) { return py::str(py::module_::import("os").attr("fspath")(value)); }
 
@@ -63,10 +75,10 @@ std::string Kwargs::word(const std::string& name, const py::object& value) const
 }
 
 double Kwargs::number(const std::string& name, const py::object& value) const {
-    if (!is_int(value) && !PyFloat_Check(value.ptr()))
+    if (!is_real(value))
         throw py::type_error(fmt::format("{}(): {} must be a number, not {}", function_, name,
                                          std::string(py::str(value.get_type().attr("__name__")))));
-    return value.cast<double>();
+    return py::float_(value).cast<double>();
 }
 
 unsigned long long Kwargs::integer(const std::string& name, const py::object& value, long long lo,
@@ -74,16 +86,18 @@ unsigned long long Kwargs::integer(const std::string& name, const py::object& va
     if (!is_int(value))
         throw py::type_error(fmt::format("{}(): {} must be an int, not {}", function_, name,
                                          std::string(py::str(value.get_type().attr("__name__")))));
+    const py::object index = py::reinterpret_steal<py::object>(PyNumber_Index(value.ptr()));
+    if (!index) throw py::error_already_set();
     int overflow = 0;
-    const long long v = PyLong_AsLongLongAndOverflow(value.ptr(), &overflow);
-    const std::string text = py::str(value);
+    const long long v = PyLong_AsLongLongAndOverflow(index.ptr(), &overflow);
+    const std::string text = py::str(index);
     if (overflow < 0 || (overflow == 0 && v < lo))
         throw InputError(fmt::format("{} {}: must be at least {}", cli_name(name), text, lo));
     if (overflow == 0) {
         if (static_cast<unsigned long long>(v) > hi) throw InputError(fmt::format("{} {}: must be at most {}", cli_name(name), text, hi));
         return static_cast<unsigned long long>(v);
     }
-    const unsigned long long u = PyLong_AsUnsignedLongLong(value.ptr());
+    const unsigned long long u = PyLong_AsUnsignedLongLong(index.ptr());
     if (PyErr_Occurred()) {
         PyErr_Clear();
         throw InputError(fmt::format("{} {}: must be at most {}", cli_name(name), text, hi));
@@ -96,7 +110,7 @@ bool Kwargs::boolean(const std::string& name, const py::object& value) const {
     if (!is_bool(value))
         throw py::type_error(fmt::format("{}(): {} must be True or False, not {}", function_, name,
                                          std::string(py::str(value.get_type().attr("__name__")))));
-    return value.cast<bool>();
+    return PyObject_IsTrue(value.ptr()) == 1;
 }
 
 bool Kwargs::flag(const std::string& name, bool fallback) {
@@ -163,7 +177,7 @@ void Kwargs::read_solver_options(SolverOptions& o) {
     if (py::object v = take("overshoot"); !v.is_none()) {
         // True is the command line's --overshoot alone: the default factor; False: none (1).
         if (is_bool(v))
-            o.overshoot = v.cast<bool>() ? kDefaultOvershoot : 1.0;
+            o.overshoot = PyObject_IsTrue(v.ptr()) == 1 ? kDefaultOvershoot : 1.0;
         else
             o.overshoot = number("overshoot", v);
     }

@@ -116,6 +116,10 @@ class FormFactors(unittest.TestCase):
         F1 = ffcube.form_factors(s, resolution=32, threads=1, quiet=True)
         F2 = ffcube.form_factors(s, resolution=32, threads=2, quiet=True)
         self.assertEqual((F1 != F2).nnz, 0)
+        # numpy's scalars are taken as the Python numbers they stand for.
+        F3 = ffcube.form_factors(s, resolution=np.int64(32), threads=np.uint8(2), near_k=np.float32(3),
+                                 quiet=np.bool_(True))
+        self.assertEqual((F1 != F3).nnz, 0)
 
     def test_against_the_closed_form(self):
         s = ffcube.load_scene(SQUARES, max_patch_edge=0.25, quiet=True)
