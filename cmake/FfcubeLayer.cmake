@@ -7,8 +7,9 @@ function(ffcube_layer name)
   add_library(ffcube_${name} STATIC ${srcs})
   add_library(ffcube::${name} ALIAS ffcube_${name})
   target_include_directories(ffcube_${name}
-    PUBLIC ${PROJECT_SOURCE_DIR}/include
+    PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>
     PRIVATE ${PROJECT_SOURCE_DIR}/src)
   target_link_libraries(ffcube_${name} PUBLIC ${L_PUBLIC} PRIVATE ffcube_warnings ${L_PRIVATE})
-  set_target_properties(ffcube_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+  # PIC: the Python module (python/) links these static libraries into a shared object.
+  set_target_properties(ffcube_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON EXPORT_NAME ${name})
 endfunction()

@@ -53,20 +53,10 @@ int run(const Options& o) {
     report.set("seconds", seconds);
     report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
                static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
-    report.set("nnz", F.nnz());
     report_row_source(report, rows);
-
-    const RowSumStats rs = row_sum_stats(F);
-    ReciprocityStats rec;
-    {
-        Progress progress("reciprocity", F.size(), !o.scene.quiet);
-        rec = reciprocity_stats(F, scene, &progress);
-    }
-    report.set("row_sums.min", rs.min);
-    report.set("row_sums.max", rs.max);
-    report.set("row_sums.mean", rs.mean);
-    report.set("reciprocity.patch_max_abs", rec.patch_max_abs);
-    report.set("reciprocity.object_max_rel", rec.object_max_rel);
+    const MatrixChecks checks = report_matrix_checks(report, F, scene, !o.scene.quiet);
+    const RowSumStats& rs = checks.row_sums;
+    const ReciprocityStats& rec = checks.reciprocity;
     info("{} rows in {:.2f} s ({:.0f} rows/s); row sums {:.6f}..{:.6f} (mean {:.6f}); reciprocity (objects) {:.2e}",
          scene.size(), seconds, static_cast<double>(scene.size()) / std::max(seconds, 1e-9), rs.min, rs.max, rs.mean,
          rec.object_max_rel);

@@ -18,17 +18,13 @@
 #include "ffcube/io/ply.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/pipeline/solve.hpp"
 #include "ffcube/render/renderer.hpp"
 #include "ffcube/render/solved_scene.hpp"
 #include "ffcube/solver/solver.hpp"
 
 namespace ffcube::cli {
 namespace {
-
-// Shooters asked from the row provider per call (SolverOptions::batch): enough to keep 16
-// hemicube workers busy. Fixed rather than the thread count, because the shooting order (and so B
-// in its last digits) depends on the batch, and results must not depend on the thread count.
-constexpr std::uint32_t kShotBatch = 16;
 
 struct Options {
     SceneFlags scene;
@@ -46,66 +42,6 @@ struct Options {
     bool allow_unconverged = false;
 };
 
-void report_vec3(Report& r, std::string_view key, const Vec3& v) {
-    const std::array<double, 3> a{v.r, v.g, v.b};
-    r.set_array(key, a);
-}
-
-
-void report_result(Report& r, const SolveResult& res, const SolverOptions& so, std::size_t patches) {
-    r.set("solver.method", to_string(res.method));
-    r.set("solver.tolerance", so.tolerance);
-    r.set("solver.max_iterations", effective_max_iterations(so, patches));
-    r.set("solver.overshoot", so.overshoot);
-    r.set("solver.row_cache_mb", so.row_cache_mb);
-    r.set("solver.batch", so.batch);
-    r.set("iterations", res.iterations);
-    r.set("shots", res.shots);
-    r.set("unshot_fraction", res.unshot_fraction);
-    r.set("stop_reason", to_string(res.stop));
-    r.set("converged", res.converged());
-    report_vec3(r, "error_bound.mean_abs", res.error_bound);
-    r.set("error_bound.relative", res.error_bound_relative);
-    r.set("ambient_included", res.ambient_included);
-    const StiffnessReport& st = res.stiffness;
-    r.set("stiffness.rho_max", st.rho_max);
-    r.set("stiffness.max_row_sum", st.max_row_sum);
-    r.set("stiffness.predicted_generations", st.predicted_generations);
-    r.set("stiffness.decay_per_window", st.decay_per_window);
-    r.set("stiffness.window_shots", st.window_shots);
-    r.set("stiffness.predicted_shots", st.predicted_shots);
-    r.set("stiffness.stiff", st.stiff);
-    r.set("stiffness.action", st.action);
-    r.set("stiffness.reason", st.reason);
-    r.set("stiffness.switched_at_shot", st.switched_at_shot);
-    r.set("stiffness.krylov_products", st.krylov_products);
-    r.set("stiffness.finish_rows_computed", st.finish_rows_computed);
-    report_vec3(r, "energy.emitted", res.energy.emitted);
-    report_vec3(r, "energy.absorbed", res.energy.absorbed);
-    report_vec3(r, "energy.escaped", res.energy.escaped);
-    report_vec3(r, "energy.unshot", res.energy.unshot);
-    r.set("energy.relative_error", res.energy.relative_error);
-    report_vec3(r, "ambient", res.ambient);
-    r.set("time.solve_total", res.timings.total);
-    r.set("time.rows", res.timings.rows);
-    r.set("time.solving", res.timings.solve);
-    std::vector<double> seconds, fraction;
-    for (const ConvergenceSample& s : res.history) {
-        seconds.push_back(s.seconds);
-        fraction.push_back(s.unshot_fraction);
-    }
-    r.set_array("history.seconds", seconds);
-    r.set_array("history.unshot_fraction", fraction);
-    r.set("row_cache.rows_computed", res.cache.rows_computed);
-    r.set("row_cache.rows_reused", res.cache.rows_reused);
-    r.set("row_cache.rows_evicted", res.cache.rows_evicted);
-    r.set("row_cache.rows_recomputed", res.cache.rows_recomputed);
-    r.set("row_cache.patches_without_row", res.cache.patches_without_row);
-    r.set("row_cache.capacity_bytes", res.cache.capacity_bytes);
-    r.set("row_cache.peak_bytes", res.cache.peak_bytes);
-    r.set_array("warnings", res.warnings);
-}
-
 int run(const Options& o) {
     // Everything that can be refused is refused before any work.
     SolverOptions so;
@@ -115,20 +51,9 @@ int run(const Options& o) {
     if (o.overshoot_option && o.overshoot_option->count() > 0) {
         // Given alone, CLI11 records no value (or an empty one): the documented default factor.
         const std::vector<std::string>& given = o.overshoot_option->results();
-        const std::string text = given.empty() ? "" : given.back();
-        so.overshoot = kDefaultOvershoot;
-        if (!text.empty()) {
-            std::size_t used = 0;
-            try {
-                so.overshoot = std::stod(text, &used);
-            } catch (const std::exception&) {
-                used = 0;
-            }
-            if (used != text.size()) throw InputError(fmt::format("--overshoot {}: not a number", text));
-        }
+        so.overshoot = parse_overshoot(given.empty() ? "" : given.back());
     }
     so.row_cache_mb = o.row_cache_mb;
-    so.batch = kShotBatch;
     validate(so);
     const bool exr = o.render.ends_with(".exr"), png = o.render.ends_with(".png");
     if (!o.render.empty() && !exr && !png)
@@ -174,21 +99,7 @@ int run(const Options& o) {
         report.set("rows", provider->name());
     }
 
-    double last_print = 0.0;
-    so.progress = [&](const SolveProgress& p) {
-        if (p.seconds - last_print < 1.0) return;
-        last_print = p.seconds;
-        info("{}: {} {}, unshot {:.3e} of emitted, {:.1f} s", to_string(p.method), p.iterations,
-             p.method == SolverMethod::Shoot ? "shots" : "sweeps", p.unshot_fraction, p.seconds);
-    };
-    const SolveResult res = solve_radiosity(scene, *provider, so);
-    info("{}: {} after {} {} ({} rows computed, {} reused), unshot {:.3e}, {:.2f} s", to_string(res.method),
-         to_string(res.stop), res.iterations, res.method == SolverMethod::Shoot ? "shots" : "sweeps",
-         res.cache.rows_computed, res.cache.rows_reused, res.unshot_fraction, res.timings.total);
-    if (res.stiffness.action != "none")
-        info("stiff scene: {} after {} shots ({} products with the rows): {}", res.stiffness.action,
-             res.stiffness.switched_at_shot, res.stiffness.krylov_products, res.stiffness.reason);
-    report_result(report, res, so, scene.size());
+    const SolveResult res = solve_and_report(scene, *provider, so, report);
     if (o.matrix.empty()) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done

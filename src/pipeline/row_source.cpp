@@ -7,6 +7,7 @@
 #include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/core/progress.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
@@ -211,6 +212,22 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
          what, st.before.row_sum_min, st.before.row_sum_max, st.after.row_sum_min, st.after.row_sum_max,
          st.before.reciprocity_max, st.after.reciprocity_max);
     return E.to_csr();
+}
+
+MatrixChecks report_matrix_checks(Report& report, const CsrMatrix& F, const Scene& scene, bool progress) {
+    MatrixChecks c;
+    c.row_sums = row_sum_stats(F);
+    {
+        Progress bar("reciprocity", F.size(), progress);
+        c.reciprocity = reciprocity_stats(F, scene, &bar);
+    }
+    report.set("nnz", F.nnz());
+    report.set("row_sums.min", c.row_sums.min);
+    report.set("row_sums.max", c.row_sums.max);
+    report.set("row_sums.mean", c.row_sums.mean);
+    report.set("reciprocity.patch_max_abs", c.reciprocity.patch_max_abs);
+    report.set("reciprocity.object_max_rel", c.reciprocity.object_max_rel);
+    return c;
 }
 
 }  // namespace ffcube

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/io/ffm.hpp"
@@ -75,5 +76,13 @@ void report_row_source(Report& report, const RowSource& rows);
 // a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
 // when options.enforce is None.
 CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report);
+
+// The checks every front end reports on a finished matrix: "nnz", "row_sums.{min,max,mean}" and
+// "reciprocity.{patch_max_abs,object_max_rel}" (reciprocity with a progress bar when `progress`).
+struct MatrixChecks {
+    RowSumStats row_sums;
+    ReciprocityStats reciprocity;
+};
+MatrixChecks report_matrix_checks(Report& report, const CsrMatrix& F, const Scene& scene, bool progress);
 
 }  // namespace ffcube

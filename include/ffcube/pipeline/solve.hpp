@@ -1,0 +1,34 @@
+// Radiosity solves as every front end runs them (the command line's `solve`, the Python module's
+// ffcube.solve): the same shot batch, the same progress lines, the same report keys.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "ffcube/formfactor/row_provider.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/scene/scene.hpp"
+#include "ffcube/solver/solver.hpp"
+
+namespace ffcube {
+
+// Shooters asked from the row provider per call (SolverOptions::batch): enough to keep 16
+// hemicube workers busy. Fixed rather than the thread count, because the shooting order (and so B
+// in its last digits) depends on the batch, and results must not depend on the thread count.
+inline constexpr std::uint32_t kShotBatch = 16;
+
+// --overshoot's value: empty (the option given alone) is kDefaultOvershoot; otherwise the whole
+// text must be a number (InputError naming it). Range checks are validate(SolverOptions)'s.
+double parse_overshoot(std::string_view text);
+
+// Solves B = E + ρ F B with options.batch = kShotBatch (whatever the caller set), printing
+// progress about once a second and a summary line (core/log.hpp), and records the result in the
+// report (solver.*, iterations, energy.*, stiffness.*, row_cache.*, history.*, time.*). Does not
+// throw for an unconverged solve: see require_converged.
+SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOptions options, Report& report);
+
+// An RGB value as a three-number array at key.
+void report_vec3(Report& report, std::string_view key, const Vec3& value);
+
+}  // namespace ffcube

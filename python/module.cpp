@@ -1,0 +1,285 @@
+// The Python module `ffcube` (pybind11): load_scene, form_factors and solve, over the same
+// composition root as the command line (src/pipeline): load_and_mesh, make_row_source,
+// apply_enforcement, solve_and_report. Keyword arguments are the command line's options with
+// dashes as underscores (python/kwargs.hpp); their words go through the pipeline's own parsers
+// and validators, so a bad option raises the message the command line prints.
+//
+// The GIL is released while a scene is loaded and meshed, rows are computed and a solve runs: no
+// Python object is touched there (arrays are made after, from the C++ results).
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/formfactor/row_provider.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/pipeline/solve.hpp"
+#include "kwargs.hpp"
+
+namespace py = pybind11;
+
+namespace ffcube::python {
+namespace {
+
+// A meshed scene, shared by the Python object and any computation running on it.
+struct PyScene {
+    std::shared_ptr<const Scene> scene;
+    std::string load_report;  // the JSON of load_and_mesh's figures (scene, patches, meshing.*, time.*)
+};
+
+// set_log_level for the duration of one call (quiet=True: warnings and errors only).
+class LogScope {
+public:
+    explicit LogScope(bool quiet) : saved_(log_level()) {
+        if (quiet) set_log_level(LogLevel::Quiet);
+    }
+    ~LogScope() { set_log_level(saved_); }
+    LogScope(const LogScope&) = delete;
+    LogScope& operator=(const LogScope&) = delete;
+
+private:
+    LogLevel saved_;
+};
+
+py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
+
+PyScene load(const SceneOptions& options, bool quiet) {
+    PyScene s;
+    py::gil_scoped_release nogil;
+    LogScope log(quiet);
+    Report report;
+    s.scene = std::make_shared<const Scene>(load_and_mesh(options, report));
+    s.load_report = report.dump();
+    return s;
+}
+
+// The scene a computation runs on: a Scene object as it is (mesh options then refused), or a
+// path (str, os.PathLike) or None (the built-in Cornell box) to load with the mesh options.
+struct SceneArgument {
+    std::shared_ptr<const Scene> scene;
+    SceneOptions options;
+};
+
+SceneArgument scene_argument(const py::object& what, Kwargs& kw, const char* function) {
+    if (py::isinstance<PyScene>(what)) {
+        const std::string given = kw.scene_option_given();
+        if (!given.empty())
+            throw py::type_error(fmt::format("{}(): '{}' is a mesh option; pass it to load_scene() instead of a Scene",
+                                             function, given));
+        return {what.cast<const PyScene&>().scene, {}};
+    }
+    SceneArgument a;
+    a.options.path = path_argument(what, function);
+    kw.read_scene_options(a.options);
+    return a;
+}
+
+// The scene, loaded and meshed into the report as the command line does unless it was given
+// loaded (then only its name, size and fingerprint are recorded). Call with the GIL released.
+std::shared_ptr<const Scene> scene_of(const SceneArgument& a, Report& report) {
+    if (!a.scene) return std::make_shared<const Scene>(load_and_mesh(a.options, report));
+    report.set("scene", a.scene->source);
+    report.set("patches", a.scene->size());
+    report.set("objects", a.scene->objects.size());
+    report.set("fingerprint", fmt::format("{:016x}", a.scene->fingerprint));
+    return a.scene;
+}
+
+template <typename T>
+py::array_t<T> vector_array(std::size_t n, auto&& value) {
+    py::array_t<T> a(static_cast<py::ssize_t>(n));
+    auto m = a.template mutable_unchecked<1>();
+    for (std::size_t i = 0; i < n; ++i) m(static_cast<py::ssize_t>(i)) = value(i);
+    return a;
+}
+
+py::array_t<double> vec3_array(std::size_t n, auto&& value) {
+    py::array_t<double> a({static_cast<py::ssize_t>(n), py::ssize_t{3}});
+    auto m = a.mutable_unchecked<2>();
+    for (std::size_t i = 0; i < n; ++i) {
+        const Vec3 v = value(i);
+        const auto r = static_cast<py::ssize_t>(i);
+        m(r, 0) = v.x;
+        m(r, 1) = v.y;
+        m(r, 2) = v.z;
+    }
+    return a;
+}
+
+// F as scipy.sparse.csr_matrix: the stored float32 values (bit for bit what .ffm files hold and
+// what .mtx files print to 9 significant digits), int32 indices while they fit.
+py::object to_csr(const CsrMatrix& F) {
+    const std::size_t n = F.size(), nnz = F.nnz();
+    py::array_t<float> data(static_cast<py::ssize_t>(nnz));
+    std::copy(F.val().begin(), F.val().end(), data.mutable_data());
+    py::object indices, indptr;
+    if (nnz < (std::uint64_t{1} << 31) && n < (std::size_t{1} << 31)) {
+        indices = vector_array<std::int32_t>(nnz, [&](std::size_t k) { return static_cast<std::int32_t>(F.col()[k]); });
+        indptr = vector_array<std::int32_t>(n + 1, [&](std::size_t i) { return static_cast<std::int32_t>(F.row_ptr()[i]); });
+    } else {
+        indices = vector_array<std::int64_t>(nnz, [&](std::size_t k) { return static_cast<std::int64_t>(F.col()[k]); });
+        indptr = vector_array<std::int64_t>(n + 1, [&](std::size_t i) { return static_cast<std::int64_t>(F.row_ptr()[i]); });
+    }
+    const py::object csr = py::module_::import("scipy.sparse").attr("csr_matrix");
+    return csr(py::make_tuple(data, indices, indptr), py::arg("shape") = py::make_tuple(n, n));
+}
+
+py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
+    Kwargs kw(kwargs, "form_factors");
+    RowOptions ro;
+    kw.read_row_options(ro, /*enforce=*/true);
+    const bool quiet = kw.flag("quiet", false);
+    const bool want_report = kw.flag("report", false);
+    const SceneArgument arg = scene_argument(what, kw, "form_factors");
+    kw.finish();
+    validate(ro);
+    CsrMatrix F;
+    std::string report_json;
+    {
+        py::gil_scoped_release nogil;
+        LogScope log(quiet);
+        Report report;
+        report.set("command", "formfactors");
+        const std::shared_ptr<const Scene> scene = scene_of(arg, report);
+        RowSource rows = make_row_source(*scene, ro);
+        for (const std::string& line : describe(rows)) info("{}", line);
+        Stopwatch watch;
+        CsrMatrix computed = compute_all_rows(rows.provider());
+        const double seconds = watch.seconds();
+        F = apply_enforcement(rows, std::move(computed), *scene, report);
+        if (want_report) {  // the keys of `ffcube formfactors --report`, but for writing and checkpoints
+            report.set("seconds", seconds);
+            report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
+                       static_cast<double>(scene->size()) / std::max(seconds, 1e-9));
+            report_row_source(report, rows);
+            report_matrix_checks(report, F, *scene, false);
+            report_json = report.dump();
+        }
+    }
+    py::object csr = to_csr(F);
+    if (!want_report) return csr;
+    return py::make_tuple(csr, json_loads(report_json));
+}
+
+py::tuple solve(const py::object& what, const py::kwargs& kwargs) {
+    Kwargs kw(kwargs, "solve");
+    RowOptions ro;
+    kw.read_row_options(ro, /*enforce=*/false);
+    SolverOptions so;
+    kw.read_solver_options(so);
+    const bool allow_unconverged = kw.flag("allow_unconverged", false);
+    const bool quiet = kw.flag("quiet", false);
+    const SceneArgument arg = scene_argument(what, kw, "solve");
+    kw.finish();
+    validate(so);
+    validate(ro);
+    SolveResult res;
+    std::string report_json;
+    {
+        py::gil_scoped_release nogil;
+        LogScope log(quiet);
+        Report report;
+        report.set("command", "solve");
+        const std::shared_ptr<const Scene> scene = scene_of(arg, report);
+        RowSource rows = make_row_source(*scene, ro);
+        for (const std::string& line : describe(rows)) info("{}", line);
+        report.set("rows", rows.provider().name());
+        res = solve_and_report(*scene, rows.provider(), so, report);
+        report_row_source(report, rows);
+        if (!res.converged()) {
+            require_converged(res, so, allow_unconverged);  // NotConvergedError unless allowed
+            warn("{}; returning the results anyway (allow_unconverged; the report says \"converged\": false)",
+                 describe_unconverged(res, so));
+        }
+        report_json = report.dump();
+    }
+    const py::array_t<double> B = vec3_array(res.radiosity.size(), [&](std::size_t i) { return res.radiosity[i]; });
+    return py::make_tuple(B, json_loads(report_json));
+}
+
+}  // namespace
+}  // namespace ffcube::python
+
+PYBIND11_MODULE(ffcube, m) {
+    using namespace ffcube;
+    using namespace ffcube::python;
+    m.doc() = "ffcube: radiosity form factors (view factors) by hemicubes or rays, and radiosity solves. "
+              "Keyword options are the command line's, dashes as underscores (README, 'in Python').";
+
+    // The command line's exit codes become exceptions carrying its messages.
+    py::register_exception<InputError>(m, "InputError", PyExc_ValueError);
+    py::register_exception<IoError>(m, "IoError", PyExc_OSError);
+    py::register_exception<GlError>(m, "GlError", PyExc_RuntimeError);
+    py::register_exception<NotConvergedError>(m, "NotConvergedError", PyExc_RuntimeError);
+    py::register_exception<InternalError>(m, "InternalError", PyExc_RuntimeError);
+
+    py::class_<PyScene>(m, "Scene", "A meshed scene: its patches (rows and columns of F) and objects.")
+        .def("__len__", [](const PyScene& s) { return s.scene->size(); })
+        .def_property_readonly("areas",
+                               [](const PyScene& s) {
+                                   return vector_array<double>(s.scene->size(), [&](std::size_t i) { return s.scene->patches[i].area; });
+                               },
+                               "patch areas, scene units^2 (float64, n)")
+        .def_property_readonly("patch_object",
+                               [](const PyScene& s) {
+                                   return vector_array<std::uint32_t>(s.scene->size(),
+                                                                      [&](std::size_t i) { return s.scene->patches[i].object; });
+                               },
+                               "index into objects of each patch (uint32, n)")
+        .def_property_readonly("objects", [](const PyScene& s) { return s.scene->objects; }, "object names")
+        .def_property_readonly("centroids",
+                               [](const PyScene& s) {
+                                   return vec3_array(s.scene->size(), [&](std::size_t i) { return s.scene->patches[i].centroid; });
+                               },
+                               "patch centroids (float64, n x 3)")
+        .def_property_readonly("normals",
+                               [](const PyScene& s) {
+                                   return vec3_array(s.scene->size(), [&](std::size_t i) { return s.scene->patches[i].normal; });
+                               },
+                               "unit front normals (float64, n x 3)")
+        .def_property_readonly("source", [](const PyScene& s) { return s.scene->source; })
+        .def_property_readonly("fingerprint", [](const PyScene& s) { return fmt::format("{:016x}", s.scene->fingerprint); })
+        .def_property_readonly("report", [](const PyScene& s) { return json_loads(s.load_report); },
+                               "loading and meshing figures, as in the command line's --report")
+        .def("__repr__", [](const PyScene& s) {
+            return fmt::format("<ffcube.Scene {}: {} patches, {} objects>", s.scene->source, s.scene->size(),
+                               s.scene->objects.size());
+        });
+
+    m.def(
+        "load_scene",
+        [](const py::object& path, const py::kwargs& kwargs) {
+            Kwargs kw(kwargs, "load_scene");
+            SceneOptions options;
+            options.path = path_argument(path, "load_scene");
+            kw.read_scene_options(options);
+            const bool quiet = kw.flag("quiet", false);
+            kw.finish();
+            return load(options, quiet);
+        },
+        py::arg("path") = py::none(),
+        "load_scene(path=None, **mesh_options) -> Scene. path: a scene file (OBJ, STL, .vs3, PLY, glTF ...), None: "
+        "the built-in Cornell box. Options: max_patch_edge, patches, format, materials, no_subdivide, objects_by, quiet.");
+    m.def("form_factors", &form_factors, py::arg("scene_or_path") = py::none(),
+          "form_factors(scene_or_path=None, **options) -> scipy.sparse.csr_matrix (float32): F[i, j] = fraction of "
+          "the energy leaving patch i that arrives at patch j; the rows `ffcube formfactors` writes for the same "
+          "options. Options: method, resolution, backend, threads, rotate/no_rotate, seed, rays, correct, near_k, "
+          "far_field, enforce, quiet, and the mesh options when given a path. report=True: (F, report dict) with the "
+          "keys of `ffcube formfactors --report`.");
+    m.def("solve", &solve, py::arg("scene_or_path") = py::none(),
+          "solve(scene_or_path=None, **options) -> (radiosity float64 n x 3, report dict), as `ffcube solve`. "
+          "Options: those of form_factors (but enforce), and solver, tolerance, max_iterations, overshoot, "
+          "row_cache_mb, allow_unconverged.");
+}
