@@ -52,6 +52,8 @@ void validate(const AdaptiveOptions& o) {
     if (o.max_elements < 1) throw InputError("--max-elements 0: must be at least 1");
     if (o.max_levels < 1) throw InputError("adaptive meshing needs at least one refinement level");
     if (o.factor < 2 || o.factor > 8) throw InputError(fmt::format("split factor {}: must be 2..8", o.factor));
+    if (!(o.fraction > 0.0 && o.fraction <= 1.0))
+        throw InputError(fmt::format("marked fraction {}: must be in (0, 1]", o.fraction));
 }
 
 std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
@@ -62,9 +64,10 @@ std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::s
         ObjectError e;
         e.name = scene.objects[o];
         e.radiosity = fine_objects[o];
-        // Second order in the spacing (measured in docs/adaptive.md): halving it leaves a quarter of
-        // the error, so the coarse level's error is 4/3 of the difference and the fine one's 1/3.
-        e.error = glm::abs(fine_objects[o] - coarse_objects[o]) / 3.0;
+        // First order in the spacing where it matters (a patch straddling a contact line counts lit
+        // or dark whole: docs/adaptive.md): halving it leaves half the error, so the fine level's
+        // error is about the difference between the levels (the coarse one's twice that).
+        e.error = glm::abs(fine_objects[o] - coarse_objects[o]);
         const double m = max_channel(e.radiosity);
         e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
         out.push_back(e);
@@ -119,7 +122,8 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             break;
         }
         const RefinementChoice choice =
-            choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor);
+            choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
+                              options.fraction);
         a.levels.back().candidates = choice.candidates;
         if (choice.marked == 0) {
             // Nothing varies by more than the target: at level 0 the variation is the estimate.
@@ -142,6 +146,7 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.max_elements", o.max_elements);
     r.set("adaptive.max_levels", o.max_levels);
     r.set("adaptive.factor", o.factor);
+    r.set("adaptive.fraction", o.fraction);
     r.set("adaptive.stop", a.stop);
     r.set("adaptive.reached_target", a.reached_target);
     r.set("adaptive.elements", a.scene.size());

@@ -74,7 +74,8 @@ std::vector<double> radiosity_variation(const Scene& scene, std::span<const Vec3
 }
 
 RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> radiosity, double target,
-                                   std::size_t max_elements, std::uint32_t factor) {
+                                   std::size_t max_elements, std::uint32_t factor, double fraction) {
+    FFCUBE_CHECK_MSG(fraction > 0.0 && fraction <= 1.0, "the marked fraction is in (0, 1]");
     FFCUBE_CHECK_MSG(factor >= 2, "a split factor is at least 2");
     FFCUBE_CHECK_MSG(target >= 0.0, "the target error is not negative");
     const std::size_t n = scene.size();
@@ -93,12 +94,16 @@ RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> rad
         return variation[a] * scene.patches[a].area > variation[b] * scene.patches[b].area;
     });
     const std::size_t extra = static_cast<std::size_t>(factor) * factor - 1;
+    double total = 0.0, marked = 0.0;
+    for (const std::uint32_t i : candidates) total += variation[i] * scene.patches[i].area;
     for (const std::uint32_t i : candidates) {
+        if (marked >= fraction * total) break;
         if (choice.elements_after + extra > max_elements) {
             choice.budget_limited = true;
             break;
         }
         choice.split[i] = factor;
+        marked += variation[i] * scene.patches[i].area;
         choice.elements_after += extra;
         ++choice.marked;
     }

@@ -50,6 +50,11 @@ TEST(RefinementIndicator, AShadowBoundaryIsWhereTheVariationIs) {
     const RefinementChoice some = choose_refinement(s, b, 1e-3, s.size() + 3 * 5);
     EXPECT_EQ(some.marked, 5u);
     EXPECT_TRUE(some.budget_limited);
+    // Dörfler's bulk: the 20 boundary patches hold equal shares of Σ η, so 24% of it takes 5 of them
+    // (4 hold 20%, the fifth brings 25%).
+    const RefinementChoice bulk = choose_refinement(s, b, 1e-3, 10'000, 2, 0.24);
+    EXPECT_EQ(bulk.marked, 5u);
+    EXPECT_FALSE(bulk.budget_limited);
     for (std::uint32_t i = 0; i < s.size(); ++i) {
         if (some.split[i] == 1) continue;
         EXPECT_EQ(some.split[i], 2u);

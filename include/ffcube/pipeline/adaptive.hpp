@@ -32,6 +32,9 @@ struct AdaptiveOptions {
     std::uint32_t max_levels = 4;
     // Each refined patch becomes factor × factor elements (2..8).
     std::uint32_t factor = 2;
+    // Each level splits the patches that hold this fraction of the estimated misplaced power
+    // (choose_refinement), in (0, 1].
+    double fraction = 0.5;
 };
 
 // The starting mesh of an adaptive solve when the command line names none: coarse enough that the
@@ -63,7 +66,7 @@ struct AdaptiveResult {
     RowSource rows;                     // the last level's rows (for report_row_source), still running
     std::vector<AdaptiveLevel> levels;
     std::vector<ObjectError> objects;
-    // "levels": error = |B_last − B_previous| / 3 (second order, spacing halved: docs/adaptive.md);
+    // "levels": error = |B_last − B_previous| (first order, spacing halved: docs/adaptive.md);
     // "variation": one level only, error = area-weighted mean of the patches' variation.
     std::string error_basis;
     // "target", "nothing_to_refine", "element_budget", "level_limit", or "unconverged_solve".

@@ -31,9 +31,11 @@ struct RefinementChoice {
 
 // Marks the patches to split by `factor` (≥ 2) into factor² elements: the candidates are the patches
 // whose variation (radiosity_variation) exceeds target × the mean luminance of their object;
-// they are taken in order of variation × area (the power misplaced by the constant, largest first;
-// ties by index, so the choice is deterministic) while the refined scene stays within max_elements.
+// they are taken in order of η = variation × area (the power misplaced by the constant, largest
+// first; ties by index, so the choice is deterministic) until the marked ones hold `fraction` of
+// the candidates' Σ η (Dörfler's bulk criterion: refinement goes where the error is, not
+// everywhere it exceeds the target), and while the refined scene stays within max_elements.
 RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> radiosity, double target,
-                                   std::size_t max_elements, std::uint32_t factor = 2);
+                                   std::size_t max_elements, std::uint32_t factor = 2, double fraction = 1.0);
 
 }  // namespace ffcube
