@@ -16,6 +16,7 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/ply.hpp"
+#include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/solve.hpp"
@@ -40,6 +41,10 @@ struct Options {
     double exposure = 0.0;  // 0: automatic
     CLI::Option* exposure_option = nullptr;
     bool allow_unconverged = false;
+    // Adaptive meshing (docs/adaptive.md): on when either is given.
+    AdaptiveOptions adaptive;
+    CLI::Option* target_error_option = nullptr;
+    CLI::Option* max_elements_option = nullptr;
 };
 
 int run(const Options& o) {
@@ -71,10 +76,19 @@ int run(const Options& o) {
     std::optional<Camera> camera;
     if (!o.camera.empty()) camera = parse_camera(o.camera);
 
+    const bool adaptive = o.target_error_option->count() > 0 || o.max_elements_option->count() > 0;
+    SceneOptions scene_options = o.scene.scene;
+    if (adaptive) {
+        validate(o.adaptive);
+        if (!o.matrix.empty()) throw InputError("--matrix with --target-error/--max-elements: adaptive meshing computes the rows of the elements it makes");
+        if (scene_options.patches == 0 && scene_options.max_patch_edge == 0.0 && scene_options.subdivide)
+            scene_options.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
+    }
+
     Stopwatch total;
     Report report;
     report.set("command", "solve");
-    const Scene scene = load_and_mesh(o.scene.scene, report);
+    Scene scene = load_and_mesh(scene_options, report);
 
     // Rows: from the file, or hemicubes. The hemicube provider starts before this process makes a
     // GL context of its own (the picture's), so that its workers can be forked processes.
@@ -92,14 +106,28 @@ int run(const Options& o) {
         report.set("matrix", o.matrix);
         report.set("time.reading_matrix", watch.seconds());
         info("rows from {} ({} non-zeros, {} {})", o.matrix, ffm->matrix.nnz(), ffm->meta.method, ffm->meta.settings);
-    } else {
+    } else if (!adaptive) {
         computed_rows = make_row_source(scene, o.rows);
         for (const std::string& line : describe(computed_rows)) info("{}", line);
         provider = &computed_rows.provider();
         report.set("rows", provider->name());
     }
 
-    const SolveResult res = solve_and_report(scene, *provider, so, report);
+    std::optional<AdaptiveResult> refined;
+    if (adaptive) {  // the levels' solves, each on its own rows; the rest runs on the last level's scene
+        const SolverOptions level_options = front_end_solver_options(so);
+        refined = solve_adaptive(scene, o.rows, level_options, o.adaptive,
+                                 [](const std::string& line) { info("{}", line); });
+        info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined->stop,
+             refined->scene.size(), scene.size(), refined->max_relative_error);
+        for (const std::string& line : describe(refined->rows)) info("{}", line);
+        report.set("rows", refined->rows.provider().name());
+        report_adaptive(report, *refined, o.adaptive);
+        scene = refined->scene;
+        computed_rows = std::move(refined->rows);
+        report_solve(scene, refined->result, level_options, report);
+    }
+    const SolveResult res = refined ? std::move(refined->result) : solve_and_report(scene, *provider, so, report);
     if (o.matrix.empty()) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done
@@ -209,6 +237,12 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     opts->exposure_option =
         sub->add_option("--exposure", opts->exposure, "PNG and PLY colours: display value = exposure x radiance (default: automatic)");
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
+    opts->target_error_option = sub->add_option("--target-error", opts->adaptive.target_error,
+                                                 "adaptive meshing: refine until every object's estimated relative error is below E")
+                                      ->default_val(opts->adaptive.target_error);
+    opts->max_elements_option =
+        sub->add_option("--max-elements", opts->adaptive.max_elements, "adaptive meshing: most elements (patches after refinement)")
+            ->default_val(opts->adaptive.max_elements);
     sub->add_flag("--allow-unconverged", opts->allow_unconverged,
                   "write the results of a solve that stopped before its tolerance (else exit 5, report only)");
     sub->callback([opts, &action] {

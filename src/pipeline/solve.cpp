@@ -1,6 +1,8 @@
 // Radiosity solves as every front end runs them: see ffcube/pipeline/solve.hpp.
 #include "ffcube/pipeline/solve.hpp"
 
+#include <memory>
+
 #include <fmt/format.h>
 
 #include <array>
@@ -89,16 +91,19 @@ double parse_overshoot(std::string_view text) {
     return value;
 }
 
-SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOptions so, Report& report) {
+SolverOptions front_end_solver_options(SolverOptions so) {
     so.batch = kShotBatch;
-    double last_print = 0.0;
-    so.progress = [&](const SolveProgress& p) {
-        if (p.seconds - last_print < 1.0) return;
-        last_print = p.seconds;
+    auto last_print = std::make_shared<double>(0.0);
+    so.progress = [last_print](const SolveProgress& p) {
+        if (p.seconds - *last_print < 1.0) return;
+        *last_print = p.seconds;
         info("{}: {} {}, unshot {:.3e} of emitted, {:.1f} s", to_string(p.method), p.iterations,
              p.method == SolverMethod::Shoot ? "shots" : "sweeps", p.unshot_fraction, p.seconds);
     };
-    const SolveResult res = solve_radiosity(scene, rows, so);
+    return so;
+}
+
+void report_solve(const Scene& scene, const SolveResult& res, const SolverOptions& so, Report& report) {
     info("{}: {} after {} {} ({} rows computed, {} reused), unshot {:.3e}, {:.2f} s", to_string(res.method),
          to_string(res.stop), res.iterations, res.method == SolverMethod::Shoot ? "shots" : "sweeps",
          res.cache.rows_computed, res.cache.rows_reused, res.unshot_fraction, res.timings.total);
@@ -106,6 +111,12 @@ SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOption
         info("stiff scene: {} after {} shots ({} products with the rows): {}", res.stiffness.action,
              res.stiffness.switched_at_shot, res.stiffness.krylov_products, res.stiffness.reason);
     report_result(report, res, so, scene.size());
+}
+
+SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOptions so, Report& report) {
+    so = front_end_solver_options(std::move(so));
+    const SolveResult res = solve_radiosity(scene, rows, so);
+    report_solve(scene, res, so, report);
     return res;
 }
 

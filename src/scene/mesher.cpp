@@ -4,6 +4,7 @@
 // emit_triangle() then split each piece into a grid that shares its vertices within the piece,
 // and record the piece as a Scene::grids entry (renderers draw pieces whole).
 #include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/refine.hpp"
 
 #include <unistd.h>
 
@@ -343,7 +344,7 @@ void emit_triangle(Scene& scene, const Piece& piece, const ObjFace& face, double
     }
 }
 
-std::uint64_t fingerprint(const Scene& scene) {
+std::uint64_t fingerprint_of(const Scene& scene) {
     Fnv1a h;
     h.add(static_cast<std::uint64_t>(scene.positions.size()));
     for (const Vec3& p : scene.positions) h.add(p.x), h.add(p.y), h.add(p.z);
@@ -363,6 +364,8 @@ void check_max_edge(double max_edge) {
 }
 
 }  // namespace
+
+std::uint64_t scene_fingerprint(const Scene& scene) { return fingerprint_of(scene); }
 
 std::size_t count_patches(const ObjModel& model, double max_patch_edge) {
     check_max_edge(max_patch_edge);
@@ -452,7 +455,7 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
     scene.stats.max_patch_edge = max_edge;
     scene.stats.how = how + fmt::format(" ({} patches)", scene.patches.size());
     scene.stats.warnings = std::move(d.warnings);
-    scene.fingerprint = fingerprint(scene);
+    scene.fingerprint = fingerprint_of(scene);
     return scene;
 }
 

@@ -28,6 +28,12 @@ double parse_overshoot(std::string_view text);
 // throw for an unconverged solve: see require_converged.
 SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOptions options, Report& report);
 
+// The two halves of solve_and_report, for front ends that run the solve themselves (adaptive
+// meshing's levels): options with the shot batch and the progress lines, and the summary lines
+// and report keys of a finished solve.
+SolverOptions front_end_solver_options(SolverOptions options);
+void report_solve(const Scene& scene, const SolveResult& result, const SolverOptions& options, Report& report);
+
 // An RGB value as a three-number array at key.
 void report_vec3(Report& report, std::string_view key, const Vec3& value);
 

@@ -1,0 +1,97 @@
+// Adaptive meshing (issue 16, docs/adaptive.md): solve, estimate where the radiosity varies, split
+// those patches into elements, solve again on the refined scene, until the estimated error of every
+// object's radiosity is below a target or an element budget is spent.
+//
+// Each level is an ordinary solve (solver/solver.hpp) of the refined scene with rows from
+// make_row_source: a refined patch's elements are receivers (one hemicube or ray-cast row each)
+// and shooters; the patches left alone keep their coarse rows. Why elements shoot too rather than
+// only gather (Cohen's substructuring) is argued in docs/adaptive.md.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <span>
+#include <string_view>
+#include <string>
+#include <vector>
+
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/options.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/scene/scene.hpp"
+#include "ffcube/solver/solver.hpp"
+
+namespace ffcube {
+
+struct AdaptiveOptions {
+    // Stop when every object's estimated relative discretisation error is at most this (> 0).
+    double target_error = 1e-3;
+    // Most elements (patches of the refined scene); ≥ the starting scene's patches.
+    std::size_t max_elements = 8000;
+    // Most refinement levels after the first solve (≥ 1).
+    std::uint32_t max_levels = 4;
+    // Each refined patch becomes factor × factor elements (2..8).
+    std::uint32_t factor = 2;
+    // Each level splits the patches that hold this fraction of the estimated misplaced power
+    // (choose_refinement), in (0, 1].
+    double fraction = 0.5;
+};
+
+// The starting mesh of an adaptive solve when the command line names none: coarse enough that the
+// refinement pays for itself (docs/adaptive.md, measured).
+inline constexpr std::size_t kAdaptiveStartPatches = 500;
+
+void validate(const AdaptiveOptions& options);
+
+struct AdaptiveLevel {
+    std::size_t elements = 0;       // patches of this level's scene
+    std::size_t refined = 0;        // patches split to make the next level (0 for the last)
+    std::size_t candidates = 0;     // patches whose variation exceeded the target
+    std::uint64_t rows_computed = 0;
+    double seconds = 0.0;           // rows and solve of this level
+    std::vector<Vec3> objects;      // area-weighted mean B per object
+};
+
+struct ObjectError {
+    std::string name;
+    Vec3 radiosity{0.0};
+    Vec3 error{0.0};      // estimated |B − B_converged| per channel
+    double relative = 0;  // max channel error / max channel radiosity (0 for an unlit object)
+};
+
+struct AdaptiveResult {
+    Scene scene;                        // the last level's scene (elements)
+    std::vector<std::uint32_t> origin;  // element → patch of the starting scene
+    SolveResult result;                 // the last level's solve
+    RowSource rows;                     // the last level's rows (for report_row_source), still running
+    std::vector<AdaptiveLevel> levels;
+    std::vector<ObjectError> objects;
+    // "levels": error = |B_last − B_previous| (first order, spacing halved: docs/adaptive.md);
+    // "variation": one level only, error = area-weighted mean of the patches' variation.
+    std::string error_basis;
+    // "target", "nothing_to_refine", "element_budget", "level_limit", or "unconverged_solve".
+    std::string stop;
+    bool reached_target = false;
+    double max_relative_error = 0.0;
+};
+
+// Solves `start` adaptively. Throws what solve_radiosity and make_row_source throw; a level whose
+// solve does not converge ends the refinement (stop "unconverged_solve", result as the solver left it).
+// progress (may be empty) gets one line per level.
+AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
+                              const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress = {});
+
+// Per-object errors (from two solves' object radiosity, or from one solve's variation).
+std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
+                                                      std::span<const Vec3> coarse_objects);
+
+// One solve's per-object error estimate from its variation (error_basis "variation"): what a
+// uniform solve reports.
+std::vector<ObjectError> estimate_object_errors(const Scene& scene, std::span<const Vec3> radiosity);
+// The report's "discretisation_error.*" keys.
+void report_object_errors(Report& report, std::span<const ObjectError> objects, std::string_view basis, double max_relative);
+
+// The report's "adaptive.*" and "discretisation_error.*" keys (docs/adaptive.md).
+void report_adaptive(Report& report, const AdaptiveResult& adaptive, const AdaptiveOptions& options);
+
+}  // namespace ffcube

@@ -1,0 +1,28 @@
+// Adaptive meshing's geometry: a scene whose chosen patches are split into elements (docs/adaptive.md).
+// A patch split by s becomes s × s similar elements in its own PatchGrid (a quad: the bilinear grid
+// of its corners; a triangle: the triangle grid of its corners), in the patch's place in patch
+// order; a grid none of whose patches is split is kept whole, so a hemicube still draws it as one
+// piece. Elements keep the patch's object and material.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+struct RefinedScene {
+    Scene scene;
+    // parent[e]: the patch of the input scene that element e lies in.
+    std::vector<std::uint32_t> parent;
+};
+
+// split[i] ≥ 1 for every patch i (1: kept). InternalError when sizes differ or a factor is 0.
+RefinedScene refine_patches(const Scene& scene, std::span<const std::uint32_t> split);
+
+// The mesher's hash of meshed geometry (Scene::fingerprint), for scenes built outside build_scene.
+std::uint64_t scene_fingerprint(const Scene& scene);
+
+}  // namespace ffcube

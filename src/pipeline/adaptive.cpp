@@ -1,0 +1,198 @@
+// Adaptive meshing: the loop of solves on refined scenes (pipeline/adaptive.hpp, docs/adaptive.md).
+#include "ffcube/pipeline/adaptive.hpp"
+
+#include <fmt/format.h>
+#include <glm/common.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/scene/refine.hpp"
+#include "ffcube/solver/refinement.hpp"
+
+namespace ffcube {
+namespace {
+
+std::vector<Vec3> object_means(const Scene& scene, std::span<const Vec3> radiosity) {
+    std::vector<Vec3> out;
+    for (const ObjectRadiosity& o : object_radiosity(scene, radiosity)) out.push_back(o.radiosity);
+    return out;
+}
+
+double max_channel(const Vec3& v) { return std::max({v.r, v.g, v.b}); }
+
+// One level's variation as per-object errors: the area-weighted mean over the object's patches of
+// the luminance variation, spread over the channels in proportion to the object's radiosity.
+std::vector<ObjectError> object_errors_from_variation(const Scene& scene, std::span<const Vec3> radiosity) {
+    const std::vector<double> variation = radiosity_variation(scene, radiosity);
+    const std::vector<ObjectRadiosity> objects = object_radiosity(scene, radiosity);
+    std::vector<double> weighted(objects.size(), 0.0);
+    for (std::size_t i = 0; i < scene.size(); ++i) weighted[scene.patches[i].object] += scene.patches[i].area * variation[i];
+    std::vector<ObjectError> out;
+    for (std::size_t o = 0; o < objects.size(); ++o) {
+        ObjectError e;
+        e.name = objects[o].name;
+        e.radiosity = objects[o].radiosity;
+        const double y = radiosity_luminance(e.radiosity);
+        if (objects[o].area > 0.0 && y > 0.0) e.error = (weighted[o] / objects[o].area / y) * e.radiosity;
+        const double m = max_channel(e.radiosity);
+        e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        out.push_back(e);
+    }
+    return out;
+}
+
+}  // namespace
+
+void validate(const AdaptiveOptions& o) {
+    if (!(o.target_error > 0.0 && std::isfinite(o.target_error)))
+        throw InputError(fmt::format("--target-error {}: must be a finite number > 0 (relative, e.g. 1e-3)", o.target_error));
+    if (o.max_elements < 1) throw InputError("--max-elements 0: must be at least 1");
+    if (o.max_levels < 1) throw InputError("adaptive meshing needs at least one refinement level");
+    if (o.factor < 2 || o.factor > 8) throw InputError(fmt::format("split factor {}: must be 2..8", o.factor));
+    if (!(o.fraction > 0.0 && o.fraction <= 1.0))
+        throw InputError(fmt::format("marked fraction {}: must be in (0, 1]", o.fraction));
+}
+
+std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
+                                                      std::span<const Vec3> coarse_objects) {
+    FFCUBE_CHECK(fine_objects.size() == scene.objects.size() && coarse_objects.size() == fine_objects.size());
+    std::vector<ObjectError> out;
+    for (std::size_t o = 0; o < fine_objects.size(); ++o) {
+        ObjectError e;
+        e.name = scene.objects[o];
+        e.radiosity = fine_objects[o];
+        // First order in the spacing where it matters (a patch straddling a contact line counts lit
+        // or dark whole: docs/adaptive.md): halving it leaves half the error, so the fine level's
+        // error is about the difference between the levels (the coarse one's twice that).
+        e.error = glm::abs(fine_objects[o] - coarse_objects[o]);
+        const double m = max_channel(e.radiosity);
+        e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        out.push_back(e);
+    }
+    return out;
+}
+
+AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
+                              const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress) {
+    validate(options);
+    if (options.max_elements < start.size())
+        throw InputError(fmt::format("--max-elements {}: fewer than the {} patches of the starting mesh", options.max_elements,
+                                     start.size()));
+    AdaptiveResult a;
+    a.scene = start;
+    a.origin.resize(start.size());
+    for (std::uint32_t i = 0; i < start.size(); ++i) a.origin[i] = i;
+    for (std::uint32_t level = 0;; ++level) {
+        Stopwatch watch;
+        a.rows = RowSource{};  // the previous level's workers end before the next start
+        a.rows = make_row_source(a.scene, rows);
+        a.result = solve_radiosity(a.scene, a.rows.provider(), solver);
+        AdaptiveLevel rec;
+        rec.elements = a.scene.size();
+        rec.rows_computed = a.result.cache.rows_computed;
+        rec.objects = object_means(a.scene, a.result.radiosity);
+        rec.seconds = watch.seconds();
+        a.levels.push_back(rec);
+        if (!a.result.converged()) {
+            a.stop = "unconverged_solve";
+            break;
+        }
+        if (level == 0) {
+            a.error_basis = "variation";
+            a.objects = object_errors_from_variation(a.scene, a.result.radiosity);
+        } else {
+            a.error_basis = "levels";
+            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects);
+        }
+        a.max_relative_error = 0.0;
+        for (const ObjectError& e : a.objects) a.max_relative_error = std::max(a.max_relative_error, e.relative);
+        if (progress)
+            progress(fmt::format("adaptive level {}: {} elements, {} rows, {:.2f} s, largest estimated object error {:.3g} ({})",
+                                 level, rec.elements, rec.rows_computed, rec.seconds, a.max_relative_error, a.error_basis));
+        if (level > 0 && a.max_relative_error <= options.target_error) {
+            a.stop = "target";
+            a.reached_target = true;
+            break;
+        }
+        if (level == options.max_levels) {
+            a.stop = "level_limit";
+            break;
+        }
+        const RefinementChoice choice =
+            choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
+                              options.fraction);
+        a.levels.back().candidates = choice.candidates;
+        if (choice.marked == 0) {
+            // Nothing varies by more than the target: at level 0 the variation is the estimate.
+            a.stop = choice.candidates == 0 ? "nothing_to_refine" : "element_budget";
+            a.reached_target = choice.candidates == 0 && a.max_relative_error <= options.target_error;
+            break;
+        }
+        a.levels.back().refined = choice.marked;
+        RefinedScene refined = refine_patches(a.scene, choice.split);
+        std::vector<std::uint32_t> origin(refined.parent.size());
+        for (std::size_t e = 0; e < origin.size(); ++e) origin[e] = a.origin[refined.parent[e]];
+        a.origin = std::move(origin);
+        a.scene = std::move(refined.scene);
+    }
+    return a;
+}
+
+void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& o) {
+    r.set("adaptive.target_error", o.target_error);
+    r.set("adaptive.max_elements", o.max_elements);
+    r.set("adaptive.max_levels", o.max_levels);
+    r.set("adaptive.factor", o.factor);
+    r.set("adaptive.fraction", o.fraction);
+    r.set("adaptive.stop", a.stop);
+    r.set("adaptive.reached_target", a.reached_target);
+    r.set("adaptive.elements", a.scene.size());
+    r.set("adaptive.start_patches", a.levels.empty() ? 0 : a.levels.front().elements);
+    std::vector<std::uint64_t> elements, refined, candidates, rows;
+    std::vector<double> seconds;
+    for (const AdaptiveLevel& l : a.levels) {
+        elements.push_back(l.elements);
+        refined.push_back(l.refined);
+        candidates.push_back(l.candidates);
+        rows.push_back(l.rows_computed);
+        seconds.push_back(l.seconds);
+    }
+    r.set_array("adaptive.levels.elements", elements);
+    r.set_array("adaptive.levels.refined", refined);
+    r.set_array("adaptive.levels.candidates", candidates);
+    r.set_array("adaptive.levels.rows_computed", rows);
+    r.set_array("adaptive.levels.seconds", seconds);
+    // Where the refinement went: elements per object.
+    std::vector<std::uint64_t> per_object(a.scene.objects.size(), 0);
+    for (const Patch& p : a.scene.patches) ++per_object[p.object];
+    r.set_array("adaptive.elements_per_object", per_object);
+    report_object_errors(r, a.objects, a.error_basis, a.max_relative_error);
+}
+
+void report_object_errors(Report& r, std::span<const ObjectError> objects, std::string_view basis, double max_relative) {
+    std::vector<std::string> names;
+    std::vector<double> rel, er, eg, eb;
+    for (const ObjectError& e : objects) {
+        names.push_back(e.name);
+        rel.push_back(e.relative);
+        er.push_back(e.error.r);
+        eg.push_back(e.error.g);
+        eb.push_back(e.error.b);
+    }
+    r.set("discretisation_error.basis", basis);
+    r.set_array("discretisation_error.objects", names);
+    r.set_array("discretisation_error.relative", rel);
+    r.set_array("discretisation_error.abs_r", er);
+    r.set_array("discretisation_error.abs_g", eg);
+    r.set_array("discretisation_error.abs_b", eb);
+    r.set("discretisation_error.max_relative", max_relative);
+}
+
+std::vector<ObjectError> estimate_object_errors(const Scene& scene, std::span<const Vec3> radiosity) {
+    return object_errors_from_variation(scene, radiosity);
+}
+
+}  // namespace ffcube

@@ -1,0 +1,81 @@
+// ffcube solve --target-error / --max-elements (docs/adaptive.md): bad values are refused before
+// any work, and a run reports what it refined and each object's estimated error.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "cli/cli_util.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::run_ffcube;
+using test::TempDir;
+
+// A floor under a square light with a square occluder between them (a shadow to refine).
+void write_shadow_scene(const TempDir& dir) {
+    std::ofstream(dir / "s.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n";
+    std::ofstream(dir / "s.obj") << "mtllib s.mtl\n"
+                                    "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                    "v -0.25 -0.25 0.5\nv 0.25 -0.25 0.5\nv 0.25 0.25 0.5\nv -0.25 0.25 0.5\n"
+                                    "v -0.5 -0.25 1\nv 0 -0.25 1\nv 0 0.25 1\nv -0.5 0.25 1\n"
+                                    "o floor\nusemtl grey\nf 1 2 3 4\n"
+                                    "o occluder\nf 5 6 7 8\n"
+                                    "o light\nusemtl lamp\nf 9 12 11 10\n";
+}
+
+TEST(AdaptiveCli, BadValuesAreRefusedBeforeAnyWork) {
+    TempDir dir;
+    write_shadow_scene(dir);
+    const std::string scene = dir / "s.obj";
+    auto r = run_ffcube("solve " + scene + " --target-error 0 --objects " + (dir / "o.csv"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--target-error 0: must be a finite number > 0"), std::string::npos) << r.output;
+    r = run_ffcube("solve " + scene + " --max-patch-edge 0.5 --max-elements 3 --objects " + (dir / "o.csv"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--max-elements 3: fewer than the"), std::string::npos) << r.output;
+    r = run_ffcube("solve " + scene + " --target-error 1e-3 --matrix " + (dir / "none.ffm"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--matrix with --target-error"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "o.csv"));
+}
+
+TEST(AdaptiveCli, ReportSaysWhatWasRefinedAndEachObjectsError) {
+    TempDir dir;
+    write_shadow_scene(dir);
+    const auto r = run_ffcube("solve " + (dir / "s.obj") + " --max-patch-edge 0.5 --resolution 32 --solver direct" +
+                              " --target-error 1e-3 --max-elements 200 -q --radiosity " + (dir / "p.csv") + " --report " +
+                              (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto rep = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    const auto& a = rep["adaptive"];
+    const std::size_t elements = a["elements"];
+    EXPECT_GT(elements, std::size_t{a["start_patches"]});
+    EXPECT_LE(elements, 200u);
+    // Each level's elements are the previous level's plus 3 per refined patch (factor 2).
+    const auto& levels = a["levels"];
+    ASSERT_GE(levels["elements"].size(), 2u);
+    for (std::size_t k = 1; k < levels["elements"].size(); ++k)
+        EXPECT_EQ(std::size_t{levels["elements"][k]}, std::size_t{levels["elements"][k - 1]} + 3 * std::size_t{levels["refined"][k - 1]});
+    EXPECT_EQ(levels["elements"].back(), elements);
+    // Elements per object add up; the floor (the shadow's receiver) got the most.
+    const auto per_object = a["elements_per_object"];
+    std::size_t sum = 0;
+    for (const auto& n : per_object) sum += std::size_t{n};
+    EXPECT_EQ(sum, elements);
+    EXPECT_GT(per_object[0], per_object[1]);
+    const auto& err = rep["discretisation_error"];
+    EXPECT_EQ(err["basis"], "levels");
+    ASSERT_EQ(err["objects"].size(), 3u);
+    for (const auto& e : err["relative"]) EXPECT_GE(double{e}, 0.0);
+    // The per-patch CSV lists the elements (a header and one line each).
+    std::istringstream csv(test::read_text(dir / "p.csv"));
+    std::size_t lines = 0;
+    for (std::string line; std::getline(csv, line);) ++lines;
+    EXPECT_EQ(lines, elements + 1);
+}
+
+}  // namespace
+}  // namespace ffcube

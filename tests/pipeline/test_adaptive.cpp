@@ -1,0 +1,81 @@
+// Adaptive meshing end to end (pipeline/adaptive.hpp) on hemicube rows: refinement of a furnace
+// changes nothing, and the refined scene and its radiosity do not depend on the thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ffcube/pipeline/adaptive.hpp"
+#include "ffcube/scene/refine.hpp"
+#include "support/scenes.hpp"
+
+namespace ffcube {
+namespace {
+
+RowOptions small_rows(unsigned threads) {
+    RowOptions o;
+    o.resolution = 64;
+    o.threads = threads;
+    return o;
+}
+
+SolverOptions direct() {
+    SolverOptions so;
+    so.method = SolverMethod::Direct;
+    return so;
+}
+
+TEST(Adaptive, TheFurnaceNeedsNoRefinementAndRefiningItChangesNothing) {
+    // The closed unit box, every wall ρ = 0.5 and E = 1: B = E / (1 − ρ) = 2 everywhere, on any mesh.
+    Scene s = test::make_scene(test::inward_box(1, 1, 1), 0.5);
+    for (Material& m : s.materials) m.kd = Vec3(0.5), m.ke = Vec3(1.0);
+    AdaptiveOptions ao;
+    const AdaptiveResult a = solve_adaptive(s, small_rows(2), direct(), ao);
+    ASSERT_EQ(a.levels.size(), 1u);
+    EXPECT_EQ(a.stop, "nothing_to_refine");
+    EXPECT_TRUE(a.reached_target);
+    EXPECT_EQ(a.scene.size(), s.size());
+    // Split every patch in 3 × 3 anyway and solve the elements: still 2. The correction closes each
+    // row to 1 in double and stores it in float (relative rounding 6e-8 per value, at most about
+    // 1e-7 on a row's sum s). B = E / (1 − ρ s) moves by ρ E / (1 − ρ)² = 2 per unit of s, so
+    // |B − 2| ≤ 2e-7; 1e-6 leaves room for the LU's rounding.
+    const RefinedScene fine = refine_patches(s, std::vector<std::uint32_t>(s.size(), 3));
+    RowSource rows = make_row_source(fine.scene, small_rows(2));
+    const SolveResult r = solve_radiosity(fine.scene, rows.provider(), direct());
+    ASSERT_EQ(r.radiosity.size(), 9 * s.size());
+    for (const Vec3& b : r.radiosity) {
+        EXPECT_NEAR(b.r, 2.0, 1e-6);
+        EXPECT_NEAR(b.b, 2.0, 1e-6);
+    }
+    for (const Vec3& b : a.result.radiosity) EXPECT_NEAR(b.g, 2.0, 1e-6);
+}
+
+TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
+    // A floor under a square light, a square occluder between them: a shadow with a penumbra.
+    Scene s = test::make_scene({test::square_z("floor", 0.0, true, 2.0, Vec3(-1, -1, 0)),
+                                test::square_z("occluder", 0.5, true, 0.5, Vec3(-0.25, -0.25, 0)),
+                                test::square_z("light", 1.0, false, 0.5, Vec3(-0.5, -0.25, 0))},
+                               0.5);
+    s.materials.push_back(Material{"lamp", Vec3(0.0), Vec3(10.0)});
+    for (Patch& p : s.patches)
+        if (s.objects[p.object] == "light") p.material = static_cast<std::uint32_t>(s.materials.size() - 1);
+    AdaptiveOptions ao;
+    ao.target_error = 1e-3;
+    ao.max_levels = 2;
+    const AdaptiveResult one = solve_adaptive(s, small_rows(1), direct(), ao);
+    const AdaptiveResult two = solve_adaptive(s, small_rows(2), direct(), ao);
+    EXPECT_GT(one.scene.size(), s.size());
+    ASSERT_EQ(one.scene.size(), two.scene.size());
+    EXPECT_EQ(one.origin, two.origin);
+    EXPECT_EQ(one.scene.fingerprint, two.scene.fingerprint);
+    ASSERT_EQ(one.result.radiosity.size(), two.result.radiosity.size());
+    for (std::size_t i = 0; i < one.result.radiosity.size(); ++i) EXPECT_EQ(one.result.radiosity[i], two.result.radiosity[i]) << i;
+    // The shadow is on the floor: the floor is where the elements went.
+    std::size_t floor_elements = 0;
+    for (const Patch& p : one.scene.patches) floor_elements += s.objects[p.object] == "floor" ? 1 : 0;
+    std::size_t floor_patches = 0;
+    for (const Patch& p : s.patches) floor_patches += s.objects[p.object] == "floor" ? 1 : 0;
+    EXPECT_GT(floor_elements, floor_patches);
+}
+
+}  // namespace
+}  // namespace ffcube

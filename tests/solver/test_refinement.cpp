@@ -1,0 +1,88 @@
+// The refinement indicator and marking (solver/refinement.hpp) on radiosity fields whose variation
+// is known: a step (a shadow boundary), a linear ramp, a constant (the furnace).
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "ffcube/solver/refinement.hpp"
+#include "support/scenes.hpp"
+
+namespace ffcube {
+namespace {
+
+// The unit floor as n × n patches of side h = 1/n (the mesher's grid: patch j·n + i has its centroid at
+// ((i + ½)h, (j + ½)h)), and a wall that is another object.
+constexpr int kN = 10;
+Scene floor_and_wall() {
+    NamedPolygon wall{"wall", {Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 1, 1), Vec3(0, 0, 1)}};
+    return test::make_scene({test::square_z("floor", 0.0, true), wall}, 1.0 / kN);
+}
+
+std::vector<Vec3> field(const Scene& s, double (*f)(const Vec3&)) {
+    std::vector<Vec3> b;
+    for (const Patch& p : s.patches) b.push_back(Vec3(p.object == 0 ? f(p.centroid) : 5.0));
+    return b;
+}
+
+TEST(RefinementIndicator, AShadowBoundaryIsWhereTheVariationIs) {
+    const Scene s = floor_and_wall();
+    ASSERT_EQ(s.size(), 2u * kN * kN);
+    // Lit (1) left of x = 0.5, shadow (0.2) right of it: the boundary runs between columns 4 and 5.
+    const auto step = [](const Vec3& c) { return c.x < 0.5 ? 1.0 : 0.2; };
+    const std::vector<Vec3> b = field(s, step);
+    const std::vector<double> v = radiosity_variation(s, b);
+    for (std::uint32_t i = 0; i < s.size(); ++i) {
+        const Patch& p = s.patches[i];
+        if (p.object != 0) {
+            // Constant on the wall; the floor's values never count (another object).
+            EXPECT_EQ(v[i], 0.0);
+            continue;
+        }
+        const int col = static_cast<int>(p.centroid.x * kN);
+        // Half the jump (|1 − 0.2| / 2, luminance of a grey is its value) beside the boundary, 0 elsewhere.
+        EXPECT_NEAR(v[i], (col == 4 || col == 5) ? 0.4 : 0.0, 1e-12) << "column " << col;
+    }
+    // Marking takes the boundary's patches first, and only as many as the budget holds.
+    const RefinementChoice all = choose_refinement(s, b, 1e-3, 10'000);
+    EXPECT_EQ(all.candidates, 2u * kN);
+    EXPECT_EQ(all.marked, 2u * kN);
+    EXPECT_EQ(all.elements_after, s.size() + 3 * 2 * kN);
+    const RefinementChoice some = choose_refinement(s, b, 1e-3, s.size() + 3 * 5);
+    EXPECT_EQ(some.marked, 5u);
+    EXPECT_TRUE(some.budget_limited);
+    // Dörfler's bulk: the 20 boundary patches hold equal shares of Σ η, so 24% of it takes 5 of them
+    // (4 hold 20%, the fifth brings 25%).
+    const RefinementChoice bulk = choose_refinement(s, b, 1e-3, 10'000, 2, 0.24);
+    EXPECT_EQ(bulk.marked, 5u);
+    EXPECT_FALSE(bulk.budget_limited);
+    for (std::uint32_t i = 0; i < s.size(); ++i) {
+        if (some.split[i] == 1) continue;
+        EXPECT_EQ(some.split[i], 2u);
+        const int col = static_cast<int>(s.patches[i].centroid.x * kN);
+        EXPECT_TRUE(col == 4 || col == 5);
+    }
+}
+
+TEST(RefinementIndicator, ALinearRampVariesByHalfItsStepAndAConstantNotAtAll) {
+    const Scene s = floor_and_wall();
+    // B = 1 + 2x: neighbours (edge or corner) differ by at most 2h in x: variation h = 0.1 everywhere.
+    const std::vector<double> ramp = radiosity_variation(s, field(s, [](const Vec3& c) { return 1.0 + 2.0 * c.x; }));
+    // The furnace: constant B, nothing varies and nothing is marked whatever the target.
+    const std::vector<Vec3> flat = field(s, [](const Vec3&) { return 3.0; });
+    const std::vector<double> none = radiosity_variation(s, flat);
+    for (std::uint32_t i = 0; i < s.size(); ++i) {
+        // Rounding of the centroids (1e-16) times the slope, far below 1e-12.
+        if (s.patches[i].object == 0) EXPECT_NEAR(ramp[i], 1.0 / kN, 1e-12);
+        EXPECT_EQ(none[i], 0.0);
+    }
+    const RefinementChoice c = choose_refinement(s, flat, 1e-9, 10'000);
+    EXPECT_EQ(c.candidates, 0u);
+    EXPECT_EQ(c.marked, 0u);
+    // The ramp's relative variation 0.1 / mean 2 = 5%: candidates at a 1% target, none at 10%.
+    const std::vector<Vec3> rb = field(s, [](const Vec3& c) { return 1.0 + 2.0 * c.x; });
+    EXPECT_EQ(choose_refinement(s, rb, 0.01, 10'000).candidates, std::size_t{kN * kN});
+    EXPECT_EQ(choose_refinement(s, rb, 0.1, 10'000).candidates, 0u);
+}
+
+}  // namespace
+}  // namespace ffcube
