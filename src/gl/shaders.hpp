@@ -1,4 +1,4 @@
-// The shaders of shaders/, embedded at build time (cmake/EmbedShaders.cmake writes their
+// The shaders of shaders/, embedded at build time (tools/cmake/EmbedShaders.cmake writes their
 // definitions into the gl library): the one place their names are declared, for the hemicube
 // worker (gl), the picture renderer (render) and the viewer.
 #pragma once

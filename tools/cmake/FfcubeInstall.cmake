@@ -20,7 +20,7 @@ install(TARGETS ${ffcube_package_targets} ffcube_all EXPORT ffcubeTargets
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/include/ffcube DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 set(ffcube_cmake_dir ${CMAKE_INSTALL_LIBDIR}/cmake/ffcube)
 install(EXPORT ffcubeTargets NAMESPACE ffcube:: DESTINATION ${ffcube_cmake_dir})
-configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/ffcubeConfig.cmake.in
+configure_package_config_file(${PROJECT_SOURCE_DIR}/tools/cmake/ffcubeConfig.cmake.in
   ${PROJECT_BINARY_DIR}/ffcubeConfig.cmake INSTALL_DESTINATION ${ffcube_cmake_dir})
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/ffcubeConfigVersion.cmake COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/ffcubeConfig.cmake ${PROJECT_BINARY_DIR}/ffcubeConfigVersion.cmake

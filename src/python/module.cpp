@@ -1,7 +1,7 @@
 // The Python module `ffcube` (pybind11): load_scene, form_factors and solve, over the same
 // composition root as the command line (src/pipeline): load_and_mesh, make_row_source,
 // apply_enforcement, solve_and_report. Keyword arguments are the command line's options with
-// dashes as underscores (python/kwargs.hpp); their words go through the pipeline's own parsers
+// dashes as underscores (src/python/kwargs.hpp); their words go through the pipeline's own parsers
 // and validators, so a bad option raises the message the command line prints.
 //
 // The GIL is released while a scene is loaded and meshed, rows are computed and a solve runs: no

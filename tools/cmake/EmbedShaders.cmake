@@ -1,7 +1,7 @@
 # Embeds shader sources into the binary at build time, so ffcube never reads shader files
 # relative to the working directory. Usage (script mode):
 #   cmake -DOUT=file.cpp -DSHADERS="a.vert;b.frag" -P EmbedShaders.cmake
-set(body "// Generated from shaders/ by cmake/EmbedShaders.cmake. Do not edit.\n#include \"gl/shaders.hpp\"\n#include <string_view>\nnamespace ffcube::shaders {\n")
+set(body "// Generated from shaders/ by tools/cmake/EmbedShaders.cmake. Do not edit.\n#include \"gl/shaders.hpp\"\n#include <string_view>\nnamespace ffcube::shaders {\n")
 foreach(path ${SHADERS})
   get_filename_component(name ${path} NAME)
   string(MAKE_C_IDENTIFIER ${name} ident)

@@ -10,6 +10,6 @@ function(ffcube_layer name)
     PUBLIC $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/include> $<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>
     PRIVATE ${PROJECT_SOURCE_DIR}/src)
   target_link_libraries(ffcube_${name} PUBLIC ${L_PUBLIC} PRIVATE ffcube_warnings ${L_PRIVATE})
-  # PIC: the Python module (python/) links these static libraries into a shared object.
+  # PIC: the Python module (src/python/) links these static libraries into a shared object.
   set_target_properties(ffcube_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON EXPORT_NAME ${name})
 endfunction()
