@@ -23,7 +23,8 @@ struct Options {
     RowOptions rows;
     std::string output, groups, report;
     CheckpointOptions checkpoint;
-    std::uint64_t stats_memory_mib = 256;
+    std::uint64_t stats_memory_mib = 512;
+    std::uint32_t ffm_version = kFfmVersion;
 };
 
 struct Figures {
@@ -43,16 +44,21 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
     RowStreamChecks checks(scene);
     {
         FfmWriter writer(o.output, scene, written);
-        Stopwatch watch;
+        Stopwatch watch, piece;
+        double writing = 0;  // coding, compressing and writing, between the rows
         stream_rows(provider, checkpoint, progress, [&](std::uint32_t i, RowView row) {
+            piece.restart();
             writer.append_row(row);
+            writing += piece.seconds();
             checks.add(i, row);
         });
         f.seconds = watch.seconds();
+        piece.restart();
         writer.finish();
+        report.set("time.writing", writing + piece.seconds());
         f.nnz = writer.nnz();
         report.set("ffm.bytes", writer.bytes_written());
-        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max<double>(1.0, f.nnz));
+        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
     }
     f.row_sums = checks.row_sums();
     f.reciprocity.object_max_rel = checks.object_max_rel();
@@ -77,7 +83,7 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
     return f;
 }
 
-// The matrix in memory: --enforce (it needs the whole matrix), .mtx, or no output.
+// The matrix in memory: --enforce (it needs the whole matrix), .mtx, --ffm-version 1, or no output.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, RowCheckpoint* checkpoint,
                   const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
@@ -94,8 +100,8 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, RowChec
     }
     watch.restart();
     if (o.output.ends_with(".ffm")) {
-        Progress bar(fmt::format("writing {} (rows)", o.output), ffm_progress_total(F), progress);
-        write_ffm(o.output, F, scene, written, &bar);
+        Progress bar(fmt::format("writing {}", o.output), ffm_progress_total(F, o.ffm_version), progress);
+        write_ffm(o.output, F, scene, written, &bar, o.ffm_version);
     } else if (o.output.ends_with(".mtx")) {
         Progress bar(fmt::format("writing {} (rows)", o.output), F.size(), progress);
         write_mtx(o.output, F, &bar);
@@ -129,7 +135,7 @@ int run(const Options& o) {
     FfmMetadata written = meta;
     if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
-    const bool stream = ffm && o.rows.enforce == EnforceRequest::None;
+    const bool stream = ffm && o.ffm_version == 2 && o.rows.enforce == EnforceRequest::None;
     report.set("streamed", stream);
     const Figures f = stream ? streamed(o, scene, rows.provider(), cp, written, report)
                              : in_memory(o, scene, rows, cp, written, report);
@@ -170,6 +176,9 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--stats-memory", opts->stats_memory_mib,
                     "MiB for the reciprocity check of a streamed .ffm (more: fewer passes over the file)")
         ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30));
+    sub->add_option("--ffm-version", opts->ffm_version,
+                    "write .ffm version 2 (compact, streamed: the default) or 1 (plain arrays, the matrix held in memory)")
+        ->check(CLI::IsMember({1u, 2u}));
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);
