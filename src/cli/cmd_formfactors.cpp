@@ -23,7 +23,93 @@ struct Options {
     RowOptions rows;
     std::string output, groups, report;
     CheckpointOptions checkpoint;
+    std::uint64_t stats_memory_mib = 512;
+    std::uint32_t ffm_version = kFfmVersion;
 };
+
+struct Figures {
+    double seconds = 0;  // computing the rows (streamed: with coding and writing them)
+    std::uint64_t nnz = 0;
+    RowSumStats row_sums;
+    ReciprocityStats reciprocity;
+    std::vector<std::vector<double>> groups;
+};
+
+// Rows straight to the .ffm as they come, statistics from the stream and from passes over the
+// written file: memory independent of the number of entries (docs/robustness.md).
+Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, RowCheckpoint* checkpoint,
+                 const FfmMetadata& written, Report& report) {
+    const bool progress = !o.scene.quiet;
+    Figures f;
+    RowStreamChecks checks(scene);
+    {
+        FfmWriter writer(o.output, scene, written);
+        Stopwatch watch, piece;
+        double writing = 0;  // coding, compressing and writing, between the rows
+        stream_rows(provider, checkpoint, progress, [&](std::uint32_t i, RowView row) {
+            piece.restart();
+            writer.append_row(row);
+            writing += piece.seconds();
+            checks.add(i, row);
+        });
+        f.seconds = watch.seconds();
+        piece.restart();
+        writer.finish();
+        report.set("time.writing", writing + piece.seconds());
+        f.nnz = writer.nnz();
+        report.set("ffm.bytes", writer.bytes_written());
+        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
+    }
+    f.row_sums = checks.row_sums();
+    f.reciprocity.object_max_rel = checks.object_max_rel();
+    if (!o.groups.empty()) f.groups = checks.object_factors();
+
+    Stopwatch watch;
+    std::vector<double> areas;
+    for (const Patch& p : scene.patches) areas.push_back(p.area);
+    // 8 bytes per entry held (a u32 index and a float value).
+    const std::uint64_t budget = std::max<std::uint64_t>(1, (o.stats_memory_mib << 20) / 8);
+    const std::size_t passes = reciprocity_bands(checks.row_counts(), checks.col_counts(), budget).size() - 1;
+    FfmReader reader(o.output);
+    {
+        Progress bar(fmt::format("reciprocity ({} pass{} over {})", passes, passes == 1 ? "" : "es", o.output),
+                     std::uint64_t(scene.size()) * passes, progress);
+        f.reciprocity.patch_max_abs = patch_reciprocity_banded(
+            areas, checks.row_counts(), checks.col_counts(),
+            [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); }, budget, &bar);
+    }
+    report.set("reciprocity.passes", passes);
+    report.set("time.statistics", watch.seconds());
+    return f;
+}
+
+// The matrix in memory: --enforce (it needs the whole matrix), .mtx, --ffm-version 1, or no output.
+Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, RowCheckpoint* checkpoint,
+                  const FfmMetadata& written, Report& report) {
+    const bool progress = !o.scene.quiet;
+    Figures f;
+    Stopwatch watch;
+    CsrMatrix computed = compute_matrix(rows.provider(), checkpoint, progress);
+    f.seconds = watch.seconds();
+    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
+    f.nnz = F.nnz();
+    f.row_sums = row_sum_stats(F);
+    {
+        Progress bar("reciprocity", F.size(), progress);
+        f.reciprocity = reciprocity_stats(F, scene, &bar);
+    }
+    watch.restart();
+    if (o.output.ends_with(".ffm")) {
+        Progress bar(fmt::format("writing {}", o.output), ffm_progress_total(F, o.ffm_version), progress);
+        write_ffm(o.output, F, scene, written, &bar, o.ffm_version);
+    } else if (o.output.ends_with(".mtx")) {
+        Progress bar(fmt::format("writing {} (rows)", o.output), F.size(), progress);
+        write_mtx(o.output, F, &bar);
+    }
+    if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
+    report.set("time.writing", watch.seconds());
+    return f;
+}
 
 int run(const Options& o) {
     const bool ffm = o.output.ends_with(".ffm"), mtx = o.output.ends_with(".mtx");
@@ -43,38 +129,28 @@ int run(const Options& o) {
     Stopwatch total;
     RowSource rows = make_row_source(scene, o.rows);
     for (const std::string& line : describe(rows)) info("{}", line);
-    RowProvider& provider = rows.provider();
 
-    Stopwatch watch;
-    watch.restart();
-    CsrMatrix computed = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
-    const double seconds = watch.seconds();
-    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
+    // The written matrix records its enforcement too (the checkpoint's rows are from before it,
+    // so `meta` without it is what resuming compares).
+    FfmMetadata written = meta;
+    if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
+    RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
+    const bool stream = ffm && o.ffm_version == 2 && o.rows.enforce == EnforceRequest::None;
+    report.set("streamed", stream);
+    const Figures f = stream ? streamed(o, scene, rows.provider(), cp, written, report)
+                             : in_memory(o, scene, rows, cp, written, report);
+    const double seconds = f.seconds;
     report.set("seconds", seconds);
     report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
                static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
     report_row_source(report, rows);
-    const MatrixChecks checks = report_matrix_checks(report, F, scene, !o.scene.quiet);
-    const RowSumStats& rs = checks.row_sums;
-    const ReciprocityStats& rec = checks.reciprocity;
+    const RowSumStats& rs = f.row_sums;
+    const ReciprocityStats& rec = f.reciprocity;
+    report_matrix_stats(report, f.nnz, rs, rec);
     info("{} rows in {:.2f} s ({:.0f} rows/s); row sums {:.6f}..{:.6f} (mean {:.6f}); reciprocity (objects) {:.2e}",
          scene.size(), seconds, static_cast<double>(scene.size()) / std::max(seconds, 1e-9), rs.min, rs.max, rs.mean,
          rec.object_max_rel);
-
-    watch.restart();
-    if (ffm) {
-        // The written matrix records its enforcement too (the checkpoint's rows are from before
-        // it, so `meta` without it is what resuming compares).
-        FfmMetadata written = meta;
-        if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
-        Progress progress(fmt::format("writing {} (bytes)", o.output), ffm_payload_bytes(F), !o.scene.quiet);
-        write_ffm(o.output, F, scene, written, &progress);
-    } else if (mtx) {
-        Progress progress(fmt::format("writing {} (rows)", o.output), F.size(), !o.scene.quiet);
-        write_mtx(o.output, F, &progress);
-    }
-    if (!o.groups.empty()) write_groups_csv(o.groups, object_form_factors(F, scene), scene.objects);
-    report.set("time.writing", watch.seconds());
+    if (!o.groups.empty()) write_groups_csv(o.groups, f.groups, scene.objects);
     report.set("time.total", total.seconds());
     if (!o.report.empty()) report.write(o.report);
     return 0;
@@ -92,6 +168,12 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--groups", opts->groups, "write object-to-object form factors as CSV (from,to,F)");
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");
     add_checkpoint_options(*sub, opts->checkpoint);
+    sub->add_option("--stats-memory", opts->stats_memory_mib,
+                    "MiB for the reciprocity check of a streamed .ffm (more: fewer passes over the file)")
+        ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30));
+    sub->add_option("--ffm-version", opts->ffm_version,
+                    "write .ffm version 2 (compact, streamed: the default) or 1 (plain arrays, the matrix held in memory)")
+        ->check(CLI::IsMember({1u, 2u}));
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);

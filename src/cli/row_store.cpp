@@ -35,6 +35,23 @@ std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const S
     return c;
 }
 
+namespace {
+
+// The rows missing from the checkpoint, each appended to its log as it comes.
+void compute_into(RowProvider& provider, RowCheckpoint& checkpoint, bool progress) {
+    const std::vector<std::uint32_t> rows = checkpoint.missing();
+    {
+        Progress bar("rows", rows.size(), progress);
+        provider.compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) {
+            checkpoint.append(i, row);
+            bar.add();
+        });
+    }
+    checkpoint.sync();
+}
+
+}  // namespace
+
 CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress) {
     const std::uint32_t n = provider.size();
     if (!checkpoint) {
@@ -48,16 +65,32 @@ CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool 
         });
         return F;
     }
-    const std::vector<std::uint32_t> rows = checkpoint->missing();
-    {
-        Progress bar("rows", rows.size(), progress);
-        provider.compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) {
-            checkpoint->append(i, row);
+    compute_into(provider, *checkpoint, progress);
+    return checkpoint->assemble();
+}
+
+void stream_rows(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
+                 const std::function<void(std::uint32_t, RowView)>& sink) {
+    const std::uint32_t n = provider.size();
+    if (!checkpoint) {
+        Progress bar("rows", n, progress);
+        std::vector<std::uint32_t> all(n);
+        for (std::uint32_t i = 0; i < n; ++i) all[i] = i;
+        std::vector<float> val;
+        provider.compute_rows(all, [&](std::uint32_t i, const SparseRow& row) {
+            val.resize(row.val.size());
+            for (std::size_t k = 0; k < val.size(); ++k) val[k] = static_cast<float>(row.val[k]);  // as CsrMatrix
+            sink(i, RowView{row.col, val});
             bar.add();
         });
+        return;
     }
-    checkpoint->sync();
-    return checkpoint->assemble();
+    compute_into(provider, *checkpoint, progress);
+    Progress bar("rows from the checkpoint", n, progress);
+    checkpoint->for_each_row([&](std::uint32_t i, RowView row) {
+        sink(i, row);
+        bar.add();
+    });
 }
 
 }  // namespace ffcube::cli

@@ -3,6 +3,7 @@
 // ffcube/io/checkpoint.hpp.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 
@@ -33,5 +34,12 @@ std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const S
 // missing from it are computed, each appended to the log as it comes, and the matrix is then read
 // back from the log in row order: bit-identical to an uninterrupted run.
 CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress);
+
+// The same rows, each handed to sink in row order as the float row CsrMatrix would hold
+// (bit-identical to compute_matrix's), without holding the matrix: straight from the provider,
+// or, with a checkpoint, the missing rows computed into the log and then every row read back
+// from it one at a time.
+void stream_rows(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
+                 const std::function<void(std::uint32_t, RowView)>& sink);
 
 }  // namespace ffcube::cli

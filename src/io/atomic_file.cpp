@@ -9,6 +9,8 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <memory>
+#include <optional>
 #include <streambuf>
 #include <string>
 
@@ -103,65 +105,91 @@ std::atomic<unsigned long long> g_counter{0};
 
 }  // namespace
 
-namespace {
-// Writes straight into an existing file that rename cannot replace (a terminal, a pipe,
-// /dev/stdout): there is no previous content to protect, and replacing the device node (or the
-// /dev/stdout link) by a regular file would be wrong.
-void write_in_place(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
-    if (fd < 0) fail(path, "cannot open for writing", errno);
-    FdStreambuf buf(fd);
-    std::ostream out(&buf);
-    try {
-        writer(out);
-        out.flush();
-    } catch (...) {
-        ::close(fd);
-        throw;
-    }
-    const int err = buf.error();
-    const bool good = static_cast<bool>(out);
-    if (::close(fd) != 0 && err == 0) fail(path, "close failed", errno);
-    if (err != 0) fail(path, "write failed", err);
-    if (!good) throw IoError(fmt::format("{}: write failed: the output stream reported an error", path.string()));
-}
-}  // namespace
 
-void write_file_atomically(const std::filesystem::path& requested, const std::function<void(std::ostream&)>& writer) {
+struct AtomicFile::Impl {
+    std::filesystem::path path;               // the file that will be replaced (a link followed)
+    std::optional<Temporary> tmp;             // absent when writing in place
+    int in_place_fd = -1;
+    std::optional<FdStreambuf> buf;
+    std::optional<std::ostream> out;
+    bool done = false;
+
+    ~Impl() {
+        out.reset();
+        buf.reset();
+        if (in_place_fd >= 0) ::close(in_place_fd);
+    }
+};
+
+AtomicFile::AtomicFile(const std::filesystem::path& requested) : impl_(std::make_unique<Impl>()) {
     std::error_code ec;
     const auto st = std::filesystem::status(requested, ec);  // follows links
     if (!ec && std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
-        !std::filesystem::is_directory(st))
-        return write_in_place(requested, writer);
-    // A link is followed, so the link stays and the file it names is replaced.
-    std::filesystem::path path = requested;
-    if (std::filesystem::is_symlink(std::filesystem::symlink_status(requested, ec))) {
-        const auto target = std::filesystem::canonical(requested, ec);
-        if (!ec) path = target;
+        !std::filesystem::is_directory(st)) {
+        // Straight into an existing file that rename cannot replace (a terminal, a pipe,
+        // /dev/stdout): there is no previous content to protect, and replacing the device node
+        // (or the /dev/stdout link) by a regular file would be wrong.
+        impl_->path = requested;
+        impl_->in_place_fd = ::open(requested.c_str(), O_WRONLY | O_CLOEXEC);
+        if (impl_->in_place_fd < 0) fail(requested, "cannot open for writing", errno);
+        impl_->buf.emplace(impl_->in_place_fd);
+    } else {
+        // A link is followed, so the link stays and the file it names is replaced.
+        impl_->path = requested;
+        if (std::filesystem::is_symlink(std::filesystem::symlink_status(requested, ec))) {
+            const auto target = std::filesystem::canonical(requested, ec);
+            if (!ec) impl_->path = target;
+        }
+        // Same directory as the destination, so that rename never crosses file systems.
+        Temporary& tmp = impl_->tmp.emplace(
+            fmt::format("{}.tmp.{}.{}", impl_->path.string(), static_cast<long>(::getpid()), g_counter++));
+        tmp.fd = ::open(tmp.name().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+        if (tmp.fd < 0) {
+            tmp.committed = true;  // nothing was created: nothing to unlink (and never someone else's file)
+            fail(impl_->path, "cannot create file", errno);
+        }
+        impl_->buf.emplace(tmp.fd);
     }
-    // Same directory as the destination, so that rename never crosses file systems.
-    Temporary tmp(fmt::format("{}.tmp.{}.{}", path.string(), static_cast<long>(::getpid()), g_counter++));
-    tmp.fd = ::open(tmp.name().c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (tmp.fd < 0) {
-        tmp.committed = true;  // nothing was created: nothing to unlink (and never someone else's file)
-        fail(path, "cannot create file", errno);
-    }
+    impl_->out.emplace(&*impl_->buf);
+}
 
-    FdStreambuf buf(tmp.fd);
-    std::ostream out(&buf);
-    writer(out);
+AtomicFile::~AtomicFile() = default;
+
+std::ostream& AtomicFile::stream() { return *impl_->out; }
+
+void AtomicFile::check() {
+    if (impl_->buf->error() != 0) fail(impl_->path, "write failed", impl_->buf->error());
+    if (!*impl_->out)
+        throw IoError(fmt::format("{}: write failed: the output stream reported an error", impl_->path.string()));
+}
+
+void AtomicFile::commit() {
+    FFCUBE_CHECK_MSG(!impl_->done, "AtomicFile committed twice");
+    impl_->done = true;
+    std::ostream& out = *impl_->out;
     out.flush();
-    if (buf.error() != 0) fail(path, "write failed", buf.error());
-    if (!out) throw IoError(fmt::format("{}: write failed: the output stream reported an error", path.string()));
-
+    check();
+    if (!impl_->tmp) {
+        const int fd = impl_->in_place_fd;
+        impl_->in_place_fd = -1;
+        if (::close(fd) != 0) fail(impl_->path, "close failed", errno);
+        return;
+    }
+    Temporary& tmp = *impl_->tmp;
     // fsync before rename: otherwise a crash after the rename can leave an empty file in place
     // of both the old and the new content.
-    if (::fsync(tmp.fd) != 0) fail(path, "fsync failed", errno);
+    if (::fsync(tmp.fd) != 0) fail(impl_->path, "fsync failed", errno);
     const int fd = tmp.fd;
     tmp.fd = -1;
-    if (::close(fd) != 0) fail(path, "close failed", errno);
-    if (std::rename(tmp.name().c_str(), path.c_str()) != 0) fail(path, "cannot replace file", errno);
+    if (::close(fd) != 0) fail(impl_->path, "close failed", errno);
+    if (std::rename(tmp.name().c_str(), impl_->path.c_str()) != 0) fail(impl_->path, "cannot replace file", errno);
     tmp.committed = true;
+}
+
+void write_file_atomically(const std::filesystem::path& requested, const std::function<void(std::ostream&)>& writer) {
+    AtomicFile file(requested);
+    writer(file.stream());
+    file.commit();
 }
 
 }  // namespace ffcube

@@ -308,18 +308,41 @@ CsrMatrix RowCheckpoint::assemble() const {
     }
     std::vector<std::uint32_t> col(row_ptr[n]);
     std::vector<float> val(row_ptr[n]);
+    for_each_row([&](std::uint32_t i, RowView r) {
+        if (r.col.size() != row_ptr[i + 1] - row_ptr[i]) throw changed(i, "length");
+        std::copy(r.col.begin(), r.col.end(), col.begin() + static_cast<long>(row_ptr[i]));
+        std::copy(r.val.begin(), r.val.end(), val.begin() + static_cast<long>(row_ptr[i]));
+    });
+    return CsrMatrix::from_arrays(n, std::move(row_ptr), std::move(col), std::move(val));
+}
+
+void RowCheckpoint::for_each_row(const std::function<void(std::uint32_t, RowView)>& f) const {
+    FFCUBE_CHECK_MSG(stored_ == size(), "for_each_row() needs every row");
+    const fs::path lpath = log_path();
+    const std::uint32_t n = size();
+    auto changed = [&](std::uint32_t i, const std::string& what) {
+        return InputError(fmt::format("{}: the record of row {} at offset {} changed on disk while in use ({})",
+                                      lpath.string(), i, offsets_[i], what));
+    };
+    unsigned char header[kHeader];
     std::vector<unsigned char> buf;
+    std::vector<std::uint32_t> col;
+    std::vector<float> val;
     for (std::uint32_t i = 0; i < n; ++i) {
-        const auto nnz = static_cast<std::uint32_t>(row_ptr[i + 1] - row_ptr[i]);
+        pread_all(fd_, header, kHeader, offsets_[i], lpath);
+        const std::uint32_t nnz = get_u32(header + 8);
+        if (get_u32(header) != kMagic || get_u32(header + 4) != i || nnz > n) throw changed(i, "bad header");
         buf.resize(record_size(nnz));
         pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
         if (get_u32(buf.data() + 8) != nnz) throw changed(i, "length");
         const std::string wrong = check_record(buf.data(), nnz, n);
         if (!wrong.empty()) throw changed(i, wrong);
-        std::memcpy(col.data() + row_ptr[i], buf.data() + kHeader, 4 * std::size_t(nnz));
-        std::memcpy(val.data() + row_ptr[i], buf.data() + kHeader + 4 * std::size_t(nnz), 4 * std::size_t(nnz));
+        col.resize(nnz);
+        val.resize(nnz);
+        std::memcpy(col.data(), buf.data() + kHeader, 4 * std::size_t(nnz));
+        std::memcpy(val.data(), buf.data() + kHeader + 4 * std::size_t(nnz), 4 * std::size_t(nnz));
+        f(i, RowView{col, val});
     }
-    return CsrMatrix::from_arrays(n, std::move(row_ptr), std::move(col), std::move(val));
 }
 
 }  // namespace ffcube

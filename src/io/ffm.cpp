@@ -13,8 +13,10 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/checksum.hpp"
+#include "io/ffm_common.hpp"
 
-// Layout (docs/ffm-format.md is the reference; keep the two in step):
+// Version 1 and the shared head (version 2's blocks: ffm_v2.cpp).
+// Layout of version 1 (docs/ffm-format.md is the reference; keep the two in step):
 //   0  char[8] "FFCUBEFM"       8 u32 version      12 u32 n           16 u32 object_count
 //  20  u32 resolution          24 u64 nnz         32 u64 fingerprint 40 f64 max_patch_edge
 //  48  u32 method_len          52 u32 meshing_len 56 u32 settings_len 60 u32 names_len
@@ -24,83 +26,100 @@
 // Every section starts at a multiple of 8, so the file can be mapped and viewed in place.
 
 namespace ffcube {
-namespace {
+using namespace ffm_detail;
 
-constexpr std::array<char, 8> kMagic = {'F', 'F', 'C', 'U', 'B', 'E', 'F', 'M'};
-constexpr std::size_t kHeaderSize = 64;
-// Values above 1 can only come from float rounding of row entries near 1; anything beyond this
-// slack is not a form factor.
-constexpr float kMaxValue = 1.0f + 1e-3f;
+namespace ffm_detail {
 
-constexpr std::uint64_t pad8(std::uint64_t bytes) { return (bytes + 7) / 8 * 8; }
-
-// File size implied by the header, in 128 bits: a corrupted nnz near 2^64 must not wrap around
-// to a plausible size.
-__extension__ using u128 = unsigned __int128;
-
-struct Header {
-    std::uint32_t version = 0, n = 0, object_count = 0, resolution = 0;
-    std::uint64_t nnz = 0, fingerprint = 0;
-    double max_patch_edge = 0.0;
-    std::uint32_t method_len = 0, meshing_len = 0, settings_len = 0, names_len = 0;
-
-    std::uint64_t text_bytes() const {
-        return pad8(std::uint64_t(method_len) + meshing_len + settings_len + names_len);
-    }
-    u128 file_size() const {
-        return u128(kHeaderSize) + text_bytes() + u128(8) * n + u128(8) * (u128(n) + 1) + pad8(4 * std::uint64_t(n)) +
-               2 * ((u128(4) * nnz + 7) / 8 * 8) + 8;
-    }
-};
-
-template <typename T>
-void put(unsigned char* p, T v) {
-    std::memcpy(p, &v, sizeof v);
-}
-template <typename T>
-T get(const unsigned char* p) {
-    T v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
-std::array<unsigned char, kHeaderSize> encode(const Header& h) {
-    std::array<unsigned char, kHeaderSize> b{};
-    std::memcpy(b.data(), kMagic.data(), kMagic.size());
-    put(b.data() + 8, h.version);
-    put(b.data() + 12, h.n);
-    put(b.data() + 16, h.object_count);
-    put(b.data() + 20, h.resolution);
-    put(b.data() + 24, h.nnz);
-    put(b.data() + 32, h.fingerprint);
-    put(b.data() + 40, h.max_patch_edge);
-    put(b.data() + 48, h.method_len);
-    put(b.data() + 52, h.meshing_len);
-    put(b.data() + 56, h.settings_len);
-    put(b.data() + 60, h.names_len);
-    return b;
-}
-
-Header decode(const unsigned char* b) {
+Header scene_header(const Scene& scene, const FfmMetadata& meta) {
+    std::uint64_t names_len = 0;
+    for (const std::string& s : scene.objects) names_len += 4 + s.size();
     Header h;
-    h.version = get<std::uint32_t>(b + 8);
-    h.n = get<std::uint32_t>(b + 12);
-    h.object_count = get<std::uint32_t>(b + 16);
-    h.resolution = get<std::uint32_t>(b + 20);
-    h.nnz = get<std::uint64_t>(b + 24);
-    h.fingerprint = get<std::uint64_t>(b + 32);
-    h.max_patch_edge = get<double>(b + 40);
-    h.method_len = get<std::uint32_t>(b + 48);
-    h.meshing_len = get<std::uint32_t>(b + 52);
-    h.settings_len = get<std::uint32_t>(b + 56);
-    h.names_len = get<std::uint32_t>(b + 60);
+    h.n = checked_u32(scene.size(), "patch count");
+    h.object_count = checked_u32(scene.objects.size(), "object count");
+    h.resolution = meta.resolution;
+    h.fingerprint = scene.fingerprint;
+    h.max_patch_edge = scene.stats.max_patch_edge;
+    h.method_len = checked_u32(meta.method.size(), "method name length");
+    h.meshing_len = checked_u32(scene.stats.how.size(), "meshing description length");
+    h.settings_len = checked_u32(meta.settings.size(), "settings length");
+    h.names_len = checked_u32(names_len, "object name block size");
     return h;
 }
 
-std::uint32_t checked_u32(std::size_t v, const char* what) {
-    FFCUBE_CHECK_MSG(v <= std::numeric_limits<std::uint32_t>::max(), fmt::format("{} does not fit in 32 bits", what));
-    return static_cast<std::uint32_t>(v);
+std::vector<unsigned char> text_block(const Scene& scene, const FfmMetadata& meta, const Header& h) {
+    std::vector<unsigned char> t;
+    t.reserve(h.text_bytes());
+    auto add = [&](const void* p, std::size_t k) {
+        const auto* b = static_cast<const unsigned char*>(p);
+        t.insert(t.end(), b, b + k);
+    };
+    add(meta.method.data(), meta.method.size());
+    add(scene.stats.how.data(), scene.stats.how.size());
+    add(meta.settings.data(), meta.settings.size());
+    for (const std::string& s : scene.objects) {
+        const std::uint32_t len = static_cast<std::uint32_t>(s.size());
+        add(&len, sizeof len);
+        add(s.data(), s.size());
+    }
+    t.resize(h.text_bytes(), 0);
+    return t;
 }
+
+void scene_arrays(const Scene& scene, std::vector<double>& areas, std::vector<std::uint32_t>& objects) {
+    const std::size_t n = scene.size();
+    areas.resize(n);
+    objects.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        areas[i] = scene.patches[i].area;
+        objects[i] = scene.patches[i].object;
+        FFCUBE_CHECK(objects[i] < scene.objects.size());
+        FFCUBE_CHECK_MSG(std::isfinite(areas[i]) && areas[i] > 0, fmt::format("patch {} has area {}", i, areas[i]));
+    }
+}
+
+void parse_head(const std::string& text, const Header& h, FfmHead& f) {
+    const std::string& name = f.source;
+    auto bad = [&](const std::string& what) { return invalid(name, what); };
+    std::size_t pos = 0;
+    auto take = [&](std::size_t len) {
+        std::string s = text.substr(pos, len);
+        pos += len;
+        return s;
+    };
+    f.version = h.version;
+    f.n = h.n;
+    f.meta.method = take(h.method_len);
+    f.meshing = take(h.meshing_len);
+    f.meta.settings = take(h.settings_len);
+    f.meta.resolution = h.resolution;
+    const std::size_t names_end = pos + h.names_len;
+    f.object_names.reserve(std::min<std::size_t>(h.object_count, h.names_len / 4));
+    for (std::uint32_t k = 0; k < h.object_count; ++k) {
+        if (names_end - pos < 4) throw bad(fmt::format("object name block ends before name {}", k));
+        const std::uint32_t len = get<std::uint32_t>(reinterpret_cast<const unsigned char*>(text.data() + pos));
+        pos += 4;
+        if (names_end - pos < len) throw bad(fmt::format("object name {} runs past the name block", k));
+        f.object_names.push_back(take(len));
+    }
+    if (pos != names_end) throw bad("object name block longer than its names");
+    for (std::size_t k = names_end; k < text.size(); ++k)
+        if (text[k] != '\0') throw bad("nonzero padding byte after the text block");
+
+    f.fingerprint = h.fingerprint;
+    f.max_patch_edge = h.max_patch_edge;
+    if (!std::isfinite(f.max_patch_edge) || f.max_patch_edge < 0)
+        throw bad(fmt::format("max patch edge {} is not a finite length", f.max_patch_edge));
+    for (std::uint32_t i = 0; i < h.n; ++i) {
+        if (!(std::isfinite(f.areas[i]) && f.areas[i] > 0))
+            throw bad(fmt::format("patch {} has area {} (must be finite and > 0)", i, f.areas[i]));
+        if (f.objects[i] >= h.object_count)
+            throw bad(fmt::format("patch {} has object {} of {}", i, f.objects[i], h.object_count));
+    }
+}
+
+}  // namespace ffm_detail
+
+namespace {
 
 // Writes bytes to the stream and into the checksum.
 class HashingWriter {
@@ -175,8 +194,6 @@ private:
     bool nonzero_padding_ = false;
 };
 
-void write_string(HashingWriter& w, std::string_view s) { w.bytes(s.data(), s.size()); }
-
 }  // namespace
 
 std::uint64_t ffm_payload_bytes(const CsrMatrix& F) {
@@ -184,52 +201,43 @@ std::uint64_t ffm_payload_bytes(const CsrMatrix& F) {
     return 8 * n + 8 * (n + 1) + pad8(4 * n) + 2 * pad8(4 * F.nnz());
 }
 
+std::uint64_t ffm_progress_total(const CsrMatrix& F, std::uint32_t version) {
+    return version == 1 ? ffm_payload_bytes(F) : F.size();
+}
+
 void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta,
-               Progress* progress) {
+               Progress* progress, std::uint32_t version) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_ffm needs every row of the matrix");
     FFCUBE_CHECK_MSG(scene.size() == n, "write_ffm: matrix and scene differ in patch count");
-
-    std::vector<double> areas(n);
-    std::vector<std::uint32_t> objects(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        areas[i] = scene.patches[i].area;
-        objects[i] = scene.patches[i].object;
-        FFCUBE_CHECK(objects[i] < scene.objects.size());
-        FFCUBE_CHECK_MSG(std::isfinite(areas[i]) && areas[i] > 0, fmt::format("patch {} has area {}", i, areas[i]));
+    FFCUBE_CHECK_MSG(version == 1 || version == 2, fmt::format("write_ffm: no .ffm version {}", version));
+    if (version == 2) {
+        FfmWriter w(path, scene, meta);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            w.append_row(F.row(i));
+            if (progress) progress->add();
+        }
+        w.finish();
+        return;
     }
+
+    std::vector<double> areas;
+    std::vector<std::uint32_t> objects;
+    scene_arrays(scene, areas, objects);
     // The reader's rules, enforced here too: a file that cannot be read back is never written.
     for (float v : F.val())
         FFCUBE_CHECK_MSG(std::isfinite(v) && v >= 0.0f && v <= kMaxValue, fmt::format("form factor {} written", v));
-    std::uint64_t names_len = 0;
-    for (const std::string& s : scene.objects) names_len += 4 + s.size();
 
-    Header h;
-    h.version = kFfmVersion;
-    h.n = n;
-    h.object_count = checked_u32(scene.objects.size(), "object count");
-    h.resolution = meta.resolution;
+    Header h = scene_header(scene, meta);
+    h.version = 1;
     h.nnz = F.nnz();
-    h.fingerprint = scene.fingerprint;
-    h.max_patch_edge = scene.stats.max_patch_edge;
-    h.method_len = checked_u32(meta.method.size(), "method name length");
-    h.meshing_len = checked_u32(scene.stats.how.size(), "meshing description length");
-    h.settings_len = checked_u32(meta.settings.size(), "settings length");
-    h.names_len = checked_u32(names_len, "object name block size");
+    const std::vector<unsigned char> text = text_block(scene, meta, h);
 
     write_file_atomically(path, [&](std::ostream& out) {
         HashingWriter w(out, progress);
         const auto header = encode(h);
         w.bytes(header.data(), header.size());
-        write_string(w, meta.method);
-        write_string(w, scene.stats.how);
-        write_string(w, meta.settings);
-        for (const std::string& s : scene.objects) {
-            const std::uint32_t len = static_cast<std::uint32_t>(s.size());
-            w.bytes(&len, sizeof len);
-            write_string(w, s);
-        }
-        w.pad_to_8(std::uint64_t(h.method_len) + h.meshing_len + h.settings_len + h.names_len);
+        w.array(text);
         w.array(areas);
         w.array(F.row_ptr());
         w.array(objects);
@@ -270,9 +278,13 @@ FfmFile read_ffm(const std::filesystem::path& path) {
         throw InputError(fmt::format("{}: truncated: expected at least {} bytes, found {}", name, kHeaderSize, size));
 
     const Header h = decode(hb.data());
-    if (h.version != kFfmVersion)
-        throw InputError(fmt::format("{}: unsupported .ffm format version {} (this ffcube reads version {})", name,
-                                     h.version, kFfmVersion));
+    if (h.version == 2) {
+        in.close();
+        return read_ffm_v2(path);
+    }
+    if (h.version != 1)
+        throw InputError(fmt::format("{}: unsupported .ffm format version {} (this ffcube reads versions 1 and 2)",
+                                     name, h.version));
     const u128 expected = h.file_size();
     if (expected != size) {
         // fmt 9 cannot format 128-bit integers portably; a header that needs more than 64 bits is
@@ -307,43 +319,10 @@ FfmFile read_ffm(const std::filesystem::path& path) {
 
     // The checksum only proves the file is as written; a file made by another program (or a bug)
     // still has to obey every rule before a solver indexes arrays with it.
-    auto bad = [&](const std::string& what) { return InputError(fmt::format("{}: invalid: {}", name, what)); };
+    auto bad = [&](const std::string& what) { return invalid(name, what); };
 
     if (r.nonzero_padding()) throw bad("nonzero padding byte between arrays");
-
-    std::size_t pos = 0;
-    auto take = [&](std::size_t len) {
-        std::string s = text.substr(pos, len);
-        pos += len;
-        return s;
-    };
-    f.meta.method = take(h.method_len);
-    f.meshing = take(h.meshing_len);
-    f.meta.settings = take(h.settings_len);
-    f.meta.resolution = h.resolution;
-    const std::size_t names_end = pos + h.names_len;
-    f.object_names.reserve(std::min<std::size_t>(h.object_count, h.names_len / 4));
-    for (std::uint32_t k = 0; k < h.object_count; ++k) {
-        if (names_end - pos < 4) throw bad(fmt::format("object name block ends before name {}", k));
-        const std::uint32_t len = get<std::uint32_t>(reinterpret_cast<const unsigned char*>(text.data() + pos));
-        pos += 4;
-        if (names_end - pos < len) throw bad(fmt::format("object name {} runs past the name block", k));
-        f.object_names.push_back(take(len));
-    }
-    if (pos != names_end) throw bad("object name block longer than its names");
-    for (std::size_t k = names_end; k < text.size(); ++k)
-        if (text[k] != '\0') throw bad("nonzero padding byte after the text block");
-
-    f.fingerprint = h.fingerprint;
-    f.max_patch_edge = h.max_patch_edge;
-    if (!std::isfinite(f.max_patch_edge) || f.max_patch_edge < 0)
-        throw bad(fmt::format("max patch edge {} is not a finite length", f.max_patch_edge));
-    for (std::uint32_t i = 0; i < h.n; ++i) {
-        if (!(std::isfinite(f.areas[i]) && f.areas[i] > 0))
-            throw bad(fmt::format("patch {} has area {} (must be finite and > 0)", i, f.areas[i]));
-        if (f.objects[i] >= h.object_count)
-            throw bad(fmt::format("patch {} has object {} of {}", i, f.objects[i], h.object_count));
-    }
+    parse_head(text, h, f);
     if (row_ptr[0] != 0) throw bad(fmt::format("row_ptr[0] = {} (must be 0)", row_ptr[0]));
     if (row_ptr[h.n] != h.nnz) throw bad(fmt::format("row_ptr[{}] = {} (must be nnz = {})", h.n, row_ptr[h.n], h.nnz));
     for (std::uint32_t i = 0; i < h.n; ++i) {

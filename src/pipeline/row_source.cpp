@@ -214,6 +214,16 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
     return E.to_csr();
 }
 
+void report_matrix_stats(Report& report, std::uint64_t nnz, const RowSumStats& row_sums,
+                         const ReciprocityStats& reciprocity) {
+    report.set("nnz", nnz);
+    report.set("row_sums.min", row_sums.min);
+    report.set("row_sums.max", row_sums.max);
+    report.set("row_sums.mean", row_sums.mean);
+    report.set("reciprocity.patch_max_abs", reciprocity.patch_max_abs);
+    report.set("reciprocity.object_max_rel", reciprocity.object_max_rel);
+}
+
 MatrixChecks report_matrix_checks(Report& report, const CsrMatrix& F, const Scene& scene, bool progress) {
     MatrixChecks c;
     c.row_sums = row_sum_stats(F);
@@ -221,12 +231,7 @@ MatrixChecks report_matrix_checks(Report& report, const CsrMatrix& F, const Scen
         Progress bar("reciprocity", F.size(), progress);
         c.reciprocity = reciprocity_stats(F, scene, &bar);
     }
-    report.set("nnz", F.nnz());
-    report.set("row_sums.min", c.row_sums.min);
-    report.set("row_sums.max", c.row_sums.max);
-    report.set("row_sums.mean", c.row_sums.mean);
-    report.set("reciprocity.patch_max_abs", c.reciprocity.patch_max_abs);
-    report.set("reciprocity.object_max_rel", c.reciprocity.object_max_rel);
+    report_matrix_stats(report, F.nnz(), c.row_sums, c.reciprocity);
     return c;
 }
 

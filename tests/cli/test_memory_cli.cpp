@@ -1,11 +1,13 @@
 // Memory at scale: a 20,000-patch run keeps F sparse and its peak resident memory under the bound
 // documented in docs/robustness.md, far below the dense N×N matrix.
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_util.hpp"
 #include "cli/rusage_util.hpp"
+#include "ffcube/io/ffm.hpp"
 
 namespace ffcube {
 namespace {
@@ -49,6 +51,74 @@ TEST(MemoryCli, TwentyThousandPatchesStayUnderTheDocumentedBound) {
     // And F is sparse at all: at 32² a hemicube has 3072 pixels, so a row holds at most 3072
     // entries, far fewer than n.
     EXPECT_LE(nnz, 3072.0 * n);
+}
+
+struct StreamedRun {
+    double peak = 0, nnz = 0, passes = 0;
+};
+StreamedRun streamed_run(const test::TempDir& dir, const std::string& resolution) {
+    const std::string tag = "r" + resolution;
+    const auto r = test::run_measured({"formfactors", test::example("cube.obj"), "--patches", "4000", "--resolution",
+                                       resolution, "--stats-memory", "8", "-q", "-o", dir / (tag + ".ffm"), "--report",
+                                       dir / (tag + ".json")},
+                                      dir / (tag + ".txt"));
+    EXPECT_EQ(r.code, 0) << test::read_text(dir / (tag + ".txt"));
+    const auto report = nlohmann::json::parse(test::read_text(dir / (tag + ".json")));
+    EXPECT_TRUE(report["streamed"].get<bool>());
+    return {1024.0 * static_cast<double>(r.maxrss_kib), report["nnz"].get<double>(),
+            report["reciprocity"]["passes"].get<double>()};
+}
+
+// Streamed to a .ffm, a run's peak memory does not grow with the number of entries: the same
+// scene at 24² and 96² pixels per hemicube face (about 16 times the pixels, several times the
+// entries) peaks within a few MiB.
+TEST(MemoryCli, StreamedPeakDoesNotGrowWithTheEntries) {
+    if (kSanitized) GTEST_SKIP() << "peak memory is meaningless under AddressSanitizer";
+    test::TempDir dir;
+    const StreamedRun lo = streamed_run(dir, "24"), hi = streamed_run(dir, "96");
+    ASSERT_GT(hi.nnz, 2.0 * lo.nnz);
+    EXPECT_GT(hi.passes, 1.0);  // the reciprocity check had to work in bands
+    // What a streamed run holds that may differ between the two:
+    //  - the reciprocity bands, at most --stats-memory 8 MiB (8 bytes per entry held);
+    //  - the writer's and the reader's block: at most 1 MiB of coded rows plus one row (9 bytes
+    //    per entry, at most n = 4000 entries), in at most 4 buffers each (coded, raw, compressed,
+    //    decoded): 8 × (1 MiB + 36 KB) < 9 MiB;
+    //  - llvmpipe's atlas, 3N × N × 8 bytes: 221 KB at N = 96 per worker.
+    // So 8 + 9 + 1 MiB, rounded up to 24 MiB for the allocator's arenas.
+    const double growth = 24.0 * 1024 * 1024;
+    EXPECT_LT(hi.peak - lo.peak, growth) << "peaks " << lo.peak / 1e6 << " and " << hi.peak / 1e6 << " MB for "
+                                         << lo.nnz << " and " << hi.nnz << " entries";
+    // The test means something only if holding the entries (12 bytes each in memory: see above)
+    // would have broken that bound several times over.
+    EXPECT_GT(12.0 * (hi.nnz - lo.nnz), 4.0 * growth);
+    // And in absolute terms: the fixed 192 MiB and 1 KiB per patch of the in-memory bound, plus
+    // the 18 MiB above, with no term per entry.
+    EXPECT_LT(hi.peak, 192.0 * 1024 * 1024 + 1024.0 * 4000 + growth);
+}
+
+// The streamed run's statistics, computed from the stream and by passes over the written file,
+// are the in-memory run's to the last bit, and its .ffm holds the in-memory matrix.
+TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
+    test::TempDir dir;
+    const std::string scene = test::example("cube.obj");
+    for (const auto& [out, extra] : {std::pair{"s.ffm", "--stats-memory 1"}, std::pair{"m.ffm", "--ffm-version 1"}}) {
+        const auto r = test::run_ffcube(fmt::format("formfactors {} --patches 1500 --resolution 48 -q {} -o {} --report {}.json",
+                                                    scene, extra, dir / out, dir / out));
+        ASSERT_EQ(r.code, 0) << r.output;
+    }
+    const auto s = nlohmann::json::parse(test::read_text(dir / "s.ffm.json"));
+    const auto m = nlohmann::json::parse(test::read_text(dir / "m.ffm.json"));
+    EXPECT_TRUE(s["streamed"].get<bool>());
+    EXPECT_FALSE(m["streamed"].get<bool>());
+    EXPECT_GT(s["reciprocity"]["passes"].get<int>(), 1);
+    for (const char* k : {"min", "max", "mean"}) EXPECT_EQ(s["row_sums"][k], m["row_sums"][k]) << k;
+    for (const char* k : {"patch_max_abs", "object_max_rel"}) EXPECT_EQ(s["reciprocity"][k], m["reciprocity"][k]) << k;
+    const FfmFile a = read_ffm(dir / "s.ffm"), b = read_ffm(dir / "m.ffm");
+    EXPECT_EQ(a.version, 2u);
+    EXPECT_EQ(b.version, 1u);
+    EXPECT_EQ(a.matrix.row_ptr(), b.matrix.row_ptr());
+    EXPECT_EQ(a.matrix.col(), b.matrix.col());
+    EXPECT_EQ(a.matrix.val(), b.matrix.val());
 }
 
 }  // namespace

@@ -19,6 +19,7 @@
 namespace ffcube::test {
 namespace {
 
+// Version 1 (still read; these tests write it explicitly). Version 2: test_ffm_v2.cpp.
 // Layout of the file written for small_scene()/small_matrix() with kMeta, derived by hand from
 // docs/ffm-format.md, so these tests check the code against the document:
 //   text: method "hemicube" 8 + meshing "--max-patch-edge" 16 + settings "rotate=1 seed=7" 15
@@ -61,7 +62,7 @@ using Ffm = ScratchDir;
 TEST_F(Ffm, RoundTripKeepsEveryValueExactly) {
     const Scene scene = small_scene();
     const CsrMatrix F = small_matrix();
-    write_ffm(path("F.ffm"), F, scene, kMeta);
+    write_ffm(path("F.ffm"), F, scene, kMeta, nullptr, 1);
     const FfmFile f = read_ffm(path("F.ffm"));
 
     EXPECT_EQ(f.source, path("F.ffm").string());
@@ -85,7 +86,7 @@ TEST_F(Ffm, RoundTripKeepsEveryValueExactly) {
 }
 
 TEST_F(Ffm, LayoutMatchesTheDocument) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const std::string b = read_all(path("F.ffm"));
     ASSERT_EQ(b.size(), kSize);
     EXPECT_EQ(b.substr(0, 8), "FFCUBEFM");
@@ -113,13 +114,13 @@ TEST_F(Ffm, LayoutMatchesTheDocument) {
 }
 
 TEST_F(Ffm, SameInputWritesByteIdenticalFiles) {
-    write_ffm(path("a.ffm"), small_matrix(), small_scene(), kMeta);
-    write_ffm(path("b.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("a.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
+    write_ffm(path("b.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     EXPECT_EQ(read_all(path("a.ffm")), read_all(path("b.ffm")));
     // Read and written again: the same bytes (nothing is lost or re-derived differently).
     const FfmFile f = read_ffm(path("a.ffm"));
     Scene again = small_scene();
-    write_ffm(path("c.ffm"), f.matrix, again, f.meta);
+    write_ffm(path("c.ffm"), f.matrix, again, f.meta, nullptr, 1);
     EXPECT_EQ(read_all(path("a.ffm")), read_all(path("c.ffm")));
 }
 
@@ -127,7 +128,7 @@ TEST_F(Ffm, EmptyMatrixRoundTrips) {
     Scene scene = small_scene();
     CsrMatrix F(5);
     for (int i = 0; i < 5; ++i) F.append_row(SparseRow{});
-    write_ffm(path("F.ffm"), F, scene, FfmMetadata{"raycast", 0, ""});
+    write_ffm(path("F.ffm"), F, scene, FfmMetadata{"raycast", 0, ""}, nullptr, 1);
     const FfmFile f = read_ffm(path("F.ffm"));
     EXPECT_EQ(f.matrix.nnz(), 0u);
     EXPECT_EQ(f.meta.method, "raycast");
@@ -141,15 +142,15 @@ TEST_F(Ffm, WriterRefusesWhatTheReaderWouldRefuse) {
     const std::vector<float> v = {1.01f};  // beyond the 1e-3 float-rounding slack
     F.append_row(c, v);
     for (int i = 1; i < 5; ++i) F.append_row(SparseRow{});
-    EXPECT_THROW(write_ffm(path("F.ffm"), F, small_scene(), kMeta), InternalError);
+    EXPECT_THROW(write_ffm(path("F.ffm"), F, small_scene(), kMeta, nullptr, 1), InternalError);
     Scene zero_area = small_scene();
     zero_area.patches[3].area = 0.0;
-    EXPECT_THROW(write_ffm(path("F.ffm"), small_matrix(), zero_area, kMeta), InternalError);
+    EXPECT_THROW(write_ffm(path("F.ffm"), small_matrix(), zero_area, kMeta, nullptr, 1), InternalError);
     EXPECT_TRUE(entries().empty());
 }
 
 TEST_F(Ffm, TruncatedAtEveryFiftiethIsRefused) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const std::string b = read_all(path("F.ffm"));
     for (std::size_t k = 0; k < 50; ++k) {
         const std::size_t cut = b.size() * k / 50;
@@ -166,7 +167,7 @@ TEST_F(Ffm, TruncatedAtEveryFiftiethIsRefused) {
 // Every single byte of the file flipped, in turn: each flip is refused (by the size check when it
 // hits a count in the header, by the checksum everywhere else), never accepted, never a crash.
 TEST_F(Ffm, EveryFlippedByteIsRefused) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const std::string b = read_all(path("F.ffm"));
     for (std::size_t pos = 0; pos < b.size(); ++pos) {
         for (int mask : {0x01, 0x80, 0xff}) {
@@ -179,7 +180,7 @@ TEST_F(Ffm, EveryFlippedByteIsRefused) {
 }
 
 TEST_F(Ffm, FlipInTheDataIsACheckSumMismatch) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     std::string b = read_all(path("F.ffm"));
     b[kVal + 5] = static_cast<char>(b[kVal + 5] ^ 0x10);
     write_all(path("bad.ffm"), b);
@@ -194,16 +195,16 @@ TEST_F(Ffm, WrongMagicAndVersionAreRefused) {
     write_all(path("empty.ffm"), "");
     expect_refused(path("empty.ffm"), "truncated");
 
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     std::string b = read_all(path("F.ffm"));
-    poke<std::uint32_t>(b, 8, 2);
+    poke<std::uint32_t>(b, 8, 3);
     reseal(b);
-    write_all(path("v2.ffm"), b);
-    expect_refused(path("v2.ffm"), "unsupported .ffm format version 2");
+    write_all(path("v3.ffm"), b);
+    expect_refused(path("v3.ffm"), "unsupported .ffm format version 3");
 }
 
 TEST_F(Ffm, HugeCountsInTheHeaderAreRefusedBeforeAllocating) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const std::string b = read_all(path("F.ffm"));
     std::string huge = b;
     poke<std::uint64_t>(huge, 24, std::numeric_limits<std::uint64_t>::max());  // nnz
@@ -222,7 +223,7 @@ TEST_F(Ffm, HugeCountsInTheHeaderAreRefusedBeforeAllocating) {
 // Files whose checksum is right but whose content breaks a rule (a buggy or foreign writer):
 // each rule is enforced on its own.
 TEST_F(Ffm, StructureIsValidatedEvenWithAValidChecksum) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const std::string good = read_all(path("F.ffm"));
     struct Case {
         const char* name;
@@ -268,7 +269,7 @@ TEST_F(Ffm, MissingFileOrDirectoryIsAnInputError) {
 }
 
 TEST_F(Ffm, FingerprintMismatchIsRefused) {
-    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta);
+    write_ffm(path("F.ffm"), small_matrix(), small_scene(), kMeta, nullptr, 1);
     const FfmFile f = read_ffm(path("F.ffm"));
     Scene other = small_scene();
     other.fingerprint = 0xfedcba9876543210ULL;
@@ -374,7 +375,7 @@ TEST_F(Ffm, DocumentedPythonReaderReadsTheFile) {
 
     const Scene scene = small_scene();
     const CsrMatrix F = small_matrix();
-    write_ffm(path("F.ffm"), F, scene, kMeta);
+    write_ffm(path("F.ffm"), F, scene, kMeta, nullptr, 1);
     const std::string out = run_capture("cd '" + dir_.string() + "' && " + py + " read.py 2>&1");
 
     auto list = [](const auto& v) {

@@ -2,6 +2,9 @@
 // per patch and per object. Pure CPU; used by reports, tests and the bench.
 #pragma once
 
+#include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -29,5 +32,45 @@ struct ReciprocityStats {
 // progress, when given, is advanced by one per row of F (at 100k patches and 1.6e9 non-zeros
 // the pass takes minutes: its reads of F_ji are scattered over the whole matrix).
 ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene, Progress* progress = nullptr);
+
+// The same figures from rows fed one at a time in order (a matrix streamed to a file), in
+// memory independent of the number of entries: O(objects²) for the object factors and O(n) for
+// the entry counts per row and per column (which patch_reciprocity_banded plans with). The
+// in-memory functions above are this class fed every row of F, so both give identical numbers.
+class RowStreamChecks {
+public:
+    explicit RowStreamChecks(const Scene& scene);
+    void add(std::uint32_t i, RowView row);  // rows 0, 1, ... in order
+    RowSumStats row_sums() const;
+    std::vector<std::vector<double>> object_factors() const;  // as object_form_factors
+    double object_max_rel() const;                            // as ReciprocityStats::object_max_rel
+    const std::vector<std::uint32_t>& row_counts() const { return row_counts_; }
+    const std::vector<std::uint32_t>& col_counts() const { return col_counts_; }
+
+private:
+    const Scene& scene_;
+    std::uint32_t rows_ = 0;
+    double min_ = 0, max_ = 0, total_ = 0;
+    std::vector<std::vector<double>> g_;  // Σ A_i F_ij per object pair, not yet divided
+    std::vector<double> area_;            // per object, of the rows seen
+    std::vector<std::uint32_t> row_counts_, col_counts_;
+};
+
+// One pass over a matrix: calls its argument with every row, in order (e.g. FfmReader::for_each_row).
+using RowPass = std::function<void(const std::function<void(std::uint32_t, RowView)>&)>;
+
+// ReciprocityStats::patch_max_abs (the same number as reciprocity_stats gives for the matrix in
+// memory) in bounded memory: the patches are cut into bands whose rows and columns together hold
+// at most budget_entries entries (a band holds at least one patch), and for each band one pass
+// collects its rows and its columns (F_ji for i in the band), which are then merged pair by pair.
+// Memory: 8 bytes per entry of a band + O(n); time: one pass per band. row_counts and col_counts
+// are the entries per row and per column (RowStreamChecks). progress, when given, is advanced by
+// one per row of each pass (total: n × bands, bands from reciprocity_bands).
+double patch_reciprocity_banded(std::span<const double> areas, std::span<const std::uint32_t> row_counts,
+                                std::span<const std::uint32_t> col_counts, const RowPass& pass,
+                                std::uint64_t budget_entries, Progress* progress = nullptr);
+// The bands' first patches (and n at the end) patch_reciprocity_banded uses.
+std::vector<std::uint32_t> reciprocity_bands(std::span<const std::uint32_t> row_counts,
+                                             std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries);
 
 }  // namespace ffcube

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <ostream>
 
 namespace ffcube {
@@ -24,5 +25,26 @@ namespace ffcube {
 // file that is neither regular nor a directory (a terminal, a pipe, /dev/stdout) is written in
 // place: rename cannot replace it, and there is no previous content to protect.
 void write_file_atomically(const std::filesystem::path& path, const std::function<void(std::ostream&)>& writer);
+
+// The same for a file written over time (a matrix streamed row by row): the constructor creates
+// the temporary (IoError as above), stream() writes to it, commit() flushes, fsyncs and renames
+// it over path. Destroyed without commit() (an exception, a refused input), the temporary is
+// removed and the file at path is left as it was. write_file_atomically is this class.
+class AtomicFile {
+public:
+    explicit AtomicFile(const std::filesystem::path& path);
+    ~AtomicFile();
+    AtomicFile(const AtomicFile&) = delete;
+    AtomicFile& operator=(const AtomicFile&) = delete;
+
+    std::ostream& stream();
+    // Throws IoError naming the path when a write so far failed (e.g. the disk is full).
+    void check();
+    void commit();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 
 }  // namespace ffcube

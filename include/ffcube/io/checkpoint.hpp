@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -73,6 +74,10 @@ public:
     // again). Requires missing().empty(). Throws InputError when a record changed on disk since
     // it was read, IoError when reading fails.
     CsrMatrix assemble() const;
+
+    // Every row in order, read back from the log one record at a time (memory: one row), each
+    // record's checksum checked again; what assemble() is made of. Same requirements and errors.
+    void for_each_row(const std::function<void(std::uint32_t, RowView)>& f) const;
 
     std::string log_path() const;
 

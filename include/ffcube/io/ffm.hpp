@@ -10,6 +10,8 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -19,7 +21,9 @@
 
 namespace ffcube {
 
-inline constexpr std::uint32_t kFfmVersion = 1;
+// The version write_ffm and FfmWriter write: 2 (compact: delta-coded columns, zstd row blocks,
+// a checksum per block). read_ffm reads 1 and 2.
+inline constexpr std::uint32_t kFfmVersion = 2;
 
 // How the rows were made. Must not hold run-dependent data (see above).
 struct FfmMetadata {
@@ -31,9 +35,11 @@ struct FfmMetadata {
     bool operator==(const FfmMetadata&) const = default;
 };
 
-// A .ffm file as read and validated by read_ffm().
-struct FfmFile {
+// Everything in a .ffm file but the matrix rows.
+struct FfmHead {
     std::string source;  // the path it was read from, for messages
+    std::uint32_t version = 0;
+    std::uint32_t n = 0;                    // patches: rows and columns
     FfmMetadata meta;
     std::uint64_t fingerprint = 0;          // Scene::fingerprint of the scene the rows were computed for
     double max_patch_edge = 0.0;            // MeshStats::max_patch_edge of that scene, scene units
@@ -41,18 +47,90 @@ struct FfmFile {
     std::vector<double> areas;              // patch areas, scene units², each finite and > 0
     std::vector<std::uint32_t> objects;     // object index of each patch, < object_names.size()
     std::vector<std::string> object_names;  // as in the OBJ
-    CsrMatrix matrix;                       // n × n, every row filled
+};
+
+// A .ffm file as read and validated by read_ffm().
+struct FfmFile : FfmHead {
+    CsrMatrix matrix;  // n × n, every row filled
 };
 
 // Writes F (every row filled, F.size() == scene.size()) with the scene's patch areas, objects,
 // object names, fingerprint and meshing, atomically (see atomic_file.hpp). Throws IoError when
 // the file cannot be written.
 // progress, when given, is advanced by the bytes written (about ffm_payload_bytes(F) in all).
+// Version 2 (the default) advances progress by one per row, version 1 by the bytes written
+// (about ffm_payload_bytes(F) in all); ffm_progress_total gives the total for either.
 void write_ffm(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, const FfmMetadata& meta,
-               Progress* progress = nullptr);
+               Progress* progress = nullptr, std::uint32_t version = kFfmVersion);
 std::uint64_t ffm_payload_bytes(const CsrMatrix& F);
+std::uint64_t ffm_progress_total(const CsrMatrix& F, std::uint32_t version = kFfmVersion);
 
-// Reads and validates a .ffm file. Nothing in it is trusted before it is checked: magic, version,
+// Version 2, written as the rows come (rows in order 0..n-1), in memory bounded by one block of
+// rows: a row is coded into the current block, and a block full (about block_bytes of coded
+// rows) is compressed, checksummed and written. Atomic like write_ffm: the file appears under its
+// name only at finish(); destroyed before, nothing is left behind. Values are stored as the float
+// CsrMatrix keeps (a SparseRow's double is rounded as CsrMatrix::append_row rounds it), so a
+// streamed matrix and write_ffm of the same rows give byte-identical files.
+struct FfmWriterOptions {
+    std::uint32_t block_bytes = 1u << 20;  // coded bytes per block (before compression)
+    int zstd_level = 3;
+};
+class FfmWriter {
+public:
+    FfmWriter(const std::filesystem::path& path, const Scene& scene, const FfmMetadata& meta,
+              FfmWriterOptions options = {});
+    ~FfmWriter();
+    FfmWriter(const FfmWriter&) = delete;
+    FfmWriter& operator=(const FfmWriter&) = delete;
+
+    // Row rows_written(): columns strictly increasing and < n, values finite in [0, 1.001]
+    // (InternalError otherwise: a file the reader would refuse is never written).
+    void append_row(const SparseRow& row);
+    void append_row(RowView row);
+    std::uint32_t rows_written() const;
+    std::uint64_t nnz() const;
+    std::uint64_t bytes_written() const;
+    // Needs every row; writes the last block and the trailer, then renames the file into place.
+    // Throws IoError when a write fails (disk full).
+    void finish();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// One block of rows of a version-2 file, validated.
+struct FfmBlock {
+    std::uint32_t first_row = 0, rows = 0;
+    std::vector<std::uint64_t> row_ptr;  // rows + 1 offsets into col/val, from 0
+    std::vector<std::uint32_t> col;
+    std::vector<float> val;
+    RowView row(std::uint32_t k) const;  // k < rows: row first_row + k
+};
+
+// Reads a version-2 file block by block, in memory bounded by one block (and the head: areas
+// and objects). The head is validated on opening (as read_ffm does); each block is checked
+// (checksum, then its structure) when next() reaches it, and the trailer (row and entry counts,
+// the checksum over every block's) after the last: a damaged file throws InputError, naming the
+// block and its rows ("F.ffm: block 17 (rows 4352..4607): checksum mismatch").
+class FfmReader {
+public:
+    explicit FfmReader(const std::filesystem::path& path);
+    ~FfmReader();
+    FfmReader(FfmReader&&) noexcept;
+    const FfmHead& head() const;
+    // The next block; false after the last one (once the trailer has been checked).
+    bool next(FfmBlock& block);
+    void rewind();
+    // Every row in order (rewinds first).
+    void for_each_row(const std::function<void(std::uint32_t, RowView)>& f);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Reads and validates a .ffm file of either version. Nothing in it is trusted before it is checked: magic, version,
 // the file size implied by the header (checked before anything is allocated), the checksum, then
 // the structure (row_ptr monotone and ending at nnz, columns < n and strictly increasing in each
 // row, values finite and in [0, 1+1e-3], areas finite and > 0, object indices in range).

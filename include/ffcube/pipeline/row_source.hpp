@@ -84,5 +84,9 @@ struct MatrixChecks {
     ReciprocityStats reciprocity;
 };
 MatrixChecks report_matrix_checks(Report& report, const CsrMatrix& F, const Scene& scene, bool progress);
+// The keys report_matrix_checks sets (nnz, row_sums.*, reciprocity.*), from statistics computed
+// elsewhere (the streamed .ffm path computes them from the stream and the file).
+void report_matrix_stats(Report& report, std::uint64_t nnz, const RowSumStats& row_sums,
+                         const ReciprocityStats& reciprocity);
 
 }  // namespace ffcube
