@@ -165,9 +165,13 @@ public:
             ImGui_ImplGlfw_NewFrame();
             ImGui::NewFrame();
             handle_input();
-            if (!settling && solving()) step(StepBudget{options_.shots_per_frame ? options_.shots_per_frame
-                                                                             : std::numeric_limits<std::uint64_t>::max(),
-                                                    options_.budget_ms / 1000.0});
+            const bool shoot = !settling && solving();
+            const double frame_start = glfwGetTime();
+            const std::uint64_t shots_before = solver_.shots();
+            if (shoot && shots_while_shooting_ == 0 && shooting_end_ == 0.0) shooting_start_ = frame_start;
+            if (shoot) step(StepBudget{options_.shots_per_frame ? options_.shots_per_frame
+                                                                : std::numeric_limits<std::uint64_t>::max(),
+                                       options_.budget_ms / 1000.0});
             if (settling && !last && options_.pick) pick_window_pixel(options_.pick->first, options_.pick->second);
             if (show_ui_) draw_panels();
             ImGui::Render();
@@ -186,10 +190,18 @@ public:
                 }
             }
             glfwSwapBuffers(window_.window());
+            if (shoot) {
+                shooting_end_ = glfwGetTime();
+                shots_while_shooting_ += solver_.shots() - shots_before;
+            }
             if (close_inspector_) inspected_.reset(), close_inspector_ = false;
             if (last) break;
         }
-        info("viewer: {} shots, unshot fraction {:.3g}", solver_.shots(), solver_.unshot_fraction());
+        // Over the frames that shot: the throughput tools/bench_viewer.sh reads.
+        const double shooting = shooting_end_ - shooting_start_;
+        info("viewer: {} shots, unshot fraction {:.3g}; {} shots in {:.2f} s of frames that shot ({:.1f} shots/s)", solver_.shots(),
+             solver_.unshot_fraction(), shots_while_shooting_, shooting,
+             shooting > 0 ? static_cast<double>(shots_while_shooting_) / shooting : 0.0);
     }
 
 private:
@@ -198,7 +210,11 @@ private:
     void step(const StepBudget& budget) {
         Stopwatch watch;
         solver_.step(budget);
-        solver_seconds_ += watch.seconds();
+        record_step(watch.seconds());
+    }
+
+    void record_step(double seconds) {
+        solver_seconds_ += seconds;
         plot_.add(solver_seconds_, solver_.unshot_fraction());
         const double now = glfwGetTime();
         rate_window_.push_back({now, solver_.shots()});
@@ -443,6 +459,9 @@ private:
     double solver_seconds_ = 0.0;
     std::deque<std::pair<double, std::uint64_t>> rate_window_;
     std::string save_png_, save_exr_, status_;
+    // Frames that shot: from the start of the first to the end of the last, and their shots.
+    double shooting_start_ = 0.0, shooting_end_ = 0.0;
+    std::uint64_t shots_while_shooting_ = 0;
 };
 
 }  // namespace
