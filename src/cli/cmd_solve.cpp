@@ -25,11 +25,6 @@
 namespace ffcube::cli {
 namespace {
 
-// Shooters asked from the row provider per call (SolverOptions::batch): enough to keep 16
-// hemicube workers busy. Fixed rather than the thread count, because the shooting order (and so B
-// in its last digits) depends on the batch, and results must not depend on the thread count.
-constexpr std::uint32_t kShotBatch = 16;
-
 struct Options {
     SceneFlags scene;
     RowOptions rows;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <future>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -165,21 +166,40 @@ public:
             ImGui_ImplGlfw_NewFrame();
             ImGui::NewFrame();
             handle_input();
-            const bool shoot = !settling && solving();
-            const double frame_start = glfwGetTime();
-            const std::uint64_t shots_before = solver_.shots();
-            if (shoot && shots_while_shooting_ == 0 && shooting_end_ == 0.0) shooting_start_ = frame_start;
-            if (shoot) step(StepBudget{options_.shots_per_frame ? options_.shots_per_frame
-                                                                : std::numeric_limits<std::uint64_t>::max(),
-                                       options_.budget_ms / 1000.0});
             if (settling && !last && options_.pick) pick_window_pixel(options_.pick->first, options_.pick->second);
-            if (show_ui_) draw_panels();
+            if (show_ui_) draw_panels();  // its buttons may step or reset: the solver is idle here
             ImGui::Render();
 
             int width = 0, height = 0;
             glfwGetFramebufferSize(window_.window(), &width, &height);
-            if (width > 0 && height > 0) {
-                renderer_.set_colors(colors());
+            const bool draw = width > 0 && height > 0;
+            // The picture shows the state before this frame's shots (read now, before they start).
+            if (draw) renderer_.set_colors(colors());
+            // This frame's shots run on a thread while this thread draws: the rows are measured
+            // in the worker processes (forked before the window existed), which would otherwise
+            // idle while the window's context draws. The step's budget is the solver time per
+            // frame, or the previous frame's drawing if that took longer (no idle workers then).
+            // Saving an image reads the solver: that frame shoots first, then draws.
+            const bool shoot = !settling && solving();
+            const bool saving = !save_png_.empty() || !save_exr_.empty() || last;
+            const double frame_start = glfwGetTime();
+            const std::uint64_t shots_before = solver_.shots();
+            if (shoot && shots_while_shooting_ == 0 && shooting_end_ == 0.0) shooting_start_ = frame_start;
+            const StepBudget budget{options_.shots_per_frame ? options_.shots_per_frame : std::numeric_limits<std::uint64_t>::max(),
+                                    std::max(options_.budget_ms / 1000.0, draw_seconds_)};
+            std::future<double> stepping;
+            if (shoot && !saving) {
+                stepping = std::async(std::launch::async, [this, budget] {
+                    Stopwatch watch;
+                    solver_.step(budget);
+                    return watch.seconds();
+                });
+            } else if (shoot) {
+                step(budget);
+                if (draw) renderer_.set_colors(colors());
+            }
+            Stopwatch drawing;
+            if (draw) {
                 renderer_.draw(settings(width, height), width, height);
                 ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
                 if (!save_png_.empty()) write_screenshot(std::exchange(save_png_, {}), width, height);
@@ -190,6 +210,8 @@ public:
                 }
             }
             glfwSwapBuffers(window_.window());
+            draw_seconds_ = drawing.seconds();
+            if (stepping.valid()) record_step(stepping.get());
             if (shoot) {
                 shooting_end_ = glfwGetTime();
                 shots_while_shooting_ += solver_.shots() - shots_before;
@@ -462,6 +484,7 @@ private:
     // Frames that shot: from the start of the first to the end of the last, and their shots.
     double shooting_start_ = 0.0, shooting_end_ = 0.0;
     std::uint64_t shots_while_shooting_ = 0;
+    double draw_seconds_ = 0.0;  // the last frame's drawing, on this thread
 };
 
 }  // namespace
