@@ -24,7 +24,7 @@ struct Options {
     ViewerOptions viewer;
     std::string size = "1280x800", pick;
     double exposure = NAN;
-    std::uint32_t batch = 0;  // 0: one shooter per worker
+    std::uint32_t batch = kShotBatch;  // as solve
     bool no_ambient = false;
 };
 
@@ -46,7 +46,8 @@ int run(Options& o) {
     if (!std::isnan(o.exposure)) o.viewer.exposure = o.exposure;
     o.viewer.ambient = !o.no_ambient;
     o.solver.method = SolverMethod::Shoot;
-    if (o.batch) o.solver.batch = o.batch;
+    if (o.batch == 0) throw InputError("--batch 0: must be at least 1 shooter per call");
+    o.solver.batch = o.batch;
     validate(o.solver);
     validate(o.viewer);
     check_output_path("--screenshot", o.viewer.screenshot);
@@ -59,8 +60,6 @@ int run(Options& o) {
     // workers (each with its own headless context) instead of sharing one process's llvmpipe.
     RowSource rows = make_row_source(scene, o.rows);
     for (const std::string& line : describe(rows)) info("{}", line);
-    if (!o.batch)
-        o.solver.batch = rows.hemicube() ? rows.hemicube()->threads() : rows.raycast()->threads();
     run_viewer(scene, rows.provider(), rows.hemicube(), o.solver, o.viewer);
     return 0;
 }
@@ -79,7 +78,7 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--overshoot", s.overshoot, "over-relaxation factor w in [1, 2) (1: classic shooting)")
         ->default_val(s.overshoot);
     sub->add_option("--row-cache-mb", s.row_cache_mb, "bound of the cache of shooters' rows, MiB")->default_val(s.row_cache_mb);
-    sub->add_option("--batch", opts->batch, "shooters whose rows are computed together (default: one per worker)");
+    sub->add_option("--batch", opts->batch, "shooters whose rows are computed together (default: 16, as solve)");
     auto& v = opts->viewer;
     sub->add_option("--size", opts->size, "window size WxH")->default_val(opts->size);
     sub->add_option("--budget-ms", v.budget_ms, "solver time per frame, milliseconds (adjustable in the window)")

@@ -63,9 +63,14 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     // sides of a branch under a mask, so a path no piece takes still costs every pixel.
     std::string frag(shaders::item_frag);
     const std::size_t eol = frag.find('\n') + 1;
-    frag.insert(eol, fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
-                                 pieces.has_kind[4] ? 1 : 0));
+    const std::string kinds = fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
+                                          pieces.has_kind[4] ? 1 : 0);
+    std::string back_frag = frag;
+    frag.insert(eol, kinds);
+    back_frag.insert(eol, kinds + "#define BACK_PASS 1\n");
     program_ = gl::make_program(gl, "item shader", shaders::item_vert, frag);
+    // The back pass's own program: its discard (item.frag) would cost the front pass early depth tests.
+    back_program_ = gl::make_program(gl, "item shader (back faces)", shaders::item_vert, back_frag);
     target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
     half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
     vao_ = gl::make_vertex_array(gl);
@@ -102,9 +107,10 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     gl.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(pieces.gpu.size() * sizeof(GpuGrid)),
                   pieces.gpu.data(), GL_STATIC_DRAW);
     gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo_.id());
+    gl.UseProgram(back_program_.id());
+    u_back_face_ = gl.GetUniformLocation(back_program_.id(), "u_face");
     gl.UseProgram(program_.id());
     u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
-    u_back_ = gl.GetUniformLocation(program_.id(), "u_back");
     // All state the item pass needs is set here and never changed: nothing leaks in or out.
     gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
     gl.Enable(GL_DEPTH_TEST);
@@ -202,7 +208,7 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     // lets the first drawn win exact ties; 4 units were too few for the two faces' rounding,
     // measured). No slope factor: a back face seen edge-on (a wall standing on the sender's
     // plate) has a huge depth slope, and slope × 1 let what is behind it show through
-    // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (u_back,
+    // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (its program,
     // from cull()'s classification of the whole piece), not gl_FrontFacing: the rasterizer
     // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
     // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
@@ -212,15 +218,15 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
         if (pass == 1) {
             gl.Enable(GL_POLYGON_OFFSET_FILL);
             gl.PolygonOffset(0.0f, -64.0f);
+            gl.UseProgram(back_program_.id());  // discards centres outside the piece (item.frag)
         }
-        gl.Uniform1ui(u_back_, static_cast<GLuint>(pass));
         for (int f = 0; f < 5; ++f) {
             const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
             const std::size_t count = lists_[pass * 5 + f].size();
             if (count > 0) {
                 const auto m = face_matrix(fs, near);
                 gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
-                gl.UniformMatrix4fv(u_face_, 1, GL_FALSE, m.data());
+                gl.UniformMatrix4fv(pass == 0 ? u_face_ : u_back_face_, 1, GL_FALSE, m.data());
                 gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
                                 reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
             }
@@ -228,6 +234,7 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
         }
     }
     gl.Disable(GL_POLYGON_OFFSET_FILL);
+    gl.UseProgram(program_.id());
     gl.Finish();
     st.draw_seconds += watch.seconds();
     watch.restart();

@@ -56,11 +56,11 @@ private:
     // row throw that class of error, from inside the worker (thread or process). 0: unset.
     int test_fail_ = 0;
     std::array<FaceSpec, 5> face_m_, half_face_m_;
-    gl::Program program_;
+    gl::Program program_, back_program_;
     gl::ItemTarget target_, half_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
-    GLint u_face_ = -1, u_back_ = -1;
+    GLint u_face_ = -1, u_back_face_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
     std::vector<std::uint32_t> ids_, half_ids_;

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <deque>
 #include <filesystem>
+#include <future>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -165,17 +166,40 @@ public:
             ImGui_ImplGlfw_NewFrame();
             ImGui::NewFrame();
             handle_input();
-            if (!settling && solving()) step(StepBudget{options_.shots_per_frame ? options_.shots_per_frame
-                                                                             : std::numeric_limits<std::uint64_t>::max(),
-                                                    options_.budget_ms / 1000.0});
             if (settling && !last && options_.pick) pick_window_pixel(options_.pick->first, options_.pick->second);
-            if (show_ui_) draw_panels();
+            if (show_ui_) draw_panels();  // its buttons may step or reset: the solver is idle here
             ImGui::Render();
 
             int width = 0, height = 0;
             glfwGetFramebufferSize(window_.window(), &width, &height);
-            if (width > 0 && height > 0) {
-                renderer_.set_colors(colors());
+            const bool draw = width > 0 && height > 0;
+            // The picture shows the state before this frame's shots (read now, before they start).
+            if (draw) renderer_.set_colors(colors());
+            // This frame's shots run on a thread while this thread draws: the rows are measured
+            // in the worker processes (forked before the window existed), which would otherwise
+            // idle while the window's context draws. The step's budget is the solver time per
+            // frame, or the previous frame's drawing if that took longer (no idle workers then).
+            // Saving an image reads the solver: that frame shoots first, then draws.
+            const bool shoot = !settling && solving();
+            const bool saving = !save_png_.empty() || !save_exr_.empty() || last;
+            const double frame_start = glfwGetTime();
+            const std::uint64_t shots_before = solver_.shots();
+            if (shoot && shots_while_shooting_ == 0 && shooting_end_ == 0.0) shooting_start_ = frame_start;
+            const StepBudget budget{options_.shots_per_frame ? options_.shots_per_frame : std::numeric_limits<std::uint64_t>::max(),
+                                    std::max(options_.budget_ms / 1000.0, draw_seconds_)};
+            std::future<double> stepping;
+            if (shoot && !saving) {
+                stepping = std::async(std::launch::async, [this, budget] {
+                    Stopwatch watch;
+                    solver_.step(budget);
+                    return watch.seconds();
+                });
+            } else if (shoot) {
+                step(budget);
+                if (draw) renderer_.set_colors(colors());
+            }
+            Stopwatch drawing;
+            if (draw) {
                 renderer_.draw(settings(width, height), width, height);
                 ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
                 if (!save_png_.empty()) write_screenshot(std::exchange(save_png_, {}), width, height);
@@ -186,10 +210,20 @@ public:
                 }
             }
             glfwSwapBuffers(window_.window());
+            draw_seconds_ = drawing.seconds();
+            if (stepping.valid()) record_step(stepping.get());
+            if (shoot) {
+                shooting_end_ = glfwGetTime();
+                shots_while_shooting_ += solver_.shots() - shots_before;
+            }
             if (close_inspector_) inspected_.reset(), close_inspector_ = false;
             if (last) break;
         }
-        info("viewer: {} shots, unshot fraction {:.3g}", solver_.shots(), solver_.unshot_fraction());
+        // Over the frames that shot: the throughput tools/bench_viewer.sh reads.
+        const double shooting = shooting_end_ - shooting_start_;
+        info("viewer: {} shots, unshot fraction {:.3g}; {} shots in {:.2f} s of frames that shot ({:.1f} shots/s)", solver_.shots(),
+             solver_.unshot_fraction(), shots_while_shooting_, shooting,
+             shooting > 0 ? static_cast<double>(shots_while_shooting_) / shooting : 0.0);
     }
 
 private:
@@ -198,7 +232,11 @@ private:
     void step(const StepBudget& budget) {
         Stopwatch watch;
         solver_.step(budget);
-        solver_seconds_ += watch.seconds();
+        record_step(watch.seconds());
+    }
+
+    void record_step(double seconds) {
+        solver_seconds_ += seconds;
         plot_.add(solver_seconds_, solver_.unshot_fraction());
         const double now = glfwGetTime();
         rate_window_.push_back({now, solver_.shots()});
@@ -443,6 +481,10 @@ private:
     double solver_seconds_ = 0.0;
     std::deque<std::pair<double, std::uint64_t>> rate_window_;
     std::string save_png_, save_exr_, status_;
+    // Frames that shot: from the start of the first to the end of the last, and their shots.
+    double shooting_start_ = 0.0, shooting_end_ = 0.0;
+    std::uint64_t shots_while_shooting_ = 0;
+    double draw_seconds_ = 0.0;  // the last frame's drawing, on this thread
 };
 
 }  // namespace

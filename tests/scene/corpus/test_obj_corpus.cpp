@@ -22,9 +22,10 @@
 // inside. 'sphere_outward' is the same sphere as a modelling tool writes it (faces outward): from
 // outside, where it emits and receives, it sees nothing.
 //
-// Findings recorded below (search KNOWN ISSUE and TODO): with --correct none a few rows of the
-// torus, bent cube and terrain box lose single pixels to back faces; at default settings the
-// bent cube's rows are rebalanced to 0.993. Those cases assert a looser derived bound or are DISABLED_.
+// Findings recorded below (search KNOWN ISSUE): with --correct none one row of the terrain box
+// loses a single pixel to a back face; that case asserts a looser derived bound, its strict
+// version is DISABLED_. (The torus and bent cube lost pixels at silhouettes until back faces
+// stopped blocking pixel centres outside them, shaders/item.frag.)
 //
 // Each run of the real binary is bounded by ctest's TIMEOUT for this executable (120 s a case, set
 // in tests/CMakeLists.txt), and at default settings by the report's count of analytic
@@ -607,34 +608,28 @@ const std::string kNone = kSmall + " --correct none";
 TEST_F(Corpus, ClosedSphereRowsSumToOne) { expect_closed(formfactors(write(sphere_case(true)), kNone), "sphere"); }
 TEST_F(Corpus, ClosedCylinderRowsSumToOne) { expect_closed(formfactors(write(cylinder_case()), kNone), "cylinder"); }
 
-// KNOWN ISSUE (hemicube, src/gl; found by this corpus): inside the torus, the bent cube and the
-// terrain box a few rows lose isolated pixels to back faces, which a closed inward surface cannot
-// show from inside; nothing is missed. Measured at N = 32 with --correct none:
-//   torus    one row 3.3e-4 short, one 3.9e-5 (mean back-face fraction 1.1e-6); none with
-//            --no-rotate; the deficit shrinks with N like a pixel's weight (1.5e-4 at N = 64,
-//            3.5e-5 at N = 128);
-//   cc_cube  one row 1.1e-4 short (--no-rotate: five symmetric rows each 1.5e-5 short);
-//   terrain  10 rows 1.7e-5 to 3.9e-5 short (grazing pixels over the shallow floor), 7 with
-//            --no-rotate. Not the T-junctions: with walls split at every floor vertex it loses
-//            the same (min 0.99996); that mesh flattened to z = 0 loses nothing. It is the
-//            shallow folds between neighbouring triangles.
-// At default settings the correction rebalances closed rows and hides it (terrain 1 − 4e-8).
-// Until it is fixed these assert at most one heaviest pixel lost per row (and so at most that
-// on average), and the strict versions below are disabled.
+// Found by this corpus (hemicube, src/gl): inside the torus, the bent cube and the terrain box,
+// rows lost isolated pixels to back faces, which a closed inward surface cannot show from inside
+// (torus: one row 3.3e-4 short at N = 32; bent cube 1.1e-4; terrain 10 rows 1.7e-5 to 3.9e-5).
+// The cause was silhouettes: where a front piece folds into a back piece behind it, the
+// rasterizer (vertices snapped to 1/256 pixel) covers pixel centres just beyond the shared edge
+// with both, and there the back piece's plane, extrapolated, is nearer. Back faces now block only
+// pixel centres inside them (shaders/item.frag, BACK_PASS), and the strict tests hold.
+// KNOWN ISSUE (hemicube, src/gl): one terrain row (19) still loses one pixel (1.7e-5) at a grazing
+// 1.5 degrees. There the pixel's ray meets a front triangle at 4% less distance than the back one
+// behind it, and the back one still wins the depth test: the front triangle crosses a side
+// face's near plane (it passes beside the eye), and the rasterizer interpolates the depth of a
+// clipped triangle from vertices of depth 1 (reversed Z), which at depths near/t ~ 1e-7 (patch
+// size 0.1) is off by tens of percent. A fix computes such pieces' depth exactly per fragment
+// (plane and ray; an experiment writing gl_FragDepth for every piece costs the early depth test).
+// Until then the terrain asserts at most one heaviest pixel lost per row (and so at most that on
+// average), and its strict version is disabled.
 constexpr Closure kOnePixel{one_pixel(kN), one_pixel(kN)};
-TEST_F(Corpus, ClosedTorusRowsLoseAtMostOnePixel) {
-    expect_closed(formfactors(write(torus_case()), kNone), "torus", kOnePixel);
-}
-TEST_F(Corpus, ClosedBentCubeRowsLoseAtMostOnePixel) {
-    expect_closed(formfactors(write(cc_cube_case()), kNone), "cc_cube", kOnePixel);
-}
 TEST_F(Corpus, ClosedTerrainBoxRowsLoseAtMostOnePixel) {
     expect_closed(formfactors(write(terrain_case()), kNone), "terrain", kOnePixel);
 }
-TEST_F(Corpus, DISABLED_ClosedTorusRowsSumToOne) { expect_closed(formfactors(write(torus_case()), kNone), "torus"); }
-TEST_F(Corpus, DISABLED_ClosedBentCubeRowsSumToOne) {
-    expect_closed(formfactors(write(cc_cube_case()), kNone), "cc_cube");
-}
+TEST_F(Corpus, ClosedTorusRowsSumToOne) { expect_closed(formfactors(write(torus_case()), kNone), "torus"); }
+TEST_F(Corpus, ClosedBentCubeRowsSumToOne) { expect_closed(formfactors(write(cc_cube_case()), kNone), "cc_cube"); }
 TEST_F(Corpus, DISABLED_ClosedTerrainBoxRowsSumToOne) {
     expect_closed(formfactors(write(terrain_case()), kNone), "terrain");
 }
@@ -648,17 +643,16 @@ TEST_F(Corpus, ClosedTerrainBoxRowsSumToOneAtDefaultSettings) {
 }
 // The sphere and torus have quads up to 2.5e-8 of their size off their planes (6-decimal
 // coordinates): planar to the mesher (1e-6), and the analytic layer now projects them onto their
-// plane instead of refusing them (it refused them before, exit 2). The torus's rows are rebalanced
-// to 1, and its back-face pixels are the known issue above: at most one pixel's weight.
+// plane instead of refusing them (it refused them before, exit 2).
 TEST_F(Corpus, ClosedSphereRowsSumToOneAtDefaultSettings) {
     expect_closed(formfactors(write(sphere_case(true)), kSmall), "sphere");
 }
 TEST_F(Corpus, ClosedTorusRowsSumToOneAtDefaultSettings) {
-    expect_closed(formfactors(write(torus_case()), kSmall), "torus", {kRowSumTolerance, one_pixel(kN)});
+    expect_closed(formfactors(write(torus_case()), kSmall), "torus");
 }
-// KNOWN ISSUE (accuracy layer): the bent cube finishes but a row is rebalanced to 0.9931
-// (corrections.rebalance_max_change 0.037), worse than with --correct none.
-TEST_F(Corpus, DISABLED_ClosedBentCubeRowsSumToOneAtDefaultSettings) {
+// The bent cube's row with the back-face pixel (above) was judged open (1 − row sum 1.1e-4, far
+// above kClosedRowTolerance) and left at 0.9931 by the correction; with the pixel gone it is closed.
+TEST_F(Corpus, ClosedBentCubeRowsSumToOneAtDefaultSettings) {
     expect_closed(formfactors(write(cc_cube_case()), kSmall), "cc_cube");
 }
 
