@@ -12,6 +12,7 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/pipeline/solve.hpp"
 #include "ffcube/viewer/viewer.hpp"
 
 namespace ffcube::cli {

@@ -13,8 +13,9 @@
 
 namespace ffcube {
 
-// Shooters asked from the row provider per call (SolverOptions::batch): enough to keep 16
-// hemicube workers busy. Fixed rather than the thread count, because the shooting order (and so B
+// Shooters asked from the row provider per call (SolverOptions::batch) by solve and the viewer:
+// enough to keep 16 hemicube workers busy (the viewer once asked one per worker, and its workers
+// idled between batches: docs/benchmarks.md). Fixed rather than the thread count, because the shooting order (and so B
 // in its last digits) depends on the batch, and results must not depend on the thread count.
 inline constexpr std::uint32_t kShotBatch = 16;
 
