@@ -13,9 +13,6 @@
 
 namespace ffcube::accuracy {
 
-namespace {
-
-// Sutherland–Hodgman: the part of `in` where dot(v − o, m) ≥ 0.
 void clip_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out) {
     out.clear();
     const std::size_t k = in.size();
@@ -26,6 +23,8 @@ void clip_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vec
         if ((da > 0 && db < 0) || (da < 0 && db > 0)) out.push_back(a + (b - a) * (da / (da - db)));
     }
 }
+
+namespace {
 
 // p with its vertices within tol of `other`'s plane moved to tol in front of it.
 Poly lift(const Poly& p, const Patch& other, double tol) {

@@ -16,6 +16,10 @@ struct NearValueScratch {
     std::vector<double> weights;
 };
 
+// Sutherland–Hodgman: the part of `in` where dot(v − o, m) ≥ 0 (the part of a patch in front
+// of another's plane, which alone exchanges radiation with it).
+void clip_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out);
+
 // ff_polygon_polygon for two facing patches, with the vertices of each that lie within
 // plane_tolerance of the other's plane moved to that distance in front of it (rounding leaves
 // such vertices a hair behind the plane, and the contour integral's adaptive quadrature of the
