@@ -1,6 +1,7 @@
 // The occlusion (shaft) test of near pairs (see shaft_test.hpp).
 #include "accuracy/shaft_test.hpp"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -66,7 +67,11 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
         for (const Vec3& v : part) hull_points[m++] = v;
     }
     const std::span<const Vec3> hull(hull_points.data(), m);
-    const Box inflated{pair.lo - Vec3(tol), pair.hi + Vec3(tol)};
+    // Candidates: the patches whose boxes meet the hull's (a q whose box misses it is separated
+    // by an axis of the box), which is smaller than the pair's where a part was clipped off.
+    Box inflated{hull[0], hull[0]};
+    for (const Vec3& v : hull) inflated = Box{glm::min(inflated.lo, v), glm::max(inflated.hi, v)};
+    inflated = Box{inflated.lo - Vec3(tol), inflated.hi + Vec3(tol)};
     std::vector<std::uint32_t>& candidates = scratch.candidates;
     grid.query(inflated, candidates);
 
