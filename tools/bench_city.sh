@@ -5,7 +5,7 @@
 # sub-hemicubes, the refused near pairs, and the pieces classified one by one against all
 # pieces × hemicubes (what the BVH left out). BASELINE=path/to/ffcube runs an older build on
 # the same city in the same sitting, for a ratio.
-#   bash tools/bench_city.sh [TRIANGLES] [RESOLUTION] [SEED]     (default 22881 256 1)
+#   bash tools/bench_city.sh [TRIANGLES] [RESOLUTION] [SEED]     (default 22881 256 1; GROUND=lots|grid)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${FFCUBE_BUILD_DIR:-build}"
@@ -14,8 +14,8 @@ resolution="${2:-256}"
 seed="${3:-1}"
 dir="$(mktemp -d)"
 trap 'rm -rf "$dir"' EXIT
-python3 tools/gen_city.py "$dir/city.stl" --binary --triangles "$triangles" --seed "$seed" 2>/dev/null
-echo "city: $triangles triangles (seed $seed), N=$resolution, $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
+python3 tools/gen_city.py "$dir/city.stl" --binary --triangles "$triangles" --seed "$seed" --ground "${GROUND:-lots}" 2>/dev/null
+echo "city: $triangles triangles (seed $seed, ground ${GROUND:-lots}), N=$resolution, $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
 printf "%-10s %8s %8s %8s %10s %14s %14s\n" build "wall (s)" "cpu (s)" "rows/s" "sub-hemi" "refused pairs" "pieces tested"
 for which in ${BASELINE:+baseline} current; do
   bin="$build/ffcube"

@@ -10,9 +10,12 @@ indexing, outward normals, counter-clockwise from the outside. Deterministic fro
     python3 tools/gen_city.py city.stl --binary --triangles 5000 --seed 7
     ffcube formfactors city.stl --no-subdivide --resolution 256 -o city.ffm
 
---triangles is met exactly: buildings fill about 80 % of it (10 facets for a rectangle, 16 for
-an L), the ground grid (2 triangles a cell) the rest, and the few left over split ground
-triangles at an edge midpoint (a T-junction, as exports leave them).
+--triangles is met exactly: buildings (10 facets for a rectangle, 16 for an L) fill what the
+ground (2 triangles a rectangle) leaves, and the few left over split ground triangles at an edge
+midpoint (a T-junction, as exports leave them). The ground is cut along the lots and streets
+(--ground lots, the default: every lot's ground runs on under its building, as a parcel layer
+does), or is a square grid over the whole city (--ground grid: its triangles cross streets and
+run on under several buildings).
 """
 import argparse
 import math
@@ -83,27 +86,57 @@ def normal(t):
     return tuple(c / length for c in n)
 
 
-def city(triangles, seed):
+def lot_ground(k):
+    """The ground cut along the lots' and streets' edges: (2k + 1)² rectangles, 2 triangles each."""
+    cuts = [0.0]
+    for _ in range(k):
+        cuts += [cuts[-1] + STREET, cuts[-1] + STREET + LOT]
+    cuts.append(cuts[-1] + STREET)
+    tris = []
+    for i in range(len(cuts) - 1):
+        for j in range(len(cuts) - 1):
+            a, b = (cuts[i], cuts[j], 0.0), (cuts[i + 1], cuts[j], 0.0)
+            c, d = (cuts[i + 1], cuts[j + 1], 0.0), (cuts[i], cuts[j + 1], 0.0)
+            tris += quad(a, b, c, d)
+    return tris
+
+
+def city(triangles, seed, ground_kind):
     rng = random.Random(seed)
-    ground_budget = max(2, int(0.2 * triangles))
-    cells = max(1, int(math.sqrt(ground_budget / 2)))
-    budget = triangles - 2 * cells * cells
+    if ground_kind == "grid":
+        # About 20 % of the facets: a square grid over the whole city, its cells crossing streets
+        # and running on under the buildings.
+        cells = max(1, int(math.sqrt(max(2, int(0.2 * triangles)) / 2)))
+        budget = triangles - 2 * cells * cells
+    else:
+        # The fewest lots per side k whose ground, 2 (2k + 1)², and k² buildings of the largest
+        # kind (16 facets) reach the count: the buildings then never run out of lots.
+        k = 1
+        while 2 * (2 * k + 1) ** 2 + 16 * k * k < triangles:
+            k += 1
+        if k > 1 and 2 * (2 * k + 1) ** 2 > triangles:  # a tiny city: fewer lots, splits make up the rest
+            k -= 1
+        budget = triangles - 2 * (2 * k + 1) ** 2
     shapes = []
     used = 0
-    while True:
+    while budget > 0 and (ground_kind == "grid" or len(shapes) < k * k):
         b = building(0.0, 0.0, random.Random(rng.random()))
         if used + len(b) > budget:
             break
         shapes.append(b)
         used += len(b)
-    k = max(1, math.ceil(math.sqrt(len(shapes))))
+    if ground_kind == "grid":
+        k = max(1, math.ceil(math.sqrt(len(shapes))))
+        g = ground(STREET + k * (LOT + STREET), cells)
+    else:
+        g = lot_ground(k)
     pitch = LOT + STREET
     tris = []
     for n, b in enumerate(shapes):
         x0, y0 = STREET + (n % k) * pitch, STREET + (n // k) * pitch
         tris += [tuple((x + x0, y + y0, z) for x, y, z in t) for t in b]
-    g = ground(STREET + k * pitch, cells)
-    # Split the first ground triangles at the midpoint of their first edge until the count is met.
+    # Split ground triangles at the midpoint of their first edge until the count is met (the
+    # list grows by one each time, so g[i] exists).
     extra = triangles - len(tris) - len(g)
     for i in range(extra):
         a, b, c = g[i]
@@ -139,10 +172,13 @@ def main():
     ap.add_argument("--triangles", type=int, default=22881, help="facet count (default 22881)")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--binary", action="store_true", help="binary STL (default ASCII)")
+    ap.add_argument("--ground", choices=["lots", "grid"], default="lots",
+                    help="lots: the ground cut along lots and streets (default); grid: a square grid "
+                    "whose cells cross streets and run on under buildings")
     a = ap.parse_args()
     if a.triangles < 20:
         sys.exit("gen_city.py: --triangles must be at least 20")
-    tris = city(a.triangles, a.seed)
+    tris = city(a.triangles, a.seed, a.ground)
     assert len(tris) == a.triangles, (len(tris), a.triangles)
     (write_binary if a.binary else write_ascii)(a.output, tris)
     print(f"{a.output}: {len(tris)} triangles", file=sys.stderr)
