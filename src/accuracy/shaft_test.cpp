@@ -58,13 +58,16 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
     // brings in front. A triangle clipped by a plane has at most 4 vertices, a quad 5.
     std::array<Vec3, 10> hull_points{};
     std::size_t m = 0;
-    std::vector<Vec3>& part = scratch.part;
     for (const auto& [a, b] : {std::pair{i, j}, std::pair{j, i}}) {
         const Patch& pb = scene.patches[b];
-        clip_front(patches.polys[a].span(), pb.centroid - tol * pb.normal, pb.normal, part);
+        const std::size_t from = m;
+        clip_front_each(patches.polys[a].span(), pb.centroid - tol * pb.normal, pb.normal,
+                        [&](const Vec3& v) { hull_points[m++] = v; });
         // facing() found a vertex tol in front: fewer than 3 would be rounding; keep the whole.
-        if (part.size() < 3) part.assign(patches.polys[a].span().begin(), patches.polys[a].span().end());
-        for (const Vec3& v : part) hull_points[m++] = v;
+        if (m - from < 3) {
+            m = from;
+            for (const Vec3& v : patches.polys[a].span()) hull_points[m++] = v;
+        }
     }
     const std::span<const Vec3> hull(hull_points.data(), m);
     // Candidates: the patches whose boxes meet the hull's (a q whose box misses it is separated

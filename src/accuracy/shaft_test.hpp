@@ -16,7 +16,6 @@ struct ShaftScratch {
     std::vector<std::uint32_t> candidates;
     std::vector<Vec3> axes;
     std::vector<Vec3> segments;
-    std::vector<Vec3> part;  // a patch clipped to the front of the other's plane
 };
 
 // Separating-axis test between the convex hull of patches i ∪ j (the parts of each in front of
