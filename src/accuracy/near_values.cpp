@@ -13,19 +13,12 @@
 
 namespace ffcube::accuracy {
 
-namespace {
-
-// Sutherland–Hodgman: the part of `in` where dot(v − o, m) ≥ 0.
 void clip_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out) {
     out.clear();
-    const std::size_t k = in.size();
-    for (std::size_t e = 0; e < k; ++e) {
-        const Vec3 &a = in[e], &b = in[(e + 1) % k];
-        const double da = glm::dot(a - o, m), db = glm::dot(b - o, m);
-        if (da >= 0) out.push_back(a);
-        if ((da > 0 && db < 0) || (da < 0 && db > 0)) out.push_back(a + (b - a) * (da / (da - db)));
-    }
+    clip_front_each(in, o, m, [&](const Vec3& v) { out.push_back(v); });
 }
+
+namespace {
 
 // p with its vertices within tol of `other`'s plane moved to tol in front of it.
 Poly lift(const Poly& p, const Patch& other, double tol) {

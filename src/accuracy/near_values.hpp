@@ -3,7 +3,10 @@
 // spheres are well apart, a 6 × 6 Gauss rule on the smaller patch.
 #pragma once
 
+#include <span>
 #include <vector>
+
+#include <glm/geometric.hpp>
 
 #include "accuracy/patch_set.hpp"
 
@@ -15,6 +18,21 @@ struct NearValueScratch {
     std::vector<Vec3> points;            // the quadrature rule of a clipped patch
     std::vector<double> weights;
 };
+
+// Sutherland–Hodgman: the part of `in` where dot(v − o, m) ≥ 0 (the part of a patch in front
+// of another's plane, which alone exchanges radiation with it), its vertices handed to emit in
+// order (at most in.size() + 1 of them); clip_front collects them.
+template <class Emit>
+void clip_front_each(std::span<const Vec3> in, const Vec3& o, const Vec3& m, Emit&& emit) {
+    const std::size_t k = in.size();
+    for (std::size_t e = 0; e < k; ++e) {
+        const Vec3 &a = in[e], &b = in[(e + 1) % k];
+        const double da = glm::dot(a - o, m), db = glm::dot(b - o, m);
+        if (da >= 0) emit(a);
+        if ((da > 0 && db < 0) || (da < 0 && db > 0)) emit(a + (b - a) * (da / (da - db)));
+    }
+}
+void clip_front(std::span<const Vec3> in, const Vec3& o, const Vec3& m, std::vector<Vec3>& out);
 
 // ff_polygon_polygon for two facing patches, with the vertices of each that lie within
 // plane_tolerance of the other's plane moved to that distance in front of it (rounding leaves

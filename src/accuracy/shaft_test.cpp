@@ -1,12 +1,15 @@
 // The occlusion (shaft) test of near pairs (see shaft_test.hpp).
 #include "accuracy/shaft_test.hpp"
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <utility>
 
+#include "accuracy/near_values.hpp"
 #include "ffcube/geometry/tolerance.hpp"
 
 namespace ffcube::accuracy {
@@ -37,11 +40,6 @@ bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, doub
 bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
                       ShaftScratch& scratch) {
     const Scene& scene = patches.scene;
-    std::array<Vec3, 8> hull_points{};
-    std::size_t m = 0;
-    for (std::size_t k = 0; k < patches.polys[i].n; ++k) hull_points[m++] = patches.polys[i].v[k];
-    for (std::size_t k = 0; k < patches.polys[j].n; ++k) hull_points[m++] = patches.polys[j].v[k];
-    const std::span<const Vec3> hull(hull_points.data(), m);
     const Box pair = patches.pair_box(i, j);
     const double scale = glm::length(pair.hi - pair.lo);
     // Relative tolerance of touching: a q that enters the hull by less than 1e-9 of the pair's
@@ -51,7 +49,32 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
     const double coord = std::max({std::abs(pair.lo.x), std::abs(pair.lo.y), std::abs(pair.lo.z), std::abs(pair.hi.x),
                                    std::abs(pair.hi.y), std::abs(pair.hi.z)});
     const double tol = geometric_tolerance(1e-9, scale, coord);
-    const Box inflated{pair.lo - Vec3(tol), pair.hi + Vec3(tol)};
+    // The shaft is the hull of the parts of i and j in front of each other's plane: only
+    // segments between those carry radiation (cos θ ≤ 0 elsewhere), and the near value is the
+    // form factor of exactly those parts (exact_ff and separated_ff clip both polygons the same
+    // way). A ground triangle reaching under a wall, or a wall reaching below a floor, no
+    // longer drags its hidden part (and what stands on it) into the shaft. Each plane is moved
+    // back by tol, so the hull also holds what the near value's lift (within tol of the plane)
+    // brings in front. A triangle clipped by a plane has at most 4 vertices, a quad 5.
+    std::array<Vec3, 10> hull_points{};
+    std::size_t m = 0;
+    for (const auto& [a, b] : {std::pair{i, j}, std::pair{j, i}}) {
+        const Patch& pb = scene.patches[b];
+        const std::size_t from = m;
+        clip_front_each(patches.polys[a].span(), pb.centroid - tol * pb.normal, pb.normal,
+                        [&](const Vec3& v) { hull_points[m++] = v; });
+        // facing() found a vertex tol in front: fewer than 3 would be rounding; keep the whole.
+        if (m - from < 3) {
+            m = from;
+            for (const Vec3& v : patches.polys[a].span()) hull_points[m++] = v;
+        }
+    }
+    const std::span<const Vec3> hull(hull_points.data(), m);
+    // Candidates: the patches whose boxes meet the hull's (a q whose box misses it is separated
+    // by an axis of the box), which is smaller than the pair's where a part was clipped off.
+    Box inflated{hull[0], hull[0]};
+    for (const Vec3& v : hull) inflated = Box{glm::min(inflated.lo, v), glm::max(inflated.hi, v)};
+    inflated = Box{inflated.lo - Vec3(tol), inflated.hi + Vec3(tol)};
     std::vector<std::uint32_t>& candidates = scratch.candidates;
     grid.query(inflated, candidates);
 

@@ -18,7 +18,8 @@ struct ShaftScratch {
     std::vector<Vec3> segments;
 };
 
-// Separating-axis test between the convex hull of patches i ∪ j and each other patch q whose
+// Separating-axis test between the convex hull of patches i ∪ j (the parts of each in front of
+// the other's plane, see shaft_test.cpp) and each other patch q whose
 // bounding box meets the pair's (inflated by the tolerance of touching, 1e-9 of the pair's
 // size). Touching counts as separated (contact in a supporting plane of the hull blocks a set of
 // segments of measure zero). A missed separating axis can only make the test refuse: it may

@@ -32,6 +32,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.skipped_rows += b.skipped_rows;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
+    a.pieces_tested += b.pieces_tested;
     for (std::size_t f = 0; f < 5; ++f) {
         a.pieces_drawn[f] += b.pieces_drawn[f];
         a.pieces_culled[f] += b.pieces_culled[f];

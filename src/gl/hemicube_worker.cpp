@@ -127,6 +127,7 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     gl::check_gl(gl, "hemicube worker setup");
 
     local_.resize(slots * 3);
+    visit_.assign(scene.grids.size(), 0u);
     for (std::size_t f = 0; f < 5; ++f) {
         face_m_[f] = layout.faces()[f];
         half_face_m_[f] = half_layout_.faces()[f];
@@ -171,17 +172,27 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
     const HemicubeFrame fr = make_frame(pa.normal, angle);
     const Vec3 eye = at + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
-    // Vertex slots (piece corners, T-vertices) relative to the eye in the local frame,
-    // subtracted in double before they become floats: far-off coordinates (1e5) keep full
-    // float precision near the eye. Equal world positions give bitwise equal vertices.
-    const std::size_t ns = pieces_.pos.size();
+    // Only the pieces that may lie in front of the hemicube plane (PieceBvh; the others would
+    // be found wholly behind it by cull()): their vertex slots (piece corners, T-vertices)
+    // relative to the eye in the local frame, subtracted in double before they become floats:
+    // far-off coordinates (1e5) keep full float precision near the eye. Equal world positions
+    // give bitwise equal vertices. Other slots keep stale values that no index list names.
+    if (++visit_stamp_ == 0) {
+        std::fill(visit_.begin(), visit_.end(), 0u);
+        visit_stamp_ = 1;
+    }
+    const std::size_t in_front = pieces_.bvh.mark_in_front(eye, fr.normal, visit_, visit_stamp_);
+    st.pieces_behind += scene_.grids.size() - in_front;
     const Vec3* pos = pieces_.pos.data();
-    for (std::size_t s = 0; s < ns; ++s) {
-        const Vec3 d = pos[s] - eye;
-        float* out = &local_[s * 3];
-        out[0] = static_cast<float>(glm::dot(d, fr.tangent));
-        out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
-        out[2] = static_cast<float>(glm::dot(d, fr.normal));
+    for (std::size_t g = 0; g < scene_.grids.size(); ++g) {
+        if (visit_[g] != visit_stamp_) continue;
+        for (std::size_t s = pieces_.first[g]; s < pieces_.first[g + 1]; ++s) {
+            const Vec3 d = pos[s] - eye;
+            float* out = &local_[s * 3];
+            out[0] = static_cast<float>(glm::dot(d, fr.tangent));
+            out[1] = static_cast<float>(glm::dot(d, fr.bitangent));
+            out[2] = static_cast<float>(glm::dot(d, fr.normal));
+        }
     }
     cull(st);
     st.prepare_seconds += watch.seconds();
@@ -318,11 +329,15 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
 // corners lie outside one of the face's frustum planes; pieces wholly behind the hemicube
 // plane (z ≤ 0: this includes the patch's own piece and every piece coplanar with it) go
 // nowhere. Corners suffice for pieces drawn with T-vertices too: those lie on the edges.
+// Only the pieces render() marked as maybe in front are tested, in piece order (the draw
+// order, which decides exact depth ties, is the same as when every piece was tested).
 void Worker::cull(HemicubeStats& st) {
     for (auto& l : lists_) l.clear();
     const std::size_t ng = scene_.grids.size();
     st.pieces_considered += ng;
     for (std::size_t g = 0; g < ng; ++g) {
+        if (visit_[g] != visit_stamp_) continue;
+        ++st.pieces_tested;
         const std::uint32_t count = scene_.grids[g].count;
         const std::uint32_t base = pieces_.first[g];
         unsigned all = ~0u;

@@ -62,6 +62,8 @@ private:
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
     GLint u_face_ = -1, u_back_face_ = -1;
     std::vector<float> local_;
+    std::vector<std::uint32_t> visit_;  // per piece: == visit_stamp_ when it may be in front (PieceBvh)
+    std::uint32_t visit_stamp_ = 0;
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
     std::vector<std::uint32_t> ids_, half_ids_;
     std::vector<double> acc_;

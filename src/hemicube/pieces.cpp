@@ -258,6 +258,7 @@ ScenePieces prepare_pieces(std::span<const PatchGrid> grids) {
     }
     sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
     sp.has_twin = find_twins(grids);
+    sp.bvh = PieceBvh(PieceBvh::piece_boxes(grids));
     return sp;
 }
 

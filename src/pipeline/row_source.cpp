@@ -141,6 +141,7 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     // Culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
     r.set("left_out.pieces_considered", st.pieces_considered);
     r.set("left_out.pieces_behind_plane", st.pieces_behind);
+    r.set("left_out.pieces_tested", st.pieces_tested);
     const char* names[5] = {"top", "pos_x", "neg_x", "pos_y", "neg_y"};
     for (std::size_t f = 0; f < 5; ++f) {
         r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);

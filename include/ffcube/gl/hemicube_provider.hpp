@@ -40,6 +40,7 @@ struct HemicubeStats {
     // fragment shader finds the patch), summed over hemicubes.
     std::uint64_t pieces_considered = 0;              // pieces × hemicubes
     std::uint64_t pieces_behind = 0;                  // wholly behind the hemicube plane
+    std::uint64_t pieces_tested = 0;                  // classified one by one (the others: PieceBvh)
     std::array<std::uint64_t, 5> pieces_drawn{};      // per face (top, +x, -x, +y, -y)
     std::array<std::uint64_t, 5> pieces_culled{};     // in front of the plane but outside the face
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face

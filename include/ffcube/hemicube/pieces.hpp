@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "ffcube/geometry/polygon.hpp"
+#include "ffcube/hemicube/piece_bvh.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
@@ -52,6 +53,8 @@ struct ScenePieces {
     // can never z-fight, however steeply they are seen (a depth offset could not settle that
     // without letting things behind edge-on back faces through).
     std::vector<std::uint8_t> has_twin;
+    // Over the pieces' corner boxes: which pieces may lie in front of a hemicube's plane.
+    PieceBvh bvh;
 };
 
 // Builds ScenePieces: plane coordinates, piece kinds, T-vertices and their triangulation, twins.
