@@ -3,6 +3,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/mpi_glue.hpp"
 #include "cli/row_store.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -36,18 +37,29 @@ int run(const Options& o) {
 
     Report report;
     report.set("command", "formfactors");
-    Scene scene = load_and_mesh(o.scene.scene, report);
+    Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
     const FfmMetadata meta = row_metadata(o.rows);
-    std::optional<RowCheckpoint> checkpoint = open_checkpoint(o.checkpoint, scene, meta, report);
+    const bool distributed = mpi_distributed();  // under mpirun: a shard per rank instead
+    std::optional<RowCheckpoint> checkpoint =
+        distributed ? std::nullopt : open_checkpoint(o.checkpoint, scene, meta, report);
 
     Stopwatch total;
-    RowSource rows = make_row_source(scene, o.rows);
+    const RowOptions row_options = mpi_row_options(o.rows);
+    RowSource rows = make_row_source(scene, row_options);
     for (const std::string& line : describe(rows)) info("{}", line);
     RowProvider& provider = rows.provider();
 
     Stopwatch watch;
     watch.restart();
-    CsrMatrix computed = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
+    CsrMatrix computed;
+    if (distributed) {  // every rank its block; rank 0 gathers them and goes on alone
+        std::optional<CsrMatrix> all =
+            mpi_compute_matrix(provider, scene, row_options, o.checkpoint, meta, report, !o.scene.quiet);
+        if (!all) return 0;
+        computed = std::move(*all);
+    } else {
+        computed = compute_matrix(provider, checkpoint ? &*checkpoint : nullptr, !o.scene.quiet);
+    }
     const double seconds = watch.seconds();
     const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
     report.set("seconds", seconds);

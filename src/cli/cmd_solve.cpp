@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/mpi_glue.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
@@ -149,7 +150,12 @@ int run(const Options& o) {
     Stopwatch total;
     Report report;
     report.set("command", "solve");
-    const Scene scene = load_and_mesh(o.scene.scene, report);
+    const Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
+    // Under mpirun each rank solves its block of rows (docs/scaling.md).
+    const std::unique_ptr<RowBlocks> blocks = mpi_row_blocks(scene, o.rows);
+    so.blocks = blocks.get();
+    validate(so);
+    const RowOptions row_options = mpi_row_options(o.rows);
 
     // Rows: from the file, or hemicubes. The hemicube provider starts before this process makes a
     // GL context of its own (the picture's), so that its workers can be forked processes.
@@ -168,7 +174,7 @@ int run(const Options& o) {
         report.set("time.reading_matrix", watch.seconds());
         info("rows from {} ({} non-zeros, {} {})", o.matrix, ffm->matrix.nnz(), ffm->meta.method, ffm->meta.settings);
     } else {
-        computed_rows = make_row_source(scene, o.rows);
+        computed_rows = make_row_source(scene, row_options);
         for (const std::string& line : describe(computed_rows)) info("{}", line);
         provider = &computed_rows.provider();
         report.set("rows", provider->name());
@@ -193,6 +199,7 @@ int run(const Options& o) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done
     }
+    if (!mpi_root()) return 0;  // every rank has B; rank 0 writes
     if (!res.converged()) {  // exit 5 and only the report, unless --allow-unconverged (docs/solve.md)
         if (!o.report.empty() && (!o.allow_unconverged || res.stop == StopReason::Diverged)) report.write(o.report);
         require_converged(res, so, o.allow_unconverged);
