@@ -30,6 +30,15 @@ cmp one.ffm two.ffm || fail ".ffm differs"
 cmp one.mtx two.mtx || fail ".mtx differs"
 echo "ok: .ffm and .mtx byte-identical at -np 2"
 
+# Bad input under mpirun: rank 0's error, exit 2 from mpirun (MPI_Abort(2) ends every rank).
+mpi formfactors missing.obj -o bad.ffm 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "missing.obj: cannot read" bad.txt && [ ! -e bad.ffm ] || fail "missing scene: rc $rc, $(cat bad.txt)"
+mpi solve $rows --solver shoot 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "only jacobi and gauss-seidel" bad.txt || fail "shoot under mpirun: rc $rc, $(cat bad.txt)"
+echo "ok: bad input under mpirun exits 2 with the error"
+
 # 2. Checkpoint shards, a killed rank, resume.
 mpi formfactors $rows -o ck.ffm --checkpoint ck || fail "mpirun with --checkpoint"
 cmp one.ffm ck.ffm || fail "checkpointed .ffm differs"
@@ -40,15 +49,16 @@ big="$scene --patches 4000 --resolution 128 --threads 1 -q"
 "$ffcube" formfactors $big -o big-one.ffm || fail "one-process formfactors (big)"
 mpi formfactors $big -o big.ffm --checkpoint kill &
 launcher=$!
-# Rank 1: the descendant of mpirun whose environment says so, killed as soon as its shard has rows.
+# Rank 1: the descendant of mpirun whose environment says so, found first, then killed as soon as
+# its shard has rows.
 victim=""
-for _ in $(seq 1 1200); do
-    if [ -s kill/rank-1-of-2/rows.log ]; then
+for _ in $(seq 1 3000); do
+    if [ -z "$victim" ]; then
         for p in $(descendants "$launcher"); do
             { tr '\0' '\n' < "/proc/$p/environ" | grep -qx OMPI_COMM_WORLD_RANK=1; } 2>/dev/null && victim=$p
         done
-        [ -n "$victim" ] && break
     fi
+    [ -n "$victim" ] && [ -s kill/rank-1-of-2/rows.log ] && break
     sleep 0.02
 done
 [ -n "$victim" ] || fail "rank 1 never started writing its shard"
@@ -71,10 +81,12 @@ echo "ok: resume with another -np refused"
 # reports error_bound.mean_abs = Σ_i A_i |r_i| / ((1 − q) Σ A) per channel, a bound on the
 # area-weighted mean of |B* − B| (docs/solvers.md). So Σ_i A_i |B_two − B_one| / Σ A ≤ bound_one +
 # bound_two per channel: the test's tolerance, nothing widened.
+# The built-in Cornell box (it has a light; cube.obj has none).
+box="--patches 600 --resolution 64 --threads 1 -q"
 for solver in jacobi gauss-seidel; do
-    "$ffcube" solve $rows --solver $solver --tolerance 1e-6 --radiosity one-$solver.csv --report one-$solver.json ||
+    "$ffcube" solve $box --solver $solver --tolerance 1e-6 --radiosity one-$solver.csv --report one-$solver.json ||
         fail "one-process solve $solver"
-    mpi solve $rows --solver $solver --tolerance 1e-6 --radiosity two-$solver.csv --report two-$solver.json ||
+    mpi solve $box --solver $solver --tolerance 1e-6 --radiosity two-$solver.csv --report two-$solver.json ||
         fail "mpirun solve $solver"
     python3 - one-$solver.csv two-$solver.csv one-$solver.json two-$solver.json <<'PY' || fail "solve $solver: B differs"
 import csv, json, sys
