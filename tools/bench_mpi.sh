@@ -16,20 +16,24 @@ dir="$(mktemp -d)"
 trap 'rm -rf "$dir"' EXIT
 args="formfactors -q --patches $patches --resolution $resolution"
 printf "%-14s %9s %9s %9s\n" run "wall (s)" "rows (s)" "rows/s"
-for run in one np1 np2; do
-  case $run in
-    one) launch=() ;;
-    np1) launch=(mpirun --oversubscribe -np 1) ;;
-    np2) launch=(mpirun --oversubscribe -np 2) ;;
+launch() {
+  case $1 in
+    one) "$build/ffcube" $args -o "$dir/$1.ffm" --report "$dir/$1.json" ;;
+    np1) mpirun --oversubscribe -np 1 "$build/ffcube" $args -o "$dir/$1.ffm" --report "$dir/$1.json" ;;
+    np2) mpirun --oversubscribe -np 2 "$build/ffcube" $args -o "$dir/$1.ffm" --report "$dir/$1.json" ;;
   esac
-  : > "$dir/$run.times"
-  for r in $(seq "$runs"); do
+}
+# Interleaved (one, np1, np2, one, ...), so that a change in the machine's load hits every kind alike.
+for r in $(seq "$runs"); do
+  for run in one np1 np2; do
     start=$(date +%s.%N)
-    "${launch[@]}" "$build/ffcube" $args -o "$dir/$run.ffm" --report "$dir/$run.json"
+    launch $run
     end=$(date +%s.%N)
-    python3 -c "import json,sys; r=json.load(open('$dir/$run.json')); print($end-$start, r['seconds'], r['patches'])" \
+    python3 -c "import json; r=json.load(open('$dir/$run.json')); print($end-$start, r['seconds'], r['patches'])" \
       >> "$dir/$run.times"
   done
+done
+for run in one np1 np2; do
   python3 - "$dir/$run.times" "$run" <<'PY'
 import statistics, sys
 rows = [list(map(float, l.split())) for l in open(sys.argv[1])]
