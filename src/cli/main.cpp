@@ -27,7 +27,8 @@ int run(int argc, char** argv) {
         return app.exit(e) == 0 ? 0 : 2;
     }
     try {
-        ffcube::cli::mpi_start(argc, argv);  // under mpirun only (docs/scaling.md)
+        // Under mpirun only (docs/scaling.md).
+        ffcube::cli::mpi_start(argc, argv, app.get_subcommands().empty() ? "" : app.get_subcommands().front()->get_name());
         return action ? action() : 0;
     } catch (const ffcube::InputError& e) {
         std::fprintf(stderr, "ffcube: error: %s\n", e.what());

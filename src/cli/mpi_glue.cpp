@@ -27,12 +27,20 @@ unsigned long launched_size() {
     return std::getenv("PMIX_RANK") ? 1 : 0;
 }
 
+void refuse_other_commands(std::string_view command) {
+    if (launched_size() > 1 && command != "formfactors" && command != "solve")
+        throw InputError(fmt::format("ffcube {} under mpirun with {} processes: only formfactors and solve are split "
+                                     "over processes; run it as one process",
+                                     command, launched_size()));
+}
+
 }  // namespace
 
 #ifdef FFCUBE_HAVE_MPI
 
-void mpi_start(int& argc, char**& argv) {
+void mpi_start(int& argc, char**& argv, std::string_view command) {
     if (launched_size() == 0) return;
+    refuse_other_commands(command);
     mpi::start(argc, argv);
     if (mpi::rank() != 0) set_log_level(LogLevel::Quiet);  // one voice: rank 0's (warnings still print)
 }
@@ -124,7 +132,7 @@ std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& 
 
 #else  // built without MPI
 
-void mpi_start(int&, char**&) {
+void mpi_start(int&, char**&, std::string_view) {
     if (launched_size() > 1)
         throw InputError(fmt::format("started by an MPI launcher as {} processes, but this ffcube was built without "
                                      "MPI (install libopenmpi-dev and rebuild; docs/scaling.md): each process would "

@@ -5,6 +5,7 @@
 
 #include <memory>
 #include <optional>
+#include <string_view>
 
 #include "cli/row_store.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
@@ -18,8 +19,9 @@ namespace ffcube::cli {
 
 // First thing in main(), before any thread: starts MPI when an MPI launcher started this process
 // (OMPI_COMM_WORLD_SIZE, PMI_SIZE or PMIX_RANK in the environment). Throws InputError when
-// launched as several processes by a build without MPI (each would do all the work).
-void mpi_start(int& argc, char**& argv);
+// launched as several processes by a build without MPI, or for a command other than formfactors
+// and solve (each process would do all the work).
+void mpi_start(int& argc, char**& argv, std::string_view command);
 bool mpi_distributed();  // running under mpirun (even -np 1)
 bool mpi_root();         // rank 0, or not distributed: the process that writes outputs
 // The process's exit code; under mpirun a non-zero code aborts every rank (mpi::finish).

@@ -37,6 +37,9 @@ rc=$?
 mpi solve $rows --solver shoot 2> bad.txt
 rc=$?
 [ "$rc" -eq 2 ] && grep -q "only jacobi and gauss-seidel" bad.txt || fail "shoot under mpirun: rc $rc, $(cat bad.txt)"
+mpi view --patches 50 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "only formfactors and solve" bad.txt || fail "view under mpirun: rc $rc, $(cat bad.txt)"
 echo "ok: bad input under mpirun exits 2 with the error"
 
 # 2. Checkpoint shards, a killed rank, resume.
