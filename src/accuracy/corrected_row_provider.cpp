@@ -114,6 +114,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     // depends only on its row, so the rows do not depend on the batching or the thread count.
     plans_.assign(rows.size(), RowPlan::centre);
     const auto plan_batch = [&](std::size_t begin, std::size_t end) {
+        if (end <= begin) return;  // no rows (e.g. a resumed checkpoint that has them all)
         std::atomic<std::size_t> next{begin};
         const auto work = [&] {
             for (std::size_t pos; (pos = next++) < end;) {

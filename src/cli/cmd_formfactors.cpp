@@ -3,6 +3,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/mpi_glue.hpp"
 #include "cli/row_store.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -84,13 +85,14 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
 }
 
 // The matrix in memory: --enforce (it needs the whole matrix), .mtx, --ffm-version 1, or no output.
-Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, RowCheckpoint* checkpoint,
+// `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
+// `seconds`.
+Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
                   const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
     Figures f;
     Stopwatch watch;
-    CsrMatrix computed = compute_matrix(rows.provider(), checkpoint, progress);
-    f.seconds = watch.seconds();
+    f.seconds = seconds;
     const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
     f.nnz = F.nnz();
     f.row_sums = row_sum_stats(F);
@@ -122,12 +124,15 @@ int run(const Options& o) {
 
     Report report;
     report.set("command", "formfactors");
-    Scene scene = load_and_mesh(o.scene.scene, report);
+    Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
     const FfmMetadata meta = row_metadata(o.rows);
-    std::optional<RowCheckpoint> checkpoint = open_checkpoint(o.checkpoint, scene, meta, report);
+    const bool distributed = mpi_distributed();  // under mpirun: a shard per rank instead
+    std::optional<RowCheckpoint> checkpoint =
+        distributed ? std::nullopt : open_checkpoint(o.checkpoint, scene, meta, report);
 
     Stopwatch total;
-    RowSource rows = make_row_source(scene, o.rows);
+    const RowOptions row_options = mpi_row_options(o.rows);
+    RowSource rows = make_row_source(scene, row_options);
     for (const std::string& line : describe(rows)) info("{}", line);
 
     // The written matrix records its enforcement too (the checkpoint's rows are from before it,
@@ -135,10 +140,25 @@ int run(const Options& o) {
     FfmMetadata written = meta;
     if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
-    const bool stream = ffm && o.ffm_version == 2 && o.rows.enforce == EnforceRequest::None;
+    // Under mpirun rank 0 gathers the ranks' rows and writes from memory (the same bytes).
+    const bool stream = !distributed && ffm && o.ffm_version == 2 && o.rows.enforce == EnforceRequest::None;
     report.set("streamed", stream);
-    const Figures f = stream ? streamed(o, scene, rows.provider(), cp, written, report)
-                             : in_memory(o, scene, rows, cp, written, report);
+    Figures f;
+    if (stream) {
+        f = streamed(o, scene, rows.provider(), cp, written, report);
+    } else {
+        Stopwatch watch;
+        CsrMatrix computed;
+        if (distributed) {  // every rank its block; rank 0 gathers them and goes on alone
+            std::optional<CsrMatrix> all =
+                mpi_compute_matrix(rows.provider(), scene, row_options, o.checkpoint, meta, report, !o.scene.quiet);
+            if (!all) return 0;
+            computed = std::move(*all);
+        } else {
+            computed = compute_matrix(rows.provider(), cp, !o.scene.quiet);
+        }
+        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report);
+    }
     const double seconds = f.seconds;
     report.set("seconds", seconds);
     report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",

@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/mpi_glue.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
@@ -81,6 +82,7 @@ int run(const Options& o) {
     if (adaptive) {
         validate(o.adaptive);
         if (!o.matrix.empty()) throw InputError("--matrix with --target-error/--max-elements: adaptive meshing computes the rows of the elements it makes");
+        if (mpi_distributed()) throw InputError("--target-error/--max-elements under mpirun: adaptive meshing runs in one process (docs/scaling.md)");
         if (scene_options.patches == 0 && scene_options.max_patch_edge == 0.0 && scene_options.subdivide)
             scene_options.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
     }
@@ -88,7 +90,12 @@ int run(const Options& o) {
     Stopwatch total;
     Report report;
     report.set("command", "solve");
-    Scene scene = load_and_mesh(scene_options, report);
+    Scene scene = mpi_load_and_mesh(scene_options, report);  // under mpirun: rank 0's, broadcast
+    // Under mpirun each rank solves its block of rows (docs/scaling.md).
+    const std::unique_ptr<RowBlocks> blocks = mpi_row_blocks(scene, o.rows);
+    so.blocks = blocks.get();
+    validate(so);
+    const RowOptions row_options = mpi_row_options(o.rows);
 
     // Rows: from the file, or hemicubes. The hemicube provider starts before this process makes a
     // GL context of its own (the picture's), so that its workers can be forked processes.
@@ -107,7 +114,7 @@ int run(const Options& o) {
         report.set("time.reading_matrix", watch.seconds());
         info("rows from {} ({} non-zeros, {} {})", o.matrix, ffm->matrix.nnz(), ffm->meta.method, ffm->meta.settings);
     } else if (!adaptive) {
-        computed_rows = make_row_source(scene, o.rows);
+        computed_rows = make_row_source(scene, row_options);
         for (const std::string& line : describe(computed_rows)) info("{}", line);
         provider = &computed_rows.provider();
         report.set("rows", provider->name());
@@ -132,6 +139,7 @@ int run(const Options& o) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done
     }
+    if (!mpi_root()) return 0;  // every rank has B; rank 0 writes
     if (!res.converged()) {  // exit 5 and only the report, unless --allow-unconverged (docs/solve.md)
         if (!o.report.empty() && (!o.allow_unconverged || res.stop == StopReason::Diverged)) report.write(o.report);
         require_converged(res, so, o.allow_unconverged);

@@ -7,9 +7,12 @@
 #include <functional>
 
 #include "cli/commands.hpp"
+#include "cli/mpi_glue.hpp"
 #include "ffcube/core/error.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
     CLI::App app{"ffcube: radiosity form factors (view factors) by hemicubes, and radiosity solvers"};
     app.require_subcommand(1);
     app.set_version_flag("--version", "ffcube 0.1.0");
@@ -24,6 +27,8 @@ int main(int argc, char** argv) {
         return app.exit(e) == 0 ? 0 : 2;
     }
     try {
+        // Under mpirun only (docs/scaling.md).
+        ffcube::cli::mpi_start(argc, argv, app.get_subcommands().empty() ? "" : app.get_subcommands().front()->get_name());
         return action ? action() : 0;
     } catch (const ffcube::InputError& e) {
         std::fprintf(stderr, "ffcube: error: %s\n", e.what());
@@ -48,3 +53,8 @@ int main(int argc, char** argv) {
         return 1;
     }
 }
+
+}  // namespace
+
+// Under mpirun a failing rank's code aborts every rank (cli/mpi_glue.hpp); otherwise the code as is.
+int main(int argc, char** argv) { return ffcube::cli::mpi_finish(run(argc, argv)); }

@@ -8,6 +8,7 @@
 #include <EGL/egl.h>
 #include <EGL/eglext.h>
 
+#include <algorithm>
 #include <atomic>
 #include <mutex>
 #include <vector>
@@ -224,6 +225,8 @@ std::shared_ptr<EglDisplay> init_display(EGLDisplay dpy, const std::string& plat
     return d;
 }
 
+std::atomic<unsigned> preferred_egl_device{0};
+
 std::unique_ptr<GlContext> create_egl(std::vector<std::string>& tried) {
     const EglLib& egl = EglLib::get();
     if (!egl.ok()) {
@@ -236,11 +239,15 @@ std::unique_ptr<GlContext> create_egl(std::vector<std::string>& tried) {
         EGLDeviceEXT devices[16];
         EGLint n = 0;
         if (egl.QueryDevicesEXT(16, devices, &n) && n > 0) {
-            int hardware = 0;
+            std::vector<EGLint> hw;  // hardware devices, from the preferred one on (set_preferred_egl_device)
             for (EGLint i = 0; i < n; ++i) {
                 const char* dev_exts = egl.QueryDeviceStringEXT ? egl.QueryDeviceStringEXT(devices[i], EGL_EXTENSIONS) : nullptr;
-                if (has_extension(dev_exts, "EGL_MESA_device_software")) continue;
-                ++hardware;
+                if (!has_extension(dev_exts, "EGL_MESA_device_software")) hw.push_back(i);
+            }
+            if (!hw.empty())
+                std::rotate(hw.begin(), hw.begin() + static_cast<std::ptrdiff_t>(preferred_egl_device % hw.size()), hw.end());
+            const auto hardware = hw.size();
+            for (const EGLint i : hw) {
                 try {
                     auto d = init_display(egl.GetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr), "egl-device");
                     return std::make_unique<EglContext>(d);
@@ -366,6 +373,8 @@ std::atomic<bool> g_context_created{false};
 }
 
 bool gl::context_created_in_process() { return g_context_created; }
+
+void set_preferred_egl_device(unsigned index) { preferred_egl_device = index; }
 
 std::unique_ptr<GlContext> create_headless_context(Backend backend) {
     std::vector<std::string> tried;

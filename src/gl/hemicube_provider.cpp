@@ -94,7 +94,7 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
     // docs/benchmarks.md). A user's own LP_NUM_THREADS is respected. Must precede the first
     // context: llvmpipe reads it when its screen is created.
     setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
-    if (can_fork_workers()) {
+    if (im.opt.worker_processes && can_fork_workers()) {
         im.processes = true;
         for (unsigned t = 0; t < n; ++t) {
             auto remote = std::make_unique<ProcessEngine>(im.scene, im.pieces, im.layout, im.opt);

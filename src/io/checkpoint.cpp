@@ -345,4 +345,32 @@ void RowCheckpoint::for_each_row(const std::function<void(std::uint32_t, RowView
     }
 }
 
+void RowCheckpoint::read_rows(std::uint32_t first, std::uint32_t last, std::vector<std::uint32_t>& nnz,
+                              std::vector<std::uint32_t>& col, std::vector<float>& val) const {
+    FFCUBE_CHECK(first <= last && last <= size());
+    const fs::path lpath = log_path();
+    const std::uint32_t n = size();
+    std::vector<unsigned char> buf(kHeader);
+    for (std::uint32_t i = first; i < last; ++i) {
+        FFCUBE_CHECK_MSG(has(i), "read_rows() needs every row of its range");
+        auto changed = [&](const std::string& what) {
+            return InputError(fmt::format("{}: the record of row {} at offset {} changed on disk while in use ({})",
+                                          lpath.string(), i, offsets_[i], what));
+        };
+        pread_all(fd_, buf.data(), kHeader, offsets_[i], lpath);
+        const std::uint32_t count = get_u32(buf.data() + 8);
+        if (get_u32(buf.data()) != kMagic || get_u32(buf.data() + 4) != i || count > n) throw changed("bad header");
+        buf.resize(record_size(count));
+        pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
+        const std::string wrong = check_record(buf.data(), count, n);
+        if (!wrong.empty()) throw changed(wrong);
+        const std::size_t at = col.size();
+        col.resize(at + count);
+        val.resize(at + count);
+        std::memcpy(col.data() + at, buf.data() + kHeader, 4 * std::size_t(count));
+        std::memcpy(val.data() + at, buf.data() + kHeader + 4 * std::size_t(count), 4 * std::size_t(count));
+        nnz.push_back(count);
+    }
+}
+
 }  // namespace ffcube

@@ -79,6 +79,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.threads = o.threads;
     h.rotate = o.rotate;
     h.seed = o.seed;
+    h.worker_processes = o.worker_processes;
     return h;
 }
 

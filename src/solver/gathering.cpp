@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <numeric>
+#include <optional>
 
 #include <fmt/format.h>
 
@@ -17,7 +18,9 @@
 namespace ffcube::detail {
 namespace {
 
+// Rows [first, first + ptr.size() − 1) of F: all of them, or a process's block (RowBlocks).
 struct RowMatrix {
+    std::uint32_t first = 0;
     std::vector<std::uint64_t> ptr{0};
     std::vector<std::uint32_t> col;
     std::vector<double> val;
@@ -26,20 +29,26 @@ struct RowMatrix {
 };
 
 // Every row, checked against the stiffness rule before any solving.
-RowMatrix fetch_all(const Scene& scene, RowProvider& provider, const PatchInputs& in, double& seconds) {
+// Rows [first, last) (all of them when blocks is null).
+RowMatrix fetch_all(const Scene& scene, RowProvider& provider, const PatchInputs& in, double& seconds,
+                    const RowBlocks* blocks = nullptr) {
     const Stopwatch watch;
-    const std::uint32_t n = in.size();
     RowMatrix f;
+    f.first = blocks ? blocks->first() : 0;
+    const std::uint32_t last = blocks ? blocks->last() : in.size();
+    FFCUBE_CHECK(f.first <= last && last <= in.size());
+    const std::uint32_t n = last - f.first;
     f.ptr.reserve(std::size_t(n) + 1);
     f.self.assign(n, 0.0);
     f.sum.resize(n);
     std::vector<std::uint32_t> all(n);
-    std::iota(all.begin(), all.end(), 0u);
+    std::iota(all.begin(), all.end(), f.first);
     provider.compute_rows(all, [&](std::uint32_t i, const SparseRow& row) {
-        FFCUBE_CHECK(i + 1 == f.ptr.size());
-        f.sum[i] = check_row(scene, provider, i, row, in.rho[i]);
+        const std::uint32_t at = i - f.first;
+        FFCUBE_CHECK(at + 1 == f.ptr.size());
+        f.sum[at] = check_row(scene, provider, i, row, in.rho[i]);
         for (std::size_t k = 0; k < row.nnz(); ++k) {
-            if (row.col[k] == i) f.self[i] = row.val[k];
+            if (row.col[k] == i) f.self[at] = row.val[k];
             f.col.push_back(row.col[k]);
             f.val.push_back(row.val[k]);
         }
@@ -56,11 +65,13 @@ struct RadiosityChannel {
     std::vector<double> rho, e;
 
     std::uint32_t size() const { return static_cast<std::uint32_t>(rho.size()); }
-    double diagonal(std::uint32_t i) const { return 1.0 - rho[i] * f->self[i]; }
+    // Rows i of f's block only (f->first ≤ i < f->first + its rows).
+    double diagonal(std::uint32_t i) const { return 1.0 - rho[i] * f->self[i - f->first]; }
     double rhs(std::uint32_t i) const { return e[i]; }
     double off_diagonal_dot(std::uint32_t i, std::span<const double> x) const {
         double s = 0.0;
-        for (std::uint64_t k = f->ptr[i]; k < f->ptr[i + 1]; ++k)
+        const std::uint32_t at = i - f->first;
+        for (std::uint64_t k = f->ptr[at]; k < f->ptr[at + 1]; ++k)
             if (f->col[k] != i) s += f->val[k] * x[f->col[k]];
         return -rho[i] * s;
     }
@@ -85,25 +96,41 @@ std::array<RadiosityChannel, 3> channels(const RowMatrix& f, const PatchInputs& 
 //   absorbed = Σ A_i (1 − ρ_i) H_i, escaped = Σ A_i B_i (1 − rowsum_i), unshot = Σ A_i r_i.
 // emitted − absorbed − escaped − unshot = Σ_ij (A_i F_ij − A_j F_ji) B_i: zero for reciprocal rows,
 // otherwise the rows' reciprocity error, so relative_error is reported but not enforced here.
-// Also returns Σ_i A_i |r_i| over channels.
+// Also returns Σ_i A_i |r_i| over channels. With blocks, f holds this block's rows, and the sums
+// are taken over every block.
 EnergyBalance gathered_energy(const RowMatrix& f, const PatchInputs& in, std::span<const Vec3> b,
-                              double& residual_abs, Vec3* residual_channels = nullptr) {
+                              double& residual_abs, Vec3* residual_channels = nullptr, RowBlocks* blocks = nullptr) {
     EnergyBalance e;
     e.emitted = in.emitted;
-    Vec3 turnover = in.emitted;
+    Vec3 turnover = blocks ? Vec3(0.0) : in.emitted, channels(0.0);
     residual_abs = 0.0;
-    for (std::uint32_t i = 0; i < in.size(); ++i) {
+    for (std::uint32_t at = 0; at + 1 < f.ptr.size(); ++at) {
+        const std::uint32_t i = f.first + at;
         Vec3 h(0.0);
-        for (std::uint64_t k = f.ptr[i]; k < f.ptr[i + 1]; ++k) h += f.val[k] * b[f.col[k]];
+        for (std::uint64_t k = f.ptr[at]; k < f.ptr[at + 1]; ++k) h += f.val[k] * b[f.col[k]];
         const Vec3 r = in.emit[i] + in.rho[i] * h - b[i];
         const double a = in.area[i];
         e.absorbed += a * (Vec3(1.0) - in.rho[i]) * h;
-        e.escaped += a * b[i] * (1.0 - f.sum[i]);
+        e.escaped += a * b[i] * (1.0 - f.sum[at]);
         e.unshot += a * r;
         turnover += a * glm::abs(b[i]);
         residual_abs += a * (std::abs(r.x) + std::abs(r.y) + std::abs(r.z));
-        if (residual_channels) *residual_channels += a * glm::abs(r);
+        channels += a * glm::abs(r);
     }
+    if (blocks) {
+        std::array<double, 16> v{e.absorbed.x, e.absorbed.y, e.absorbed.z, e.escaped.x, e.escaped.y, e.escaped.z,
+                                 e.unshot.x,   e.unshot.y,   e.unshot.z,   turnover.x,  turnover.y,  turnover.z,
+                                 residual_abs, channels.x,   channels.y,   channels.z};
+        blocks->sum(v);
+        e.absorbed = Vec3(v[0], v[1], v[2]);
+        e.escaped = Vec3(v[3], v[4], v[5]);
+        e.unshot = Vec3(v[6], v[7], v[8]);
+        turnover = Vec3(v[9], v[10], v[11]);
+        residual_abs = v[12];
+        channels = Vec3(v[13], v[14], v[15]);
+    }
+    if (blocks) turnover += in.emitted;
+    if (residual_channels) *residual_channels += channels;
     for (int c = 0; c < 3; ++c)
         if (turnover[c] > 0.0)
             e.relative_error = std::max(
@@ -111,8 +138,9 @@ EnergyBalance gathered_energy(const RowMatrix& f, const PatchInputs& in, std::sp
     return e;
 }
 
-void set_stiffness_figures(SolveResult& r, const RowMatrix& f, const PatchInputs& in) {
+void set_stiffness_figures(SolveResult& r, const RowMatrix& f, const PatchInputs& in, RowBlocks* blocks = nullptr) {
     for (double s : f.sum) r.stiffness.max_row_sum = std::max(r.stiffness.max_row_sum, s);
+    if (blocks) blocks->max(std::span<double>(&r.stiffness.max_row_sum, 1));
     for (const Vec3& rho : in.rho) r.stiffness.rho_max = std::max({r.stiffness.rho_max, rho.x, rho.y, rho.z});
 }
 
@@ -123,7 +151,8 @@ SolveResult solve_sweeps(const Scene& scene, RowProvider& provider, const Solver
     if (!(in.emitted_total > 0.0)) return nothing_to_do(scene, options.method);
     SolveResult r;
     r.method = options.method;
-    const RowMatrix f = fetch_all(scene, provider, in, r.timings.rows);
+    RowBlocks* blocks = options.blocks;
+    const RowMatrix f = fetch_all(scene, provider, in, r.timings.rows, blocks);
     const std::array<RadiosityChannel, 3> ch = channels(f, in);
     std::array<std::vector<double>, 3> x{ch[0].e, ch[1].e, ch[2].e};  // start from B = E
     const std::array<std::span<double>, 3> xs{x[0], x[1], x[2]};
@@ -133,20 +162,33 @@ SolveResult solve_sweeps(const Scene& scene, RowProvider& provider, const Solver
     control.tolerance = options.tolerance;
     control.max_sweeps = effective_max_iterations(options, scene.size());
     ConvergenceHistory history(options.history_capacity);
+    std::optional<SweepRange> range;
+    if (blocks) {
+        range.emplace();
+        range->first = blocks->first();
+        range->last = blocks->last();
+        range->share = [blocks](std::span<double> v) { blocks->share(v); };
+        range->total = [blocks](double v) {
+            blocks->sum(std::span<double>(&v, 1));
+            return v;
+        };
+    }
     const Stopwatch watch;
     const SweepOutcome out = sweep_until<RadiosityChannel>(
-        ch, xs, in.area, in.emitted_total, control, [&](std::uint64_t sweeps, double fraction) {
+        ch, xs, in.area, in.emitted_total, control,
+        [&](std::uint64_t sweeps, double fraction) {
             history.offer(watch.seconds(), fraction);
             if (options.progress && sweeps > 0)
                 options.progress(SolveProgress{options.method, sweeps, fraction, watch.seconds()});
-        });
+        },
+        range ? &*range : nullptr);
     r.timings.solve = watch.seconds();
 
     r.radiosity.resize(in.size());
     for (std::uint32_t i = 0; i < in.size(); ++i) r.radiosity[i] = Vec3(x[0][i], x[1][i], x[2][i]);
     double residual_abs = 0.0;
-    r.energy = gathered_energy(f, in, r.radiosity, residual_abs, &r.unshot_abs);
-    set_stiffness_figures(r, f, in);
+    r.energy = gathered_energy(f, in, r.radiosity, residual_abs, &r.unshot_abs, blocks);
+    set_stiffness_figures(r, f, in, blocks);
     r.iterations = out.sweeps;
     r.unshot_fraction = out.residual_fraction;
     r.stop = out.stop;

@@ -50,6 +50,12 @@ void validate(const SolverOptions& o) {
     if (o.history_capacity < 2) throw InputError("solver history capacity: must keep at least 2 samples");
     if (!(o.row_cache_mb >= 0.0) || !(o.row_cache_mb <= 1e12))
         throw InputError(fmt::format("--row-cache-mb {}: must be a number of MiB in [0, 1e12]", o.row_cache_mb));
+    if (o.blocks && o.method != SolverMethod::Jacobi && o.method != SolverMethod::GaussSeidel)
+        throw InputError(fmt::format("--solver {}: only jacobi and gauss-seidel are split over several processes "
+                                     "(mpirun); run {} in one process",
+                                     to_string(o.method), to_string(o.method)));
+    if (o.blocks && !(o.blocks->first() <= o.blocks->last()))
+        throw InputError("solver row block: first row after last");
 }
 
 std::uint64_t effective_max_iterations(const SolverOptions& o, std::size_t patches) {

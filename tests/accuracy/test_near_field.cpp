@@ -393,6 +393,18 @@ TEST(NearField, SeparatedNearPairsMatchTheContourIntegral) {
     EXPECT_GE(separated, 60);
 }
 
+// Asking for no rows hands nothing to the sink and does not fail (a resumed checkpoint, or an MPI
+// rank's shard, that already holds every row asks for none).
+TEST(NearField, NoRowsAskedIsNothingToDo) {
+    const Scene s = test::make_scene(perpendicular_squares(), 0.25);
+    const CsrMatrix plain = midpoint_matrix(s);
+    MatrixRowProvider inner(plain);
+    CorrectedRowProvider corrected(s, inner);
+    std::size_t delivered = 0;
+    corrected.compute_rows({}, [&](std::uint32_t, const SparseRow&) { ++delivered; });
+    EXPECT_EQ(delivered, 0u);
+}
+
 }  // namespace
 }  // namespace ffcube
 

@@ -60,4 +60,10 @@ private:
 // backend tried and why it failed. The returned context is not current on any thread.
 std::unique_ptr<GlContext> create_headless_context(Backend backend);
 
+// Which hardware EGL device the device platform tries first: device (index mod the number of
+// hardware devices) of the ones EGL lists, then the others in order. 0 (the default) is the
+// first. Several processes on one node (MPI ranks) each pass their local rank, so that each
+// drives its own GPU (src/mpi, docs/scaling.md). Set before the first context is created.
+void set_preferred_egl_device(unsigned index);
+
 }  // namespace ffcube

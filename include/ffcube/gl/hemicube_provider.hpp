@@ -26,6 +26,9 @@ struct HemicubeOptions {
     Backend backend = Backend::Auto;
     bool rotate = true;       // rotate each hemicube about the normal by a seeded angle
     std::uint64_t seed = 0x5eed;
+    // Workers may be forked processes (when this process has no thread and no context yet).
+    // false: always threads, each with its own context; an MPI rank must not fork (src/mpi).
+    bool worker_processes = true;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers

@@ -74,6 +74,11 @@ public:
     // again). Requires missing().empty(). Throws InputError when a record changed on disk since
     // it was read, IoError when reading fails.
     CsrMatrix assemble() const;
+    // Rows [first, last) (each stored), read back like assemble() and appended to the arrays:
+    // nnz[k] entries of row first + k, their columns and values. How one MPI rank's shard gives
+    // back its block of rows (src/mpi).
+    void read_rows(std::uint32_t first, std::uint32_t last, std::vector<std::uint32_t>& nnz,
+                   std::vector<std::uint32_t>& col, std::vector<float>& val) const;
 
     // Every row in order, read back from the log one record at a time (memory: one row), each
     // record's checksum checked again; what assemble() is made of. Same requirements and errors.

@@ -45,6 +45,9 @@ struct RowOptions {
     // Both methods: worker threads (0: every core) and the seed of angles or rays.
     unsigned threads = 0;
     std::uint64_t seed = 0x5eed;
+    // Hemicube workers may be forked processes (HemicubeOptions::worker_processes); the MPI
+    // commands set false. Rows do not depend on it.
+    bool worker_processes = true;
     // Ray caster: rays per patch (≥ 1).
     std::uint64_t rays = 4096;
     // The near-field correction (accuracy/near_field.hpp) and its far field.

@@ -88,6 +88,16 @@ struct SweepControl {
     double stagnation_progress = 1e-6;
 };
 
+// A sweep of some rows only: this process's block of a solve split over processes
+// (solver/row_blocks.hpp). After each sweep, share(x[k]) fills every other block's rows of x[k]
+// with its owner's newest values; total(v) is the sum of v over all blocks, the same on each.
+// Gauss–Seidel is then Gauss–Seidel inside a block and Jacobi between blocks (docs/scaling.md).
+struct SweepRange {
+    std::uint32_t first = 0, last = 0;
+    std::function<void(std::span<double> x)> share;
+    std::function<double(double)> total;
+};
+
 struct SweepOutcome {
     StopReason stop = StopReason::Running;
     std::uint64_t sweeps = 0;
@@ -100,17 +110,21 @@ struct SweepOutcome {
 //   fraction = Σ_k Σ_i weights[i] |r_ki| / reference
 // and calls on_sweep(sweeps, fraction) (may be empty; also called once with sweeps = 0 for the
 // start vector). x[k] is system k's start vector and result.
-// reference > 0. Allocates its Jacobi scratch once, before the first sweep.
+// reference > 0. Allocates its Jacobi scratch once, before the first sweep. With a range, only
+// its rows are swept and measured (SweepRange); every block then takes the same decisions.
 template <SweepSystem S>
 SweepOutcome sweep_until(std::span<const S> systems, std::span<const std::span<double>> x,
                          std::span<const double> weights, double reference, const SweepControl& control,
-                         const std::function<void(std::uint64_t, double)>& on_sweep) {
+                         const std::function<void(std::uint64_t, double)>& on_sweep,
+                         const SweepRange* range = nullptr) {
+    const std::uint32_t first = range ? range->first : 0;
+    const auto last_of = [&](const S& s) { return range ? range->last : s.size(); };
     const auto fraction = [&] {
         double sum = 0.0;
         for (std::size_t k = 0; k < systems.size(); ++k)
-            for (std::uint32_t i = 0; i < systems[k].size(); ++i)
+            for (std::uint32_t i = first; i < last_of(systems[k]); ++i)
                 sum += weights[i] * std::abs(residual(systems[k], i, x[k]));
-        return sum / reference;
+        return (range ? range->total(sum) : sum) / reference;
     };
     std::vector<double> scratch(control.sweep == Sweep::Jacobi && !systems.empty() ? systems[0].size() : 0);
     DivergenceMonitor monitor(control.divergence_window, control.divergence_growth);
@@ -129,12 +143,14 @@ SweepOutcome sweep_until(std::span<const S> systems, std::span<const std::span<d
             return out;
         }
         for (std::size_t k = 0; k < systems.size(); ++k) {
+            const std::uint32_t last = last_of(systems[k]);
             if (control.sweep == Sweep::Jacobi) {
-                jacobi_sweep(systems[k], x[k], scratch);
-                std::copy(scratch.begin(), scratch.end(), x[k].begin());
+                jacobi_sweep(systems[k], x[k], scratch, first, last);
+                std::copy(scratch.begin() + first, scratch.begin() + last, x[k].begin() + first);
             } else {
-                gauss_seidel_sweep(systems[k], x[k]);
+                gauss_seidel_sweep(systems[k], x[k], first, last);
             }
+            if (range) range->share(x[k]);
         }
         ++out.sweeps;
         out.residual_fraction = fraction();

@@ -24,17 +24,26 @@ concept SweepSystem = requires(const S& s, std::uint32_t i, std::span<const doub
 
 // One Jacobi sweep: next_i = (b_i − Σ_{j≠i} a_ij x_j) / a_ii, every i from the same old x.
 // x and next must not overlap.
+// The overloads with [first, last) update only those rows (a block of a solve split over
+// processes, solver/row_blocks.hpp); x is always the whole vector.
+template <SweepSystem S>
+void jacobi_sweep(const S& s, std::span<const double> x, std::span<double> next, std::uint32_t first,
+                  std::uint32_t last) {
+    for (std::uint32_t i = first; i < last; ++i) next[i] = (s.rhs(i) - s.off_diagonal_dot(i, x)) / s.diagonal(i);
+}
 template <SweepSystem S>
 void jacobi_sweep(const S& s, std::span<const double> x, std::span<double> next) {
-    const std::uint32_t n = s.size();
-    for (std::uint32_t i = 0; i < n; ++i) next[i] = (s.rhs(i) - s.off_diagonal_dot(i, x)) / s.diagonal(i);
+    jacobi_sweep(s, x, next, 0, s.size());
 }
 
 // One Gauss–Seidel sweep in index order, in place: x_i uses the x_j (j < i) already updated.
 template <SweepSystem S>
+void gauss_seidel_sweep(const S& s, std::span<double> x, std::uint32_t first, std::uint32_t last) {
+    for (std::uint32_t i = first; i < last; ++i) x[i] = (s.rhs(i) - s.off_diagonal_dot(i, x)) / s.diagonal(i);
+}
+template <SweepSystem S>
 void gauss_seidel_sweep(const S& s, std::span<double> x) {
-    const std::uint32_t n = s.size();
-    for (std::uint32_t i = 0; i < n; ++i) x[i] = (s.rhs(i) - s.off_diagonal_dot(i, x)) / s.diagonal(i);
+    gauss_seidel_sweep(s, x, 0, s.size());
 }
 
 // Residual of row i: r_i = b_i − (A x)_i.

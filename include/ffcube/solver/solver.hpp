@@ -17,6 +17,7 @@
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/scene/scene.hpp"
 #include "ffcube/solver/convergence.hpp"
+#include "ffcube/solver/row_blocks.hpp"
 
 namespace ffcube {
 
@@ -71,6 +72,10 @@ struct SolverOptions {
     // (docs/solvers.md, "Stiff scenes"). false: plain shooting to the end (the stepping API, tests
     // of shooting itself).
     bool stiff_switch = true;
+    // jacobi and gauss-seidel only: solve this process's block of rows, sharing B with the
+    // other blocks after each sweep (solver/row_blocks.hpp; `mpirun … ffcube solve`). Every block
+    // returns the whole B. nullptr: one process, every row.
+    RowBlocks* blocks = nullptr;
 };
 
 // InputError naming the option and the rule when an option is out of range.

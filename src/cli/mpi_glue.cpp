@@ -1,0 +1,155 @@
+#include "cli/mpi_glue.hpp"
+
+#include <fmt/format.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+#include <thread>
+#include <algorithm>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/progress.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
+#ifdef FFCUBE_HAVE_MPI
+#include "ffcube/mpi/world.hpp"
+#endif
+
+namespace ffcube::cli {
+namespace {
+
+// The number of processes an MPI launcher started (0: not launched by one; 1 when only PMIx
+// says so without a size).
+unsigned long launched_size() {
+    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+        if (const char* v = std::getenv(name)) return std::strtoul(v, nullptr, 10);
+    return std::getenv("PMIX_RANK") ? 1 : 0;
+}
+
+void refuse_other_commands(std::string_view command) {
+    if (launched_size() > 1 && command != "formfactors" && command != "solve")
+        throw InputError(fmt::format("ffcube {} under mpirun with {} processes: only formfactors and solve are split "
+                                     "over processes; run it as one process",
+                                     command, launched_size()));
+}
+
+}  // namespace
+
+#ifdef FFCUBE_HAVE_MPI
+
+void mpi_start(int& argc, char**& argv, std::string_view command) {
+    if (launched_size() == 0) return;
+    refuse_other_commands(command);
+    mpi::start(argc, argv);
+    if (mpi::rank() != 0) set_log_level(LogLevel::Quiet);  // one voice: rank 0's (warnings still print)
+}
+
+bool mpi_distributed() { return mpi::active(); }
+bool mpi_root() { return !mpi::active() || mpi::rank() == 0; }
+int mpi_finish(int code) { return mpi::finish(code); }
+
+RowOptions mpi_row_options(RowOptions rows) {
+    if (!mpi::active()) return rows;
+    rows.worker_processes = false;
+    if (rows.threads == 0) rows.threads = std::max(1u, std::thread::hardware_concurrency() / mpi::local_size());
+    return rows;
+}
+
+Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) {
+    if (!mpi::active()) return load_and_mesh(options, report);
+    std::optional<Scene> scene;
+    if (mpi::rank() == 0) scene = load_and_mesh(options, report);
+    Scene s = mpi::broadcast_scene(std::move(scene));
+    report.set("mpi.ranks", mpi::size());
+    return s;
+}
+
+std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& scene, const RowOptions& rows,
+                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                            Report& report, bool progress) {
+    namespace fs = std::filesystem;
+    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, rows);
+    const int r = mpi::rank(), k = mpi::size();
+    const std::uint32_t first = bounds[r], last = bounds[r + 1];
+    info("{} ranks; rank 0 computes rows {}..{} of {}", k, bounds[0], bounds[1], scene.size());
+    report.set("mpi.rows_rank0", bounds[1] - bounds[0]);
+    mpi::RowBlock mine;
+    if (checkpoint.dir.empty()) {
+        std::vector<std::uint32_t> list;
+        for (std::uint32_t i = first; i < last; ++i) list.push_back(i);
+        Progress bar("rows (rank 0's block)", list.size(), progress && r == 0);
+        provider.compute_rows(list, [&](std::uint32_t, const SparseRow& row) {
+            mine.nnz.push_back(static_cast<std::uint32_t>(row.nnz()));
+            mine.col.insert(mine.col.end(), row.col.begin(), row.col.end());
+            for (double v : row.val) mine.val.push_back(static_cast<float>(v));  // as CsrMatrix::append_row
+            bar.add();
+        });
+    } else {
+        // DIR holds one shard per rank, each a checkpoint of its own (io/checkpoint.hpp).
+        const fs::path dir = checkpoint.dir;
+        const fs::path shard = dir / fmt::format("rank-{}-of-{}", r, k);
+        if (!checkpoint.resume && r == 0) {
+            std::error_code ec;
+            fs::create_directory(dir, ec);
+            if (ec) throw IoError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
+        }
+        mpi::barrier();
+        if (checkpoint.resume && !fs::exists(shard / "manifest.txt")) {
+            std::string found;
+            std::error_code ec;
+            for (const auto& e : fs::directory_iterator(dir, ec))
+                if (e.path().filename().string().starts_with("rank-")) found += " " + e.path().filename().string();
+            throw InputError(fmt::format(
+                "--checkpoint {} --resume: no shard {} for rank {} of {} (found:{}); resume with the number of ranks "
+                "that made it",
+                dir.string(), shard.filename().string(), r, k, found.empty() ? " none" : found));
+        }
+        CheckpointOptions mine_opts = checkpoint;
+        mine_opts.dir = shard.string();
+        std::optional<RowCheckpoint> c = open_checkpoint(mine_opts, scene, meta, report);
+        std::vector<std::uint32_t> todo;
+        for (std::uint32_t i = first; i < last; ++i)
+            if (!c->has(i)) todo.push_back(i);
+        info("rank 0: {} of its {} rows to compute", todo.size(), last - first);
+        {
+            Progress bar("rows (rank 0's block)", todo.size(), progress && r == 0);
+            provider.compute_rows(todo, [&](std::uint32_t i, const SparseRow& row) {
+                c->append(i, row);
+                bar.add();
+            });
+        }
+        c->sync();
+        c->read_rows(first, last, mine.nnz, mine.col, mine.val);  // bit-identical to the rows as computed
+    }
+    return mpi::gather_rows(static_cast<std::uint32_t>(scene.size()), bounds, mine);
+}
+
+std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& rows) {
+    if (!mpi::active()) return nullptr;
+    return std::make_unique<mpi::WorldRowBlocks>(mpi::row_blocks(scene, rows));
+}
+
+#else  // built without MPI
+
+void mpi_start(int&, char**&, std::string_view) {
+    if (launched_size() > 1)
+        throw InputError(fmt::format("started by an MPI launcher as {} processes, but this ffcube was built without "
+                                     "MPI (install libopenmpi-dev and rebuild; docs/scaling.md): each process would "
+                                     "do all the work",
+                                     launched_size()));
+}
+bool mpi_distributed() { return false; }
+RowOptions mpi_row_options(RowOptions rows) { return rows; }
+bool mpi_root() { return true; }
+int mpi_finish(int code) { return code; }
+Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) { return load_and_mesh(options, report); }
+std::optional<CsrMatrix> mpi_compute_matrix(RowProvider&, const Scene&, const RowOptions&, const CheckpointOptions&,
+                                            const FfmMetadata&, Report&, bool) {
+    throw InternalError("mpi_compute_matrix without MPI");
+}
+std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene&, const RowOptions&) { return nullptr; }
+
+#endif
+
+}  // namespace ffcube::cli

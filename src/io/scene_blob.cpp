@@ -1,0 +1,184 @@
+#include "ffcube/io/scene_blob.hpp"
+
+#include <fmt/format.h>
+
+#include <cstring>
+#include <string>
+#include <type_traits>
+
+#include "ffcube/core/error.hpp"
+
+namespace ffcube {
+namespace {
+
+constexpr std::uint64_t kMagic = 0x3142534542434646;  // "FFCBSEB1"
+
+class Writer {
+public:
+    template <class T>
+        requires std::is_trivially_copyable_v<T>
+    void put(const T& v) {
+        const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
+        out.insert(out.end(), p, p + sizeof(T));
+    }
+    void put(const std::string& s) {
+        put<std::uint64_t>(s.size());
+        out.insert(out.end(), s.begin(), s.end());
+    }
+    void put(const Vec3& v) {
+        put(v.x);
+        put(v.y);
+        put(v.z);
+    }
+    template <class T>
+    void put_all(const std::vector<T>& items, auto&& each) {
+        put<std::uint64_t>(items.size());
+        for (const T& item : items) each(item);
+    }
+    std::vector<std::uint8_t> out;
+};
+
+class Reader {
+public:
+    explicit Reader(std::span<const std::uint8_t> b) : bytes(b) {}
+    template <class T>
+        requires std::is_trivially_copyable_v<T>
+    T get() {
+        need(sizeof(T), "a number");
+        T v;
+        std::memcpy(&v, bytes.data() + at, sizeof(T));
+        at += sizeof(T);
+        return v;
+    }
+    std::string get_string() {
+        const auto n = count(1, "a string");
+        std::string s(reinterpret_cast<const char*>(bytes.data() + at), n);
+        at += n;
+        return s;
+    }
+    Vec3 get_vec3() {
+        Vec3 v;
+        v.x = get<double>();
+        v.y = get<double>();
+        v.z = get<double>();
+        return v;
+    }
+    // An element count, checked against the bytes left (each element takes at least min_bytes).
+    std::size_t count(std::size_t min_bytes, const char* what) {
+        const auto n = get<std::uint64_t>();
+        if (n > (bytes.size() - at) / min_bytes) fail(fmt::format("{} of {} elements exceeds the bytes left", what, n));
+        return static_cast<std::size_t>(n);
+    }
+    void need(std::size_t n, const char* what) {
+        if (bytes.size() - at < n) fail(fmt::format("truncated while reading {}", what));
+    }
+    [[noreturn]] void fail(const std::string& why) const {
+        throw InputError(fmt::format("scene blob ({} bytes): offset {}: {}", bytes.size(), at, why));
+    }
+    std::span<const std::uint8_t> bytes;
+    std::size_t at = 0;
+};
+
+void put_material(Writer& w, const Material& m) {
+    w.put(m.name);
+    w.put(m.kd);
+    w.put(m.ke);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> serialize_scene(const Scene& s) {
+    Writer w;
+    w.put(kMagic);
+    w.put(s.source);
+    w.put_all(s.positions, [&](const Vec3& p) { w.put(p); });
+    w.put_all(s.patches, [&](const Patch& p) {
+        for (std::uint32_t v : p.v) w.put(v);
+        w.put(p.count);
+        w.put(p.object);
+        w.put(p.material);
+        w.put(p.area);
+        w.put(p.normal);
+        w.put(p.centroid);
+        w.put(p.size);
+    });
+    w.put_all(s.grids, [&](const PatchGrid& g) {
+        for (const Vec3& c : g.corners) w.put(c);
+        w.put(g.count);
+        w.put(g.nu);
+        w.put(g.nv);
+        w.put(g.first_patch);
+    });
+    w.put_all(s.objects, [&](const std::string& o) { w.put(o); });
+    w.put_all(s.materials, [&](const Material& m) { put_material(w, m); });
+    w.put<std::uint64_t>(s.stats.input_faces);
+    w.put<std::uint64_t>(s.stats.triangulated_ngons);
+    w.put<std::uint64_t>(s.stats.dropped_degenerate);
+    w.put<std::uint64_t>(s.stats.non_planar);
+    w.put(s.stats.max_patch_edge);
+    w.put(s.stats.how);
+    w.put_all(s.stats.warnings, [&](const std::string& x) { w.put(x); });
+    w.put(s.bbox_min);
+    w.put(s.bbox_max);
+    w.put(s.fingerprint);
+    w.put<std::uint64_t>(w.out.size() + 8);  // the total, last: a truncated or padded blob is refused
+    return std::move(w.out);
+}
+
+Scene deserialize_scene(std::span<const std::uint8_t> bytes) {
+    Reader r(bytes);
+    if (r.get<std::uint64_t>() != kMagic) r.fail("not a scene blob (wrong magic or version)");
+    Scene s;
+    s.source = r.get_string();
+    s.positions.resize(r.count(24, "positions"));
+    for (Vec3& p : s.positions) p = r.get_vec3();
+    s.patches.resize(r.count(92, "patches"));
+    for (Patch& p : s.patches) {
+        for (std::uint32_t& v : p.v) v = r.get<std::uint32_t>();
+        p.count = r.get<std::uint32_t>();
+        p.object = r.get<std::uint32_t>();
+        p.material = r.get<std::uint32_t>();
+        p.area = r.get<double>();
+        p.normal = r.get_vec3();
+        p.centroid = r.get_vec3();
+        p.size = r.get<double>();
+    }
+    s.grids.resize(r.count(112, "grids"));
+    for (PatchGrid& g : s.grids) {
+        for (Vec3& c : g.corners) c = r.get_vec3();
+        g.count = r.get<std::uint32_t>();
+        g.nu = r.get<std::uint32_t>();
+        g.nv = r.get<std::uint32_t>();
+        g.first_patch = r.get<std::uint32_t>();
+    }
+    s.objects.resize(r.count(8, "objects"));
+    for (std::string& o : s.objects) o = r.get_string();
+    s.materials.resize(r.count(56, "materials"));
+    for (Material& m : s.materials) {
+        m.name = r.get_string();
+        m.kd = r.get_vec3();
+        m.ke = r.get_vec3();
+    }
+    s.stats.input_faces = r.get<std::uint64_t>();
+    s.stats.triangulated_ngons = r.get<std::uint64_t>();
+    s.stats.dropped_degenerate = r.get<std::uint64_t>();
+    s.stats.non_planar = r.get<std::uint64_t>();
+    s.stats.max_patch_edge = r.get<double>();
+    s.stats.how = r.get_string();
+    s.stats.warnings.resize(r.count(8, "warnings"));
+    for (std::string& x : s.stats.warnings) x = r.get_string();
+    s.bbox_min = r.get_vec3();
+    s.bbox_max = r.get_vec3();
+    s.fingerprint = r.get<std::uint64_t>();
+    if (r.get<std::uint64_t>() != bytes.size() || r.at != bytes.size()) r.fail("its length does not match its contents");
+    // Indices in range, so that a damaged blob cannot make a row provider read out of bounds.
+    for (std::size_t i = 0; i < s.patches.size(); ++i) {
+        const Patch& p = s.patches[i];
+        bool ok = (p.count == 3 || p.count == 4) && p.object < s.objects.size() && p.material < s.materials.size();
+        for (std::uint32_t v : p.v) ok = ok && v < s.positions.size();
+        if (!ok) r.fail(fmt::format("patch {} has an index out of range", i));
+    }
+    return s;
+}
+
+}  // namespace ffcube

@@ -1,0 +1,202 @@
+#include "ffcube/mpi/world.hpp"
+
+#include <mpi.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <climits>
+#include <cstdlib>
+#include <string>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/gl/context.hpp"
+#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/pipeline/row_partition.hpp"
+
+namespace ffcube::mpi {
+namespace {
+
+bool g_active = false;
+int g_rank = 0, g_size = 1;
+unsigned g_local = 0, g_local_size = 1;
+
+// Largest count of one MPI call: counts are ints.
+constexpr std::size_t kChunk = std::size_t{1} << 28;
+
+void check(int rc, const char* what) {
+    if (rc != MPI_SUCCESS) throw IoError(fmt::format("MPI: {} failed (error {})", what, rc));
+}
+
+template <class T>
+MPI_Datatype type_of() {
+    if constexpr (sizeof(T) == 1) return MPI_BYTE;
+    else if constexpr (std::is_same_v<T, float>) return MPI_FLOAT;
+    else if constexpr (std::is_same_v<T, double>) return MPI_DOUBLE;
+    else if constexpr (sizeof(T) == 4) return MPI_UINT32_T;
+    else return MPI_UINT64_T;
+}
+
+template <class T>
+void send_all(std::span<const T> data, int to, int tag) {
+    for (std::size_t at = 0; at < data.size() || at == 0; at += kChunk) {
+        const std::size_t n = std::min(kChunk, data.size() - at);
+        check(MPI_Send(data.data() + at, static_cast<int>(n), type_of<T>(), to, tag, MPI_COMM_WORLD), "MPI_Send");
+        if (data.empty()) break;
+    }
+}
+
+template <class T>
+void recv_all(std::span<T> data, int from, int tag) {
+    for (std::size_t at = 0; at < data.size() || at == 0; at += kChunk) {
+        const std::size_t n = std::min(kChunk, data.size() - at);
+        check(MPI_Recv(data.data() + at, static_cast<int>(n), type_of<T>(), from, tag, MPI_COMM_WORLD,
+                       MPI_STATUS_IGNORE),
+              "MPI_Recv");
+        if (data.empty()) break;
+    }
+}
+
+template <class T>
+void broadcast_vector(std::vector<T>& v) {
+    std::uint64_t n = v.size();
+    check(MPI_Bcast(&n, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD), "MPI_Bcast");
+    v.resize(n);
+    for (std::size_t at = 0; at < n; at += kChunk)
+        check(MPI_Bcast(v.data() + at, static_cast<int>(std::min<std::size_t>(kChunk, n - at)), type_of<T>(), 0,
+                        MPI_COMM_WORLD),
+              "MPI_Bcast");
+}
+
+}  // namespace
+
+void start(int& argc, char**& argv) {
+    int provided = 0;
+    check(MPI_Init_thread(&argc, &argv, MPI_THREAD_FUNNELED, &provided), "MPI_Init_thread");
+    g_active = true;
+    MPI_Comm_rank(MPI_COMM_WORLD, &g_rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &g_size);
+    // The ranks sharing this node (collective: every rank makes the call).
+    MPI_Comm node;
+    check(MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, g_rank, MPI_INFO_NULL, &node),
+          "MPI_Comm_split_type");
+    int r = 0, s = 1;
+    MPI_Comm_rank(node, &r);
+    MPI_Comm_size(node, &s);
+    MPI_Comm_free(&node);
+    g_local = static_cast<unsigned>(r);
+    g_local_size = static_cast<unsigned>(std::max(1, s));
+    if (const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_RANK"))
+        g_local = static_cast<unsigned>(std::strtoul(local, nullptr, 10));
+    set_preferred_egl_device(g_local);
+}
+
+bool active() { return g_active; }
+int rank() { return g_rank; }
+int size() { return g_size; }
+unsigned local_rank() { return g_local; }
+unsigned local_size() { return g_local_size; }
+
+int finish(int code) {
+    if (!g_active) return code;
+    if (code != 0) {
+        std::fflush(nullptr);
+        MPI_Abort(MPI_COMM_WORLD, code);
+    }
+    g_active = false;
+    MPI_Finalize();
+    return 0;
+}
+
+void barrier() { check(MPI_Barrier(MPI_COMM_WORLD), "MPI_Barrier"); }
+
+Scene broadcast_scene(std::optional<Scene> scene) {
+    std::vector<std::uint8_t> bytes;
+    if (g_rank == 0) {
+        FFCUBE_CHECK(scene.has_value());
+        bytes = serialize_scene(*scene);
+    }
+    broadcast_vector(bytes);
+    if (g_rank == 0) return std::move(*scene);
+    return deserialize_scene(bytes);
+}
+
+std::vector<std::uint32_t> row_blocks(const Scene& scene, const RowOptions& options) {
+    std::vector<std::uint32_t> bounds;
+    if (g_rank == 0) bounds = balanced_row_blocks(estimate_row_costs(scene, options), static_cast<unsigned>(g_size));
+    broadcast_vector(bounds);
+    FFCUBE_CHECK(bounds.size() == std::size_t(g_size) + 1);
+    return bounds;
+}
+
+std::optional<CsrMatrix> gather_rows(std::uint32_t n, std::span<const std::uint32_t> bounds, const RowBlock& mine) {
+    constexpr int kTagCount = 11, kTagNnz = 12, kTagCol = 13, kTagVal = 14;
+    if (g_rank != 0) {
+        const std::uint64_t total = mine.col.size();
+        check(MPI_Send(&total, 1, MPI_UINT64_T, 0, kTagCount, MPI_COMM_WORLD), "MPI_Send");
+        send_all<std::uint32_t>(mine.nnz, 0, kTagNnz);
+        send_all<std::uint32_t>(mine.col, 0, kTagCol);
+        send_all<float>(mine.val, 0, kTagVal);
+        return std::nullopt;
+    }
+    CsrMatrix m(n);
+    const auto append = [&](const RowBlock& b, std::uint32_t rows) {
+        FFCUBE_CHECK(b.nnz.size() == rows);
+        std::size_t at = 0;
+        for (std::uint32_t k = 0; k < rows; ++k) {
+            m.append_row(std::span(b.col).subspan(at, b.nnz[k]), std::span(b.val).subspan(at, b.nnz[k]));
+            at += b.nnz[k];
+        }
+    };
+    append(mine, bounds[1] - bounds[0]);
+    RowBlock other;
+    for (int r = 1; r < g_size; ++r) {
+        std::uint64_t total = 0;
+        check(MPI_Recv(&total, 1, MPI_UINT64_T, r, kTagCount, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
+        other.nnz.resize(bounds[r + 1] - bounds[r]);
+        other.col.resize(total);
+        other.val.resize(total);
+        recv_all<std::uint32_t>(other.nnz, r, kTagNnz);
+        recv_all<std::uint32_t>(other.col, r, kTagCol);
+        recv_all<float>(other.val, r, kTagVal);
+        append(other, bounds[r + 1] - bounds[r]);
+    }
+    return m;
+}
+
+WorldRowBlocks::WorldRowBlocks(std::vector<std::uint32_t> bounds) : bounds_(std::move(bounds)) {
+    FFCUBE_CHECK(bounds_.size() == std::size_t(g_size) + 1);
+    for (int r = 0; r < g_size; ++r) {
+        FFCUBE_CHECK(bounds_[r + 1] - bounds_[r] <= INT_MAX);
+        counts_.push_back(static_cast<int>(bounds_[r + 1] - bounds_[r]));
+        displs_.push_back(static_cast<int>(bounds_[r]));
+    }
+}
+
+std::uint32_t WorldRowBlocks::first() const { return bounds_[g_rank]; }
+std::uint32_t WorldRowBlocks::last() const { return bounds_[g_rank + 1]; }
+
+void WorldRowBlocks::share(std::span<double> x) {
+    FFCUBE_CHECK(x.size() == bounds_.back());
+    check(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, x.data(), counts_.data(), displs_.data(), MPI_DOUBLE,
+                         MPI_COMM_WORLD),
+          "MPI_Allgatherv");
+}
+
+void WorldRowBlocks::sum(std::span<double> v) {
+    gathered_.resize(v.size() * static_cast<std::size_t>(g_size));
+    check(MPI_Allgather(v.data(), static_cast<int>(v.size()), MPI_DOUBLE, gathered_.data(), static_cast<int>(v.size()),
+                        MPI_DOUBLE, MPI_COMM_WORLD),
+          "MPI_Allgather");
+    for (std::size_t k = 0; k < v.size(); ++k) {
+        double s = 0.0;
+        for (int r = 0; r < g_size; ++r) s += gathered_[std::size_t(r) * v.size() + k];
+        v[k] = s;
+    }
+}
+
+void WorldRowBlocks::max(std::span<double> v) {
+    check(MPI_Allreduce(MPI_IN_PLACE, v.data(), static_cast<int>(v.size()), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD),
+          "MPI_Allreduce");
+}
+
+}  // namespace ffcube::mpi

@@ -1,0 +1,86 @@
+// The scene as bytes (io/scene_blob.hpp), as `mpirun … ffcube` broadcasts it: every field comes
+// back bit for bit; a damaged blob is refused with an InputError, never read out of bounds.
+#include <gtest/gtest.h>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/scene/builtin.hpp"
+#include "ffcube/scene/mesher.hpp"
+
+namespace ffcube {
+namespace {
+
+Scene cornell() {
+    MeshOptions m;
+    m.target_patches = 300;
+    Scene s = build_scene(load_cornell_box(), m);
+    s.stats.warnings.push_back("a warning, carried too");
+    return s;
+}
+
+TEST(SceneBlob, RoundTripIsExact) {
+    const Scene a = cornell();
+    const Scene b = deserialize_scene(serialize_scene(a));
+    EXPECT_EQ(b.source, a.source);
+    EXPECT_EQ(b.positions, a.positions);
+    ASSERT_EQ(b.patches.size(), a.patches.size());
+    for (std::size_t i = 0; i < a.patches.size(); ++i) {
+        const Patch &p = a.patches[i], &q = b.patches[i];
+        EXPECT_EQ(q.v, p.v);
+        EXPECT_EQ(q.count, p.count);
+        EXPECT_EQ(q.object, p.object);
+        EXPECT_EQ(q.material, p.material);
+        EXPECT_EQ(q.area, p.area);
+        EXPECT_EQ(q.normal, p.normal);
+        EXPECT_EQ(q.centroid, p.centroid);
+        EXPECT_EQ(q.size, p.size);
+    }
+    ASSERT_EQ(b.grids.size(), a.grids.size());
+    for (std::size_t g = 0; g < a.grids.size(); ++g) {
+        EXPECT_EQ(b.grids[g].corners, a.grids[g].corners);
+        EXPECT_EQ(b.grids[g].count, a.grids[g].count);
+        EXPECT_EQ(b.grids[g].nu, a.grids[g].nu);
+        EXPECT_EQ(b.grids[g].nv, a.grids[g].nv);
+        EXPECT_EQ(b.grids[g].first_patch, a.grids[g].first_patch);
+    }
+    EXPECT_EQ(b.objects, a.objects);
+    ASSERT_EQ(b.materials.size(), a.materials.size());
+    for (std::size_t m = 0; m < a.materials.size(); ++m) {
+        EXPECT_EQ(b.materials[m].name, a.materials[m].name);
+        EXPECT_EQ(b.materials[m].kd, a.materials[m].kd);
+        EXPECT_EQ(b.materials[m].ke, a.materials[m].ke);
+    }
+    EXPECT_EQ(b.stats.input_faces, a.stats.input_faces);
+    EXPECT_EQ(b.stats.max_patch_edge, a.stats.max_patch_edge);
+    EXPECT_EQ(b.stats.how, a.stats.how);
+    EXPECT_EQ(b.stats.warnings, a.stats.warnings);
+    EXPECT_EQ(b.bbox_min, a.bbox_min);
+    EXPECT_EQ(b.bbox_max, a.bbox_max);
+    EXPECT_EQ(b.fingerprint, a.fingerprint);
+    EXPECT_EQ(serialize_scene(b), serialize_scene(a));
+}
+
+TEST(SceneBlob, DamagedBlobsAreRefused) {
+    const std::vector<std::uint8_t> good = serialize_scene(cornell());
+    // Every truncation: each is refused (by a read past the end or the length check).
+    for (std::size_t n = 0; n < good.size(); n += 97)
+        EXPECT_THROW(deserialize_scene(std::span(good).first(n)), InputError) << n << " bytes";
+    std::vector<std::uint8_t> bad = good;
+    bad[0] ^= 1;
+    EXPECT_THROW(deserialize_scene(bad), InputError);  // magic
+    bad = good;
+    bad.push_back(0);
+    EXPECT_THROW(deserialize_scene(bad), InputError);  // length
+    // A patch's first vertex index (after magic, source, positions) set far out of range.
+    Scene s = cornell();
+    s.patches[5].v[0] = static_cast<std::uint32_t>(s.positions.size());
+    try {
+        deserialize_scene(serialize_scene(s));
+        FAIL() << "an index out of range was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("patch 5"), std::string::npos) << e.what();
+    }
+}
+
+}  // namespace
+}  // namespace ffcube

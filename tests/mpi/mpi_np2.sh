@@ -1,0 +1,106 @@
+#!/usr/bin/env bash
+# `mpirun -np 2 ffcube …` on one machine against the one-process run (docs/scaling.md):
+#   1. formfactors .ffm and .mtx: byte-identical (cmp);
+#   2. with --checkpoint (a shard per rank): byte-identical; a rank killed with SIGKILL part-way
+#      makes mpirun fail (non-zero, no output file), and --resume finishes it, byte-identical;
+#   3. solve --solver jacobi and gauss-seidel over 2 ranks against one process: the area-weighted
+#      L1 difference of B within the two runs' error bounds (derivation below).
+# Exit 77 (skipped) when mpirun is missing.
+set -u
+ffcube=$1
+work=$2
+mpirun=$(command -v mpirun) || { echo "mpirun not found: skipped"; exit 77; }
+# CI runs as root; OpenMPI refuses that unless told (both variables).
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+# One machine with few cores, no network: the shared-memory and self transports only.
+export OMPI_MCA_btl=self,vader OMPI_MCA_rmaps_base_oversubscribe=1
+mpi() { "$mpirun" --oversubscribe -np 2 "$ffcube" "$@"; }
+fail() { echo "FAIL: $*"; exit 1; }
+descendants() { for c in $(ps -o pid= --ppid "$1"); do echo "$c"; descendants "$c"; done; }
+scene="$(cd "$(dirname "$0")/../../examples" && pwd)/cube.obj"
+rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+rows="$scene --patches 600 --resolution 64 --threads 1 -q"
+
+# 1. Byte-identical outputs.
+"$ffcube" formfactors $rows -o one.ffm || fail "one-process formfactors"
+"$ffcube" formfactors $rows -o one.mtx || fail "one-process formfactors .mtx"
+mpi formfactors $rows -o two.ffm || fail "mpirun formfactors"
+mpi formfactors $rows -o two.mtx || fail "mpirun formfactors .mtx"
+cmp one.ffm two.ffm || fail ".ffm differs"
+cmp one.mtx two.mtx || fail ".mtx differs"
+echo "ok: .ffm and .mtx byte-identical at -np 2"
+
+# Bad input under mpirun: rank 0's error, exit 2 from mpirun (MPI_Abort(2) ends every rank).
+mpi formfactors missing.obj -o bad.ffm 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "missing.obj: cannot read" bad.txt && [ ! -e bad.ffm ] || fail "missing scene: rc $rc, $(cat bad.txt)"
+mpi solve $rows --solver shoot 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "only jacobi and gauss-seidel" bad.txt || fail "shoot under mpirun: rc $rc, $(cat bad.txt)"
+mpi view --patches 50 2> bad.txt
+rc=$?
+[ "$rc" -eq 2 ] && grep -q "only formfactors and solve" bad.txt || fail "view under mpirun: rc $rc, $(cat bad.txt)"
+echo "ok: bad input under mpirun exits 2 with the error"
+
+# 2. Checkpoint shards, a killed rank, resume.
+mpi formfactors $rows -o ck.ffm --checkpoint ck || fail "mpirun with --checkpoint"
+cmp one.ffm ck.ffm || fail "checkpointed .ffm differs"
+[ -f ck/rank-0-of-2/rows.log ] && [ -f ck/rank-1-of-2/rows.log ] || fail "no shard per rank"
+# Big enough that rank 1 is still computing when killed (2,000 rows of N = 128 on one thread each,
+# a few seconds on llvmpipe), small enough for a test.
+big="$scene --patches 4000 --resolution 128 --threads 1 -q"
+"$ffcube" formfactors $big -o big-one.ffm || fail "one-process formfactors (big)"
+mpi formfactors $big -o big.ffm --checkpoint kill &
+launcher=$!
+# Rank 1: the descendant of mpirun whose environment says so, found first, then killed as soon as
+# its shard has rows.
+victim=""
+for _ in $(seq 1 3000); do
+    if [ -z "$victim" ]; then
+        for p in $(descendants "$launcher"); do
+            { tr '\0' '\n' < "/proc/$p/environ" | grep -qx OMPI_COMM_WORLD_RANK=1; } 2>/dev/null && victim=$p
+        done
+    fi
+    [ -n "$victim" ] && [ -s kill/rank-1-of-2/rows.log ] && break
+    sleep 0.02
+done
+[ -n "$victim" ] || fail "rank 1 never started writing its shard"
+kill -9 "$victim"
+wait "$launcher"
+rc=$?
+[ "$rc" -ne 0 ] || fail "mpirun exited 0 although rank 1 was killed"
+[ ! -e big.ffm ] || fail "a final .ffm exists after the failed run"
+echo "ok: killed rank 1 -> mpirun exit $rc, no big.ffm"
+mpi formfactors $big -o big.ffm --checkpoint kill --resume || fail "resume"
+cmp big-one.ffm big.ffm || fail "resumed .ffm differs"
+echo "ok: resumed run byte-identical"
+# Resuming with another number of ranks is refused, naming the shards found.
+"$mpirun" --oversubscribe -np 1 "$ffcube" formfactors $big -o big3.ffm --checkpoint kill --resume 2> refused.txt &&
+    fail "resume at -np 1 of a 2-rank checkpoint accepted"
+grep -q "rank-0-of-2" refused.txt || fail "refusal does not name the shards: $(cat refused.txt)"
+echo "ok: resume with another -np refused"
+
+# 3. Distributed Jacobi and Gauss–Seidel. Each run stops with Σ_i A_i |r_i| ≤ τ × emitted power and
+# reports error_bound.mean_abs = Σ_i A_i |r_i| / ((1 − q) Σ A) per channel, a bound on the
+# area-weighted mean of |B* − B| (docs/solvers.md). So Σ_i A_i |B_two − B_one| / Σ A ≤ bound_one +
+# bound_two per channel: the test's tolerance, nothing widened.
+# The built-in Cornell box (it has a light; cube.obj has none).
+box="--patches 600 --resolution 64 --threads 1 -q"
+for solver in jacobi gauss-seidel; do
+    "$ffcube" solve $box --solver $solver --tolerance 1e-6 --radiosity one-$solver.csv --report one-$solver.json ||
+        fail "one-process solve $solver"
+    mpi solve $box --solver $solver --tolerance 1e-6 --radiosity two-$solver.csv --report two-$solver.json ||
+        fail "mpirun solve $solver"
+    python3 - one-$solver.csv two-$solver.csv one-$solver.json two-$solver.json <<'PY' || fail "solve $solver: B differs"
+import csv, json, sys
+one, two = (list(csv.DictReader(open(p))) for p in sys.argv[1:3])
+b1, b2 = (json.load(open(p))["error_bound"]["mean_abs"] for p in sys.argv[3:5])
+assert len(one) == len(two) and len(one) > 0
+area = sum(float(r["area"]) for r in one)
+for c, name in enumerate(("B_r", "B_g", "B_b")):
+    diff = sum(float(a["area"]) * abs(float(a[name]) - float(b[name])) for a, b in zip(one, two)) / area
+    print(f"{name}: area-weighted mean |B_two - B_one| = {diff:.3e}, bound {b1[c] + b2[c]:.3e}")
+    assert diff <= b1[c] + b2[c], name
+PY
+done
+echo "ok: distributed jacobi and gauss-seidel agree with one process within their error bounds"
