@@ -64,11 +64,15 @@ void check_against_brute_force(const std::vector<BvhBox>& boxes, const Vec3& off
             const double h = highest_corner(boxes[b], o, n);
             const bool is_marked = visit[b] == q;
             count += is_marked;
-            if (h >= 0) EXPECT_TRUE(is_marked) << "box " << b << " has a corner " << h << " in front, query " << q;
+            if (h >= 0) {
+                EXPECT_TRUE(is_marked) << "box " << b << " has a corner " << h << " in front, query " << q;
+            }
             // The bound the tree uses is the same maximum, computed from centre and half extents:
             // it differs from the corners' by rounding (1e-16 relative), far below the margin.
-            if (is_marked) EXPECT_GE(h, -2 * margin) << "box " << b << " lies " << -h << " behind, query " << q;
-            if (h < -2 * margin) EXPECT_FALSE(is_marked);
+            if (is_marked) {
+                EXPECT_GE(h, -2 * margin) << "box " << b << " lies " << -h << " behind, query " << q;
+            }
+            if (h < -2 * margin) { EXPECT_FALSE(is_marked); }
         }
         EXPECT_EQ(marked, count);
     }

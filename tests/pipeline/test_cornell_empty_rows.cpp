@@ -91,13 +91,15 @@ void check_rows(const Scene& scene, RowProvider& rows, bool whole, const std::st
             empty_ceiling += above_light;
         }
         // Enclosed by a block (floor, four sides and top, every one seen from behind).
-        if (object == "floor" && std::max(inside_by(scene, i, kShortBlock, whole), inside_by(scene, i, kTallBlock, whole)) > 0)
+        if (object == "floor" && std::max(inside_by(scene, i, kShortBlock, whole), inside_by(scene, i, kTallBlock, whole)) > 0) {
             EXPECT_EQ(sum, 0.0) << "floor patch " << i << " under a block";
-        if (object == "ceiling" && inside_by(scene, i, kLight, whole) > kCeilingMargin)
+        }
+        if (object == "ceiling" && inside_by(scene, i, kLight, whole) > kCeilingMargin) {
             EXPECT_EQ(sum, 0.0) << "ceiling patch " << i << " above the light";
+        }
         // Everything else sees part of the open box's inside: a row well above 0 (the open front
         // lets at most the half-space in front of a patch escape, never all of it).
-        if (!under_block && !above_light) EXPECT_GT(sum, 0.05) << "row " << i << " (" << object << ")";
+        if (!under_block && !above_light) { EXPECT_GT(sum, 0.05) << "row " << i << " (" << object << ")"; }
     }
     EXPECT_GT(empty_floor, 0u);
     EXPECT_GT(empty_ceiling, 0u);
