@@ -4,6 +4,7 @@
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
 #include "cli/row_store.hpp"
+#include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
@@ -14,6 +15,7 @@
 #include "ffcube/io/mtx.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/pipeline/surface_outputs.hpp"
 
 namespace ffcube::cli {
 namespace {
@@ -23,6 +25,7 @@ struct Options {
     RowOptions rows;
     std::string output, groups, report;
     CheckpointOptions checkpoint;
+    SurfaceOutputOptions outputs;  // --sky, --view3d, --elmer, --patch-table
 };
 
 int run(const Options& o) {
@@ -32,16 +35,19 @@ int run(const Options& o) {
     check_output_path("--output", o.output);
     check_output_path("--groups", o.groups);
     check_output_path("--report", o.report);
+    check_surface_output_paths(o.outputs);
     validate(o.rows);  // before any work
 
     Report report;
     report.set("command", "formfactors");
     Scene scene = load_and_mesh(o.scene.scene, report);
-    const FfmMetadata meta = row_metadata(o.rows);
+    RowOptions row_options = o.rows;
+    apply_view3d_controls(scene, row_options, report);  // a .vs3's encl=1: --enforce closure
+    const FfmMetadata meta = row_metadata(row_options);
     std::optional<RowCheckpoint> checkpoint = open_checkpoint(o.checkpoint, scene, meta, report);
 
     Stopwatch total;
-    RowSource rows = make_row_source(scene, o.rows);
+    RowSource rows = make_row_source(scene, row_options);
     for (const std::string& line : describe(rows)) info("{}", line);
     RowProvider& provider = rows.provider();
 
@@ -76,7 +82,8 @@ int run(const Options& o) {
         // The written matrix records its enforcement too (the checkpoint's rows are from before
         // it, so `meta` without it is what resuming compares).
         FfmMetadata written = meta;
-        if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
+        if (row_options.enforce != EnforceRequest::None)
+            written.settings += fmt::format(" enforce={}", to_string(row_options.enforce));
         Progress progress(fmt::format("writing {} (bytes)", o.output), ffm_payload_bytes(F), !o.scene.quiet);
         write_ffm(o.output, F, scene, written, &progress);
     } else if (mtx) {
@@ -84,6 +91,7 @@ int run(const Options& o) {
         write_mtx(o.output, F, &progress);
     }
     if (!o.groups.empty()) write_groups_csv(o.groups, object_form_factors(F, scene), scene.objects);
+    write_surface_outputs(o.outputs, F, scene, report, !o.scene.quiet);
     report.set("time.writing", watch.seconds());
     report.set("time.total", total.seconds());
     if (!o.report.empty()) report.write(o.report);
@@ -102,6 +110,7 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--groups", opts->groups, "write object-to-object form factors as CSV (from,to,F)");
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");
     add_checkpoint_options(*sub, opts->checkpoint);
+    add_surface_output_options(*sub, opts->outputs);
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);
