@@ -5,6 +5,7 @@
 #include "cli/common.hpp"
 #include "cli/mpi_glue.hpp"
 #include "cli/row_store.hpp"
+#include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
@@ -15,6 +16,7 @@
 #include "ffcube/io/mtx.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/pipeline/surface_outputs.hpp"
 
 namespace ffcube::cli {
 namespace {
@@ -26,6 +28,7 @@ struct Options {
     CheckpointOptions checkpoint;
     std::uint64_t stats_memory_mib = 512;
     std::uint32_t ffm_version = kFfmVersion;
+    SurfaceOutputOptions outputs;  // --sky, --view3d, --elmer, --patch-table
 };
 
 struct Figures {
@@ -43,6 +46,7 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
     const bool progress = !o.scene.quiet;
     Figures f;
     RowStreamChecks checks(scene);
+    std::vector<double> sums(scene.size(), 0.0);  // for the sky view factors: 8 bytes a patch
     {
         FfmWriter writer(o.output, scene, written);
         Stopwatch watch, piece;
@@ -52,6 +56,7 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
             writer.append_row(row);
             writing += piece.seconds();
             checks.add(i, row);
+            sums[i] = row.sum();
         });
         f.seconds = watch.seconds();
         piece.restart();
@@ -81,6 +86,7 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
     }
     report.set("reciprocity.passes", passes);
     report.set("time.statistics", watch.seconds());
+    write_surface_outputs(o.outputs, sums, scene, report);
     return f;
 }
 
@@ -109,6 +115,7 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
         write_mtx(o.output, F, &bar);
     }
     if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
+    write_surface_outputs(o.outputs, F, scene, report, progress);
     report.set("time.writing", watch.seconds());
     return f;
 }
@@ -120,28 +127,33 @@ int run(const Options& o) {
     check_output_path("--output", o.output);
     check_output_path("--groups", o.groups);
     check_output_path("--report", o.report);
+    check_surface_output_paths(o.outputs);
     validate(o.rows);  // before any work
 
     Report report;
     report.set("command", "formfactors");
     Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
-    const FfmMetadata meta = row_metadata(o.rows);
+    RowOptions row_options = mpi_row_options(o.rows);
+    apply_view3d_controls(scene, row_options, report);  // a .vs3's encl=1: --enforce closure
+    const FfmMetadata meta = row_metadata(row_options);
     const bool distributed = mpi_distributed();  // under mpirun: a shard per rank instead
     std::optional<RowCheckpoint> checkpoint =
         distributed ? std::nullopt : open_checkpoint(o.checkpoint, scene, meta, report);
 
     Stopwatch total;
-    const RowOptions row_options = mpi_row_options(o.rows);
     RowSource rows = make_row_source(scene, row_options);
     for (const std::string& line : describe(rows)) info("{}", line);
 
     // The written matrix records its enforcement too (the checkpoint's rows are from before it,
     // so `meta` without it is what resuming compares).
     FfmMetadata written = meta;
-    if (o.rows.enforce != EnforceRequest::None) written.settings += fmt::format(" enforce={}", to_string(o.rows.enforce));
+    if (row_options.enforce != EnforceRequest::None)
+        written.settings += fmt::format(" enforce={}", to_string(row_options.enforce));
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
-    // Under mpirun rank 0 gathers the ranks' rows and writes from memory (the same bytes).
-    const bool stream = !distributed && ffm && o.ffm_version == 2 && o.rows.enforce == EnforceRequest::None;
+    // Under mpirun rank 0 gathers the ranks' rows and writes from memory (the same bytes); View3D's
+    // and Elmer's files need the whole matrix too.
+    const bool stream = !distributed && ffm && o.ffm_version == 2 && row_options.enforce == EnforceRequest::None &&
+                        !surface_outputs_need_matrix(o.outputs);
     report.set("streamed", stream);
     Figures f;
     if (stream) {
@@ -188,6 +200,7 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--groups", opts->groups, "write object-to-object form factors as CSV (from,to,F)");
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");
     add_checkpoint_options(*sub, opts->checkpoint);
+    add_surface_output_options(*sub, opts->outputs);
     sub->add_option("--stats-memory", opts->stats_memory_mib,
                     "MiB for the reciprocity check of a streamed .ffm (more: fewer passes over the file)")
         ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30));

@@ -422,6 +422,7 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
     Scene scene;
     scene.source = model.source;
     scene.objects = model.objects;
+    scene.view3d = model.view3d;
     scene.materials = model.materials;
     std::size_t vertices = 0;
     for (const Piece& piece : d.pieces) {

@@ -15,19 +15,19 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/load_model.hpp"
-#include "text_number.hpp"
+#include "text_lines.hpp"
 
 namespace ffcube {
 namespace {
 
 using detail::fail_at;
+using detail::kMaxToken;
 using detail::shown;
 
 static_assert(std::endian::native == std::endian::little, "binary STL is read as little-endian");
 
 constexpr std::size_t kHeader = 84;    // 80 bytes of header, uint32 facet count
 constexpr std::size_t kFacet = 50;     // 12 float32 (normal, 3 vertices) and a uint16 attribute
-constexpr std::size_t kMaxToken = 4096;
 // The mesher's degeneracy bound (mesher.cpp): area at most 1e-12 × (longest edge)².
 constexpr double kDegenerate = 1e-12;
 
@@ -154,8 +154,6 @@ ObjModel parse_binary(std::string_view bytes, const std::string& source, const s
     return builder.finish("facet");
 }
 
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
 bool iequals(std::string_view a, std::string_view b) {
     return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
                return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
@@ -165,10 +163,11 @@ bool iequals(std::string_view a, std::string_view b) {
 class AsciiParser {
 public:
     AsciiParser(std::string_view text, const std::string& source, const std::string& stem)
-        : rest_(text), source_(source), stem_(stem), builder_(source) {}
+        : reader_(text, source, {},
+                  "not an ASCII STL file (control bytes; a binary STL must be exactly 84 + 50 x (facet count) bytes long)"),
+          source_(source), stem_(stem), builder_(source) {}
 
     ObjModel run() {
-        if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
         enum class State { Outside, Solid, Facet, Loop, EndLoop };
         State state = State::Outside;
         std::uint32_t object = 0, solid_line = 0, facet_line = 0;
@@ -251,65 +250,28 @@ public:
     }
 
 private:
-    static std::string_view trim(std::string_view s) {
-        while (!s.empty() && is_space(s.front())) s.remove_prefix(1);
-        while (!s.empty() && is_space(s.back())) s.remove_suffix(1);
-        return s;
-    }
-
     bool next_line(std::string_view& line) {
-        if (done_) return false;
-        const std::size_t eol = rest_.find('\n');
-        line = rest_.substr(0, eol);
-        if (eol == std::string_view::npos)
-            done_ = true;
-        else
-            rest_.remove_prefix(eol + 1);
-        ++number_;
-        for (const char c : line) {
-            const auto u = static_cast<unsigned char>(c);
-            if ((u < 0x20 && !is_space(c)) || u == 0x7F)
-                fail_at(source_, number_, "not an ASCII STL file (control bytes; a binary STL must be exactly 84 + 50 x "
-                                          "(facet count) bytes long)");
-        }
-        return true;
+        const bool more = reader_.next(line);
+        number_ = reader_.line_number();
+        return more;
     }
+    bool token(std::string_view& line, std::string_view& out) const { return reader_.token(line, out); }
+    double number(std::string_view& line, const char* what) const { return reader_.number(line, what); }
+    void no_more(std::string_view& line, const char* rule) const { reader_.no_more(line, rule); }
+    static std::string_view trim(std::string_view s) { return detail::LineReader::trim(s); }
 
-    bool token(std::string_view& line, std::string_view& out) {
-        while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
-        if (line.empty()) return false;
-        std::size_t n = 0;
-        while (n < line.size() && !is_space(line[n])) ++n;
-        if (n > kMaxToken) fail_at(source_, number_, fmt::format("a token of {} bytes is longer than the limit of 4096 bytes", n));
-        out = line.substr(0, n);
-        line.remove_prefix(n);
-        return true;
-    }
-
-    double number(std::string_view& line, const char* what) {
-        std::string_view t;
-        if (!token(line, t)) fail_at(source_, number_, fmt::format("missing a number ({})", what));
-        return detail::parse_number(t, source_, number_, what);
-    }
-
-    void no_more(std::string_view& line, const char* rule) {
-        std::string_view t;
-        if (token(line, t)) fail_at(source_, number_, fmt::format("{}, found {}", rule, shown(t)));
-    }
-
-    std::string_view rest_;
+    detail::LineReader reader_;
     const std::string& source_;
     const std::string& stem_;
     Builder builder_;
     std::uint32_t number_ = 0;
-    bool done_ = false;
     std::size_t solids_ = 0;
 };
 
 bool begins_with_solid(std::string_view bytes) {
     if (bytes.substr(0, 3) == "\xEF\xBB\xBF") bytes.remove_prefix(3);
-    while (!bytes.empty() && (is_space(bytes.front()) || bytes.front() == '\n')) bytes.remove_prefix(1);
-    return bytes.size() >= 5 && iequals(bytes.substr(0, 5), "solid") && (bytes.size() == 5 || is_space(bytes[5]) || bytes[5] == '\n');
+    while (!bytes.empty() && (detail::is_blank(bytes.front()) || bytes.front() == '\n')) bytes.remove_prefix(1);
+    return bytes.size() >= 5 && iequals(bytes.substr(0, 5), "solid") && (bytes.size() == 5 || detail::is_blank(bytes[5]) || bytes[5] == '\n');
 }
 
 }  // namespace

@@ -12,7 +12,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/load_model.hpp"
-#include "text_number.hpp"
+#include "text_lines.hpp"
 
 namespace ffcube {
 namespace {
@@ -20,19 +20,16 @@ namespace {
 using detail::fail_at;
 using detail::shown;
 
-constexpr std::size_t kMaxToken = 4096;
-
-bool is_space(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
-
 class Vs3Parser {
 public:
-    Vs3Parser(std::string_view text, const std::string& source) : rest_(text), source_(source) {
+    Vs3Parser(std::string_view text, const std::string& source)
+        : reader_(text, source, "!/", "not a View3D file (control bytes: binary data?)"), source_(source) {
         model_.source = source;
+        model_.view3d.present = true;
         model_.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
     }
 
     ObjModel run() {
-        if (rest_.substr(0, 3) == "\xEF\xBB\xBF") rest_.remove_prefix(3);
         std::string_view line;
         while (next_line(line)) {
             std::string_view element;
@@ -43,7 +40,7 @@ public:
                 fail_at(source_, number_, fmt::format("unknown element {} (View3D lines begin with T, C, F, V, S, O, M, N or E)",
                                                       shown(element)));
             switch (kind) {
-            case 'T': break;  // title: ignored
+            case 'T': model_.view3d.title = std::string(detail::LineReader::trim(line)); break;  // the last one wins
             case 'C': control(line); break;
             case 'F': geometry_format(line); break;
             case 'V': vertex(line); break;
@@ -74,40 +71,13 @@ public:
 
 private:
     bool next_line(std::string_view& line) {
-        if (done_) return false;
-        const std::size_t eol = rest_.find('\n');
-        line = rest_.substr(0, eol);
-        if (eol == std::string_view::npos)
-            done_ = true;
-        else
-            rest_.remove_prefix(eol + 1);
-        ++number_;
-        // '!' or '/' starts a comment, also after data on a line.
-        if (const std::size_t c = line.find_first_of("!/"); c != std::string_view::npos) line = line.substr(0, c);
-        for (const char c : line) {
-            const auto u = static_cast<unsigned char>(c);
-            if ((u < 0x20 && !is_space(c)) || u == 0x7F)
-                fail_at(source_, number_, "not a View3D file (control bytes: binary data?)");
-        }
-        return true;
+        const bool more = reader_.next(line);
+        number_ = reader_.line_number();
+        return more;
     }
+    bool token(std::string_view& line, std::string_view& out) const { return reader_.token(line, out); }
 
-    bool token(std::string_view& line, std::string_view& out) {
-        while (!line.empty() && is_space(line.front())) line.remove_prefix(1);
-        if (line.empty()) return false;
-        std::size_t n = 0;
-        while (n < line.size() && !is_space(line[n])) ++n;
-        if (n > kMaxToken) fail_at(source_, number_, fmt::format("a token of {} bytes is longer than the limit of 4096 bytes", n));
-        out = line.substr(0, n);
-        line.remove_prefix(n);
-        return true;
-    }
-
-    std::string_view required(std::string_view& line, const char* what) {
-        std::string_view t;
-        if (!token(line, t)) fail_at(source_, number_, fmt::format("missing {}", what));
-        return t;
-    }
+    std::string_view required(std::string_view& line, const char* what) const { return reader_.required(line, what); }
 
     long long integer(std::string_view& line, const char* what) {
         const std::string_view t = required(line, what);
@@ -128,26 +98,35 @@ private:
             const double value = detail::parse_number(pair.substr(eq + 1), source_, number_, "a control value");
             std::string lower = key;
             std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
+            // Honoured: encl, emit, out (0 or 1 each, as View3D takes them).
+            if (lower == "encl" || lower == "emit" || lower == "out") {
+                if (value != 0.0 && value != 1.0)
+                    fail_at(source_, number_, fmt::format("control {}={} must be 0 or 1", key, value));
+                (lower == "encl" ? model_.view3d.encl : lower == "emit" ? model_.view3d.emit : model_.view3d.out) =
+                    static_cast<int>(value);
+                continue;
+            }
             static const std::map<std::string, std::string> kIgnored = {
                 {"eps", "ffcube's accuracy is set by --resolution and --correct"},
                 {"maxu", "ffcube's accuracy is set by --resolution and --correct"},
                 {"maxo", "ffcube's accuracy is set by --resolution and --correct"},
                 {"mino", "ffcube's accuracy is set by --resolution and --correct"},
                 {"maxv", "ffcube's accuracy is set by --resolution and --correct"},
-                {"row", "ffcube computes every row"},
-                {"col", "ffcube computes every column"},
-                {"encl", "rows are not adjusted; ffcube's --enforce closure is the analogue"},
-                {"emit", "ffcube computes black form factors; the emissivities only set Kd = 1 - emissivity for solve"},
-                {"out", "ffcube's outputs are chosen by its own options"},
+                {"row", "ffcube computes every row (read one row from the output)"},
+                {"col", "ffcube computes every column (read one column from the output)"},
                 {"list", "ffcube's log is set by --quiet"},
                 {"prjd", "ffcube does not project"},
                 {"prjreverse", "ffcube does not project"},
             };
+            // The defaults change nothing, so they are honoured trivially; View3D's defaults:
+            // eps 1e-4, maxU 12, maxO 8, minO 0, row 0, col 0, list 0.
+            static const std::map<std::string, double> kDefault = {{"row", 0.0}, {"col", 0.0}, {"list", 0.0}};
+            if (const auto d = kDefault.find(lower); d != kDefault.end() && d->second == value) continue;
             const auto it = kIgnored.find(lower);
-            model_.warnings.push_back(
-                it != kIgnored.end()
-                    ? fmt::format("{}:{}: control {}={} is ignored: {}", source_, number_, key, value, it->second)
-                    : fmt::format("{}:{}: unknown control {}={} is ignored", source_, number_, detail::shown(key), value));
+            const std::string setting = fmt::format("{}={}", it != kIgnored.end() ? key : detail::shown(key), value);
+            const std::string why = it != kIgnored.end() ? it->second : "unknown control key";
+            model_.view3d.ignored.push_back(fmt::format("{}: {}", setting, why));
+            model_.warnings.push_back(fmt::format("{}:{}: control {} is ignored: {}", source_, number_, setting, why));
         }
     }
 
@@ -232,11 +211,10 @@ private:
         return it->second;
     }
 
-    std::string_view rest_;
+    detail::LineReader reader_;
     const std::string& source_;
     ObjModel model_;
     std::uint32_t number_ = 0;
-    bool done_ = false;
     bool saw_format_ = false;
     std::vector<std::uint32_t> surface_object_;
     std::vector<long long> surface_cmb_;

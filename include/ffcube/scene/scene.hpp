@@ -27,6 +27,18 @@ struct ObjFace {
     std::uint32_t line = 0;        // 1-based line of the 'f' statement, for messages
 };
 
+// What a View3D file's control lines (C) and title (T) ask for, kept for the parts of ffcube that
+// honour them (docs/scene-format.md, "View3D control keys"). From other formats: present = false.
+struct View3dControls {
+    bool present = false;  // the scene came from a .vs3 file
+    int encl = 0;          // 1: the surfaces form an enclosure: rows are made to conserve energy (--enforce closure)
+    int emit = 0;          // 1: the View3D output holds Hottel's script-F (reflections included, emissivities)
+    int out = 0;           // the View3D output: 0 text, 1 binary
+    std::string title;     // the last T line
+    // One entry per control key that ffcube does not honour: "KEY=VALUE: why" (also a warning).
+    std::vector<std::string> ignored;
+};
+
 // A parsed OBJ/MTL file before meshing. Validated: every index in range, every number finite.
 struct ObjModel {
     std::string source;                 // file path (or "<built-in cornell box>") for messages
@@ -39,6 +51,7 @@ struct ObjModel {
     // meshing, and vertex references merged into an exactly coinciding earlier vertex.
     std::size_t dropped_degenerate = 0;
     std::size_t merged_vertices = 0;
+    View3dControls view3d;              // a .vs3 file's control keys and title
 };
 
 // A patch: a planar triangle or convex quad, the unit of the form-factor matrix.
@@ -88,6 +101,7 @@ struct Scene {
     std::vector<std::string> objects;
     std::vector<Material> materials;
     MeshStats stats;
+    View3dControls view3d;  // as loaded (ObjModel::view3d)
     Vec3 bbox_min{0.0}, bbox_max{0.0};
     // Hash of the meshed geometry (vertex positions, patch vertices and objects). Two runs that
     // mesh the same file with the same options get the same value; materials do not enter it,

@@ -1,0 +1,53 @@
+// Files that other radiation solvers read (docs/outputs.md): NIST View3D's view-factor file, Elmer's
+// ViewFactors.dat, a patch table that maps rows to geometry, and sky view factors. Every writer is
+// atomic (atomic_file.hpp) and throws IoError when the file cannot be written.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "ffcube/core/progress.hpp"
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+// View3D's surfaces after combination: N areas, an N × N matrix F[n][m] (fraction of the energy
+// leaving n that arrives at m; with emit = 1 Hottel's exchange factors), N emissivities.
+struct View3dTable {
+    std::vector<double> area;
+    std::vector<std::vector<double>> F;
+    std::vector<double> emissivity;
+    int encl = 0;  // the header's flags, as View3D writes them
+    int emit = 0;
+};
+
+// The header View3D 3.5 writes (savevf.c): "View3D 3.5 <format> <encl> <emit> <N>" blank-padded to
+// 30 bytes; then "\n" (text: 31 bytes) or "\r\n" (binary: 32 bytes).
+std::string view3d_header(int format, int encl, int emit, std::size_t n);
+
+// Text (binary = false): the header, a line of the N areas ("%g"), N lines of N factors ("%.6f"),
+// a line of N emissivities ("%.3f"). Binary: the 32-byte header, then float32 areas, rows, and
+// emissivities, little-endian, nothing between them.
+void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool binary);
+
+// Elmer's ViewFactors.dat, as fem/src/ViewFactors.F90 writes it, for the patches as Elmer's
+// radiation boundary elements: text: for every row i, a line with the count k of its non-zero
+// factors, then k lines "i j F_ij" (1-based). Binary ("Viewfactor Binary Output", unformatted
+// stream): int32 N, then per row int32 k and k pairs (int32 j, float64 F_ij). Little-endian.
+void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix& F, bool binary,
+                              Progress* progress = nullptr);
+
+// One line per patch, header "patch,object,area,cx,cy,cz,nx,ny,nz": the row/column index i
+// (0-based, as in .ffm; Matrix Market's row i+1), its object's name, its area (scene units²), its
+// centroid and its unit normal (front side).
+void write_patch_table(const std::filesystem::path& path, const Scene& scene);
+
+// Sky view factors per patch: header "patch,object,area,sky_view_factor".
+void write_patch_sky_csv(const std::filesystem::path& path, const Scene& scene, const std::vector<double>& svf);
+// Per object: header "object,area,sky_view_factor" (area-weighted means).
+void write_object_sky_csv(const std::filesystem::path& path, const std::vector<std::string>& names,
+                          const std::vector<double>& area, const std::vector<double>& svf);
+
+}  // namespace ffcube

@@ -1,0 +1,56 @@
+// The outputs of `ffcube formfactors` that other tools read (docs/outputs.md): sky view factors,
+// View3D's view-factor file, Elmer's ViewFactors.dat, the patch table; and the View3D control
+// keys of a .vs3 scene that change how the matrix is made (encl). Composition only: the numbers
+// come from formfactor/sky.hpp and solver/exchange.hpp, the bytes from io/solver_files.hpp.
+#pragma once
+
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/io/solver_files.hpp"
+#include "ffcube/pipeline/options.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+enum class SkyBy { Patch, Object };
+enum class FileFormat { Auto, Text, Binary };
+
+struct SurfaceOutputOptions {
+    std::string sky;                  // --sky S.csv
+    SkyBy sky_by = SkyBy::Patch;      // --sky-by patch|object
+    std::string view3d;               // --view3d F: View3D's view-factor file (one surface per object)
+    FileFormat view3d_format = FileFormat::Auto;  // --view3d-format: auto = the .vs3's `out`, else text
+    std::string elmer;                // --elmer ViewFactors.dat (one row per patch)
+    FileFormat elmer_format = FileFormat::Auto;   // --elmer-format: auto = text
+    std::string patch_table;          // --patch-table P.csv
+};
+
+SkyBy parse_sky_by(std::string_view text);            // patch | object
+FileFormat parse_file_format(std::string_view text);  // auto | text | binary
+
+// A .vs3 scene's encl=1 asks for rows that conserve energy: --enforce closure, unless the command
+// line chose an --enforce mode (which wins; the report says so). Recorded under "view3d" in the
+// report with the title and every ignored control key.
+void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report);
+
+// The View3D table of F: one surface per object (a .vs3's S surfaces, cmb groups as one, named
+// by the group's first surface), in object order: areas, object form factors (F to a group is the
+// sum over its parts, F from it the area-weighted mean), emissivities ε = 1 − Kd (area-weighted,
+// mean of RGB; a .vs3 gives Kd = 1 − ε). With the scene's emit=1, Hottel's exchange factors.
+View3dTable view3d_table(const CsrMatrix& F, const Scene& scene);
+
+// Sky statistics into the report (always), then every file asked for. F is the finished matrix.
+void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
+                           bool progress);
+// Whether the outputs asked for need the whole matrix (View3D's and Elmer's files do; the sky view
+// factors and the patch table need only each row's sum).
+bool surface_outputs_need_matrix(const SurfaceOutputOptions& o);
+// The same from each row's sum, for a streamed matrix; the options must not need the matrix.
+void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
+                           Report& report);
+
+}  // namespace ffcube

@@ -1,0 +1,149 @@
+#include "ffcube/io/solver_files.hpp"
+
+#include <fmt/format.h>
+
+#include <bit>
+#include <cstdint>
+#include <cstring>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/atomic_file.hpp"
+#include "ffcube/io/csv.hpp"
+
+namespace ffcube {
+namespace {
+
+static_assert(std::endian::native == std::endian::little, "binary outputs are written little-endian");
+
+template <typename T>
+void put(std::ostream& out, T value) {
+    char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    out.write(bytes, sizeof(T));
+}
+
+constexpr std::size_t kFlushBytes = 1 << 20;
+
+void flush_if_full(std::ostream& out, fmt::memory_buffer& buf, bool force = false) {
+    if (!force && buf.size() < kFlushBytes) return;
+    out.write(buf.data(), static_cast<std::streamsize>(buf.size()));
+    buf.clear();
+}
+
+}  // namespace
+
+std::string view3d_header(int format, int encl, int emit, std::size_t n) {
+    std::string h = fmt::format("View3D 3.5 {} {} {} {}", format, encl, emit, n);
+    FFCUBE_CHECK_MSG(h.size() <= 30, "View3D header longer than 30 bytes");
+    h.resize(30, ' ');
+    h += format == 1 ? "\r\n" : "\n";
+    return h;
+}
+
+void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool binary) {
+    const std::size_t n = t.area.size();
+    FFCUBE_CHECK(t.F.size() == n && t.emissivity.size() == n);
+    write_file_atomically(path, [&](std::ostream& out) {
+        const std::string header = view3d_header(binary ? 1 : 0, t.encl, t.emit, n);
+        if (binary) {
+            out.write(header.data(), static_cast<std::streamsize>(header.size()));
+            for (const double a : t.area) put(out, static_cast<float>(a));
+            for (const auto& row : t.F)
+                for (const double f : row) put(out, static_cast<float>(f));
+            for (const double e : t.emissivity) put(out, static_cast<float>(e));
+            return;
+        }
+        fmt::memory_buffer buf;
+        const auto line = [&](const std::vector<double>& v, auto&& one) {
+            for (std::size_t k = 0; k < v.size(); ++k) {
+                if (k) buf.push_back(' ');
+                one(v[k]);
+            }
+            buf.push_back('\n');
+            flush_if_full(out, buf);
+        };
+        buf.append(header);
+        // Values are rounded to float first, as View3D stores them (R4).
+        line(t.area, [&](double a) { fmt::format_to(std::back_inserter(buf), "{:g}", static_cast<float>(a)); });
+        for (const auto& row : t.F)
+            line(row, [&](double f) { fmt::format_to(std::back_inserter(buf), "{:.6f}", static_cast<float>(f)); });
+        line(t.emissivity, [&](double e) { fmt::format_to(std::back_inserter(buf), "{:.3f}", static_cast<float>(e)); });
+        flush_if_full(out, buf, true);
+    });
+}
+
+void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix& F, bool binary, Progress* progress) {
+    const std::uint32_t n = F.size();
+    FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_elmer_view_factors needs every row of the matrix");
+    write_file_atomically(path, [&](std::ostream& out) {
+        fmt::memory_buffer buf;
+        if (binary) put(out, static_cast<std::int32_t>(n));
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const RowView r = F.row(i);
+            std::int32_t k = 0;
+            for (const float v : r.val) k += v > 0.0f ? 1 : 0;
+            if (binary) {
+                put(out, k);
+                for (std::size_t e = 0; e < r.col.size(); ++e)
+                    if (r.val[e] > 0.0f) {
+                        put(out, static_cast<std::int32_t>(r.col[e] + 1));
+                        put(out, static_cast<double>(r.val[e]));
+                    }
+            } else {
+                fmt::format_to(std::back_inserter(buf), "{}\n", k);
+                // 9 significant digits: every float reads back exactly.
+                for (std::size_t e = 0; e < r.col.size(); ++e)
+                    if (r.val[e] > 0.0f)
+                        fmt::format_to(std::back_inserter(buf), "{} {} {:.9g}\n", i + 1, r.col[e] + 1,
+                                       static_cast<double>(r.val[e]));
+                flush_if_full(out, buf);
+            }
+            if (progress) progress->add();
+        }
+        flush_if_full(out, buf, true);
+    });
+}
+
+void write_patch_table(const std::filesystem::path& path, const Scene& scene) {
+    write_file_atomically(path, [&](std::ostream& out) {
+        fmt::memory_buffer buf;
+        buf.append(std::string_view("patch,object,area,cx,cy,cz,nx,ny,nz\n"));
+        for (std::size_t i = 0; i < scene.size(); ++i) {
+            const Patch& p = scene.patches[i];
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", i,
+                           csv_field(scene.objects[p.object]), p.area, p.centroid.x, p.centroid.y, p.centroid.z,
+                           p.normal.x, p.normal.y, p.normal.z);
+            flush_if_full(out, buf);
+        }
+        flush_if_full(out, buf, true);
+    });
+}
+
+void write_patch_sky_csv(const std::filesystem::path& path, const Scene& scene, const std::vector<double>& svf) {
+    FFCUBE_CHECK(svf.size() == scene.size());
+    write_file_atomically(path, [&](std::ostream& out) {
+        fmt::memory_buffer buf;
+        buf.append(std::string_view("patch,object,area,sky_view_factor\n"));
+        for (std::size_t i = 0; i < scene.size(); ++i) {
+            const Patch& p = scene.patches[i];
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g}\n", i, csv_field(scene.objects[p.object]), p.area,
+                           svf[i]);
+            flush_if_full(out, buf);
+        }
+        flush_if_full(out, buf, true);
+    });
+}
+
+void write_object_sky_csv(const std::filesystem::path& path, const std::vector<std::string>& names,
+                          const std::vector<double>& area, const std::vector<double>& svf) {
+    FFCUBE_CHECK(names.size() == area.size() && names.size() == svf.size());
+    write_file_atomically(path, [&](std::ostream& out) {
+        fmt::memory_buffer buf;
+        buf.append(std::string_view("object,area,sky_view_factor\n"));
+        for (std::size_t a = 0; a < names.size(); ++a)
+            fmt::format_to(std::back_inserter(buf), "{},{:.9g},{:.9g}\n", csv_field(names[a]), area[a], svf[a]);
+        flush_if_full(out, buf, true);
+    });
+}
+
+}  // namespace ffcube

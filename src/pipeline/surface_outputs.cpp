@@ -1,0 +1,107 @@
+#include "ffcube/pipeline/surface_outputs.hpp"
+
+#include <fmt/format.h>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/formfactor/sky.hpp"
+#include "ffcube/solver/exchange.hpp"
+
+namespace ffcube {
+
+SkyBy parse_sky_by(std::string_view text) {
+    if (text == "patch") return SkyBy::Patch;
+    if (text == "object") return SkyBy::Object;
+    throw InputError(fmt::format("--sky-by {}: expected patch or object", text));
+}
+
+FileFormat parse_file_format(std::string_view text) {
+    if (text == "auto") return FileFormat::Auto;
+    if (text == "text") return FileFormat::Text;
+    if (text == "binary") return FileFormat::Binary;
+    throw InputError(fmt::format("{}: expected auto, text or binary", text));
+}
+
+void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report) {
+    const View3dControls& v = scene.view3d;
+    if (!v.present) return;
+    report.set("view3d.title", v.title);
+    report.set("view3d.encl", v.encl);
+    report.set("view3d.emit", v.emit);
+    report.set("view3d.out", v.out);
+    report.set_array("view3d.ignored_controls", v.ignored);
+    if (v.encl != 1) return;
+    if (rows.enforce == EnforceRequest::None) {
+        rows.enforce = EnforceRequest::Closure;
+        info("{}: encl=1: rows are made to conserve energy (--enforce closure)", scene.source);
+        report.set("view3d.encl_applied", "closure");
+    } else {
+        info("{}: encl=1: --enforce {} given on the command line is used instead", scene.source, to_string(rows.enforce));
+        report.set("view3d.encl_applied", std::string(to_string(rows.enforce)));
+    }
+}
+
+View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) {
+    View3dTable t;
+    t.area = object_areas(scene);
+    t.F = object_form_factors(F, scene);
+    std::vector<double> eps(scene.size());
+    for (std::size_t i = 0; i < scene.size(); ++i) {
+        const Vec3 kd = scene.materials[scene.patches[i].material].kd;
+        eps[i] = 1.0 - (kd.x + kd.y + kd.z) / 3.0;
+    }
+    t.emissivity = object_means(eps, scene);
+    t.encl = scene.view3d.encl;
+    t.emit = scene.view3d.emit;
+    if (t.emit == 1) t.F = hottel_exchange_factors(t.F, t.area, t.emissivity);
+    return t;
+}
+
+namespace {
+
+// The sky statistics (always) and the files that need only the sky view factors and the scene.
+void write_sky_and_table(const SurfaceOutputOptions& o, const std::vector<double>& svf, const Scene& scene,
+                         Report& report) {
+    const SkyStats s = sky_stats(svf, scene);
+    report.set("sky.min", s.min);
+    report.set("sky.mean", s.mean);
+    report.set("sky.max", s.max);
+    report.set("sky.area_weighted_mean", s.area_weighted_mean);
+    if (!o.sky.empty()) {
+        if (o.sky_by == SkyBy::Patch)
+            write_patch_sky_csv(o.sky, scene, svf);
+        else
+            write_object_sky_csv(o.sky, scene.objects, object_areas(scene), object_means(svf, scene));
+    }
+    if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene);
+}
+
+}  // namespace
+
+bool surface_outputs_need_matrix(const SurfaceOutputOptions& o) { return !o.view3d.empty() || !o.elmer.empty(); }
+
+void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
+                           bool progress) {
+    write_sky_and_table(o, sky_view_factors(F), scene, report);
+    if (!o.view3d.empty()) {
+        const bool binary = o.view3d_format == FileFormat::Binary ||
+                            (o.view3d_format == FileFormat::Auto && scene.view3d.present && scene.view3d.out == 1);
+        write_view3d(o.view3d, view3d_table(F, scene), binary);
+        report.set("view3d.written", o.view3d);
+        report.set("view3d.format", binary ? "binary" : "text");
+        report.set("view3d.surfaces", scene.objects.size());
+    }
+    if (!o.elmer.empty()) {
+        Progress bar(fmt::format("writing {} (rows)", o.elmer), F.size(), progress);
+        write_elmer_view_factors(o.elmer, F, o.elmer_format == FileFormat::Binary, &bar);
+    }
+}
+
+void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
+                           Report& report) {
+    FFCUBE_CHECK_MSG(!surface_outputs_need_matrix(o), "View3D and Elmer files need the whole matrix");
+    write_sky_and_table(o, sky_view_factors(row_sums), scene, report);
+}
+
+}  // namespace ffcube
