@@ -8,8 +8,10 @@
 // make their own vectors: near pairs and the sender quadrature still allocate there).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
+#include <cstdint>
 #include <cstdlib>
 #include <new>
 #include <numeric>
@@ -146,10 +148,20 @@ TEST_P(CorrectedRowProviderScratch, AllocatesNothingPerRow) {
     const RowSink sink = [&](std::uint32_t, const SparseRow& r) { sum += r.sum(); };
     corrected.compute_rows(all, sink);  // the buffers grow
     corrected.compute_rows(all, sink);
+    // The pools hold as many scratch spaces and analysis buffers as were ever in use at once, and
+    // which buffer serves which row depends on the planning threads' timing: on a loaded machine a
+    // call may still meet a new high-water mark (a new buffer, or one growing to the largest row:
+    // 29 allocations seen once in 60 runs beside three busy loops). Such growth happens once per
+    // buffer and cannot recur, whereas a per-row allocation recurs in every call: so the count of
+    // a call is the least over five calls.
     const auto count = [&](std::size_t rows) {
-        const std::size_t before = g_allocations.load();
-        corrected.compute_rows(std::span<const std::uint32_t>(all).first(rows), sink);
-        return g_allocations.load() - before;
+        std::size_t least = SIZE_MAX;
+        for (int k = 0; k < 5; ++k) {
+            const std::size_t before = g_allocations.load();
+            corrected.compute_rows(std::span<const std::uint32_t>(all).first(rows), sink);
+            least = std::min(least, g_allocations.load() - before);
+        }
+        return least;
     };
     const std::size_t a = count(all.size()), b = count(all.size() / 4);
     if (!planned) {
@@ -163,9 +175,9 @@ TEST_P(CorrectedRowProviderScratch, AllocatesNothingPerRow) {
         EXPECT_LE(a, 4u + 2 * 8u) << "a 72-row call";
         EXPECT_LE(a, b + 8u) << "one more batch, per " << all.size() << "-row call " << a << ", per 18-row call " << b;
     }
-    EXPECT_EQ(inner.plans_[static_cast<std::size_t>(RowProvider::RowPlan::centre)], planned ? 3 * 72u + 18u : 0u);
+    EXPECT_EQ(inner.plans_[static_cast<std::size_t>(RowProvider::RowPlan::centre)], planned ? (2 + 5) * 72u + 5 * 18u : 0u);
     EXPECT_EQ(corrected.retained_analysis_entries(), 0u);
-    EXPECT_EQ(corrected.stats().far_entries, (3 * 72u + 18u) * 36u);
+    EXPECT_EQ(corrected.stats().far_entries, ((2 + 5) * 72u + 5 * 18u) * 36u);
     EXPECT_GT(sum, 0.0);
 }
 

@@ -72,14 +72,16 @@ TEST(RefinementIndicator, ALinearRampVariesByHalfItsStepAndAConstantNotAtAll) {
     const std::vector<double> none = radiosity_variation(s, flat);
     for (std::uint32_t i = 0; i < s.size(); ++i) {
         // Rounding of the centroids (1e-16) times the slope, far below 1e-12.
-        if (s.patches[i].object == 0) EXPECT_NEAR(ramp[i], 1.0 / kN, 1e-12);
+        if (s.patches[i].object == 0) {
+            EXPECT_NEAR(ramp[i], 1.0 / kN, 1e-12);
+        }
         EXPECT_EQ(none[i], 0.0);
     }
     const RefinementChoice c = choose_refinement(s, flat, 1e-9, 10'000);
     EXPECT_EQ(c.candidates, 0u);
     EXPECT_EQ(c.marked, 0u);
     // The ramp's relative variation 0.1 / mean 2 = 5%: candidates at a 1% target, none at 10%.
-    const std::vector<Vec3> rb = field(s, [](const Vec3& c) { return 1.0 + 2.0 * c.x; });
+    const std::vector<Vec3> rb = field(s, [](const Vec3& p) { return 1.0 + 2.0 * p.x; });
     EXPECT_EQ(choose_refinement(s, rb, 0.01, 10'000).candidates, std::size_t{kN * kN});
     EXPECT_EQ(choose_refinement(s, rb, 0.1, 10'000).candidates, 0u);
 }
