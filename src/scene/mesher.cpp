@@ -367,6 +367,8 @@ void check_max_edge(double max_edge) {
 
 std::uint64_t scene_fingerprint(const Scene& scene) { return fingerprint_of(scene); }
 
+void fill_patch_geometry(Scene& scene, Patch& patch) { fill_patch(scene, patch); }
+
 std::size_t count_patches(const ObjModel& model, double max_patch_edge) {
     check_max_edge(max_patch_edge);
     const double n = count_pieces(decompose(model).pieces, max_patch_edge);

@@ -13,16 +13,6 @@
 namespace ffcube {
 namespace {
 
-void fill_element(Scene& scene, Patch& patch) {
-    const std::array<Vec3, 4> v = {scene.positions[patch.v[0]], scene.positions[patch.v[1]],
-                                   scene.positions[patch.v[2]], scene.positions[patch.v[3]]};
-    const std::span<const Vec3> poly(v.data(), patch.count);
-    patch.area = polygon_area(poly);
-    patch.normal = polygon_normal(poly);
-    patch.centroid = polygon_centroid(poly);
-    patch.size = polygon_max_edge(poly);
-}
-
 // The mesher's layouts (scene.hpp, PatchGrid), so that a renderer finds an element from its
 // position in the grid exactly as it finds a patch.
 void split_quad(Scene& out, const Patch& p, const std::array<Vec3, 4>& c, std::uint32_t s) {
@@ -41,7 +31,7 @@ void split_quad(Scene& out, const Patch& p, const std::array<Vec3, 4>& c, std::u
             Patch e = p;
             const std::uint32_t a = base + j * row + i;
             e.v = {a, a + 1, a + row + 1, a + row};
-            fill_element(out, e);
+            fill_patch_geometry(out, e);
             out.patches.push_back(e);
         }
 }
@@ -58,7 +48,7 @@ void split_triangle(Scene& out, const Patch& p, const std::array<Vec3, 4>& c, st
     const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t cc) {
         Patch e = p;
         e.v = {a, b, cc, cc};
-        fill_element(out, e);
+        fill_patch_geometry(out, e);
         out.patches.push_back(e);
     };
     out.grids.push_back(PatchGrid{{c[0], c[1], c[2], c[2]}, 3, k, k, static_cast<std::uint32_t>(out.patches.size())});

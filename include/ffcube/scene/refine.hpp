@@ -25,4 +25,7 @@ RefinedScene refine_patches(const Scene& scene, std::span<const std::uint32_t> s
 // The mesher's hash of meshed geometry (Scene::fingerprint), for scenes built outside build_scene.
 std::uint64_t scene_fingerprint(const Scene& scene);
 
+// A patch's area, normal, centroid and size from its vertices, as the mesher fills them (mesher.cpp).
+void fill_patch_geometry(Scene& scene, Patch& patch);
+
 }  // namespace ffcube
