@@ -121,6 +121,12 @@ std::vector<std::uint8_t> serialize_scene(const Scene& s) {
     w.put(s.bbox_min);
     w.put(s.bbox_max);
     w.put(s.fingerprint);
+    w.put<std::uint8_t>(s.view3d.present ? 1 : 0);
+    w.put<std::int32_t>(s.view3d.encl);
+    w.put<std::int32_t>(s.view3d.emit);
+    w.put<std::int32_t>(s.view3d.out);
+    w.put(s.view3d.title);
+    w.put_all(s.view3d.ignored, [&](const std::string& x) { w.put(x); });
     w.put<std::uint64_t>(w.out.size() + 8);  // the total, last: a truncated or padded blob is refused
     return std::move(w.out);
 }
@@ -170,6 +176,13 @@ Scene deserialize_scene(std::span<const std::uint8_t> bytes) {
     s.bbox_min = r.get_vec3();
     s.bbox_max = r.get_vec3();
     s.fingerprint = r.get<std::uint64_t>();
+    s.view3d.present = r.get<std::uint8_t>() != 0;
+    s.view3d.encl = r.get<std::int32_t>();
+    s.view3d.emit = r.get<std::int32_t>();
+    s.view3d.out = r.get<std::int32_t>();
+    s.view3d.title = r.get_string();
+    s.view3d.ignored.resize(r.count(8, "ignored View3D controls"));
+    for (std::string& x : s.view3d.ignored) x = r.get_string();
     if (r.get<std::uint64_t>() != bytes.size() || r.at != bytes.size()) r.fail("its length does not match its contents");
     // Indices in range, so that a damaged blob cannot make a row provider read out of bounds.
     for (std::size_t i = 0; i < s.patches.size(); ++i) {

@@ -15,6 +15,13 @@ Scene cornell() {
     m.target_patches = 300;
     Scene s = build_scene(load_cornell_box(), m);
     s.stats.warnings.push_back("a warning, carried too");
+    // A .vs3's controls travel too (rank 0 applies encl/emit/out; the others must agree).
+    s.view3d.present = true;
+    s.view3d.encl = 1;
+    s.view3d.emit = 1;
+    s.view3d.out = 1;
+    s.view3d.title = "a title";
+    s.view3d.ignored = {"eps=1e-6: ffcube's accuracy is --resolution and --correct"};
     return s;
 }
 
@@ -57,6 +64,12 @@ TEST(SceneBlob, RoundTripIsExact) {
     EXPECT_EQ(b.bbox_min, a.bbox_min);
     EXPECT_EQ(b.bbox_max, a.bbox_max);
     EXPECT_EQ(b.fingerprint, a.fingerprint);
+    EXPECT_EQ(b.view3d.present, a.view3d.present);
+    EXPECT_EQ(b.view3d.encl, a.view3d.encl);
+    EXPECT_EQ(b.view3d.emit, a.view3d.emit);
+    EXPECT_EQ(b.view3d.out, a.view3d.out);
+    EXPECT_EQ(b.view3d.title, a.view3d.title);
+    EXPECT_EQ(b.view3d.ignored, a.view3d.ignored);
     EXPECT_EQ(serialize_scene(b), serialize_scene(a));
 }
 
