@@ -8,8 +8,8 @@ cd "$(dirname "$0")/.."
 build_dir="${FFCUBE_ASAN_DIR:-build-asan}"
 FFCUBE_BUILD_DIR="$build_dir" FFCUBE_CMAKE_ARGS="-DFFCUBE_SANITIZE=ON ${FFCUBE_CMAKE_ARGS:-}" bash tools/setup.sh
 
-# Leak checking stays on, with no suppressions for ffcube (only OpenMPI's own allocations in mpi.np2:
-# tests/mpi/lsan_openmpi.supp). One trap: Mesa's EGL and OSMesa drivers (with
+# Leak checking stays on, with no suppressions (mpi.np2 alone runs without it: OpenMPI's leaks
+# cannot be told apart, see tests/CMakeLists.txt). One trap: Mesa's EGL and OSMesa drivers (with
 # llvmpipe inside) are dlopen'ed by ffcube's GL layer and dlclose'd when the last context goes.
 # Their process-lifetime allocations are referenced only from the drivers' own globals; once a
 # driver is unmapped those references vanish and LeakSanitizer reports the blocks as leaked, with

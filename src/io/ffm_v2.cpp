@@ -326,8 +326,10 @@ FfmReader::FfmReader(const std::filesystem::path& path) : impl_(std::make_unique
     const std::string text(reinterpret_cast<const char*>(bytes.data()) + kHeaderSize, h.text_bytes());
     m.head.areas.resize(h.n);
     m.head.objects.resize(h.n);
-    std::memcpy(m.head.areas.data(), bytes.data() + text_end, 8 * std::size_t(h.n));
-    std::memcpy(m.head.objects.data(), bytes.data() + text_end + 8 * std::uint64_t(h.n), 4 * std::size_t(h.n));
+    if (h.n > 0) {  // an empty vector's data() may be null, which memcpy must not be given
+        std::memcpy(m.head.areas.data(), bytes.data() + text_end, 8 * std::size_t(h.n));
+        std::memcpy(m.head.objects.data(), bytes.data() + text_end + 8 * std::uint64_t(h.n), 4 * std::size_t(h.n));
+    }
     const std::uint64_t obj_end = text_end + 12 * std::uint64_t(h.n);
     for (std::uint64_t k = obj_end; k + 8 < bytes.size(); ++k)
         if (bytes[k] != 0) throw invalid(name, "nonzero padding byte after the objects");
@@ -423,7 +425,7 @@ bool FfmReader::Impl::next(FfmBlock& out) {
     raw.resize(raw_bytes);
     if (codec == kCodecRaw) {
         if (stored_bytes != raw_bytes) throw bad(fmt::format("raw block of {} bytes stores {}", raw_bytes, stored_bytes));
-        std::memcpy(raw.data(), stored.data(), raw_bytes);
+        if (raw_bytes > 0) std::memcpy(raw.data(), stored.data(), raw_bytes);
     } else if (codec == kCodecZstd) {
         const unsigned long long frame = ZSTD_getFrameContentSize(stored.data(), stored_bytes);
         if (frame != raw_bytes) throw bad("zstd frame size differs from the block's coded size");
