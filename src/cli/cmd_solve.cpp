@@ -85,6 +85,8 @@ int run(const Options& o) {
         if (mpi_distributed()) throw InputError("--target-error/--max-elements under mpirun: adaptive meshing runs in one process (docs/scaling.md)");
         if (scene_options.patches == 0 && scene_options.max_patch_edge == 0.0 && scene_options.subdivide)
             scene_options.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
+        if (scene_options.contact_cuts == ContactCuts::Auto && scene_options.subdivide)
+            scene_options.contact_cuts = ContactCuts::On;  // contact lines: docs/adaptive.md
     }
 
     Stopwatch total;

@@ -46,6 +46,10 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
            "every input face is one patch (triangles and convex planar quads only)")
         ->excludes(edge)
         ->excludes(patches);
+    add_word_option(app, "--contact-cuts", o.scene.contact_cuts, parse_contact_cuts, {"auto", "on", "off"},
+                    "cut faces along the polygons where other objects stand on them, before meshing (auto: on for "
+                    "adaptive solves; docs/adaptive.md)",
+                    "auto");
     add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
                     {"auto", "o", "g", "material"},
                     "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto");

@@ -28,6 +28,13 @@ FarFieldMode parse_far_field(std::string_view text) {
     throw InputError(fmt::format("--far-field {}: must be auto, on or off", text));
 }
 
+ContactCuts parse_contact_cuts(std::string_view text) {
+    if (text == "auto") return ContactCuts::Auto;
+    if (text == "on") return ContactCuts::On;
+    if (text == "off") return ContactCuts::Off;
+    throw InputError(fmt::format("--contact-cuts {}: must be auto, on or off", text));
+}
+
 EnforceRequest parse_enforce_request(std::string_view text) {
     if (text.empty()) return EnforceRequest::None;
     if (text == "reciprocity") return EnforceRequest::Reciprocity;
@@ -63,6 +70,8 @@ void validate(const SceneOptions& o) {
         throw InputError(fmt::format("--max-patch-edge {}: must be a finite length > 0", o.max_patch_edge));
     if (!o.subdivide && (o.max_patch_edge > 0 || o.patches > 0))
         throw InputError("--no-subdivide keeps every face as one patch: give neither --max-patch-edge nor --patches with it");
+    if (!o.subdivide && o.contact_cuts == ContactCuts::On)
+        throw InputError("--contact-cuts on with --no-subdivide: the cut faces are not one patch each (docs/adaptive.md)");
 }
 
 void validate(const RowOptions& o) {

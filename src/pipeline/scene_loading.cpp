@@ -2,9 +2,12 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/scene/builtin.hpp"
+#include "ffcube/scene/contact.hpp"
 #include "ffcube/scene/load_model.hpp"
 #include "ffcube/scene/material_map.hpp"
 #include "ffcube/scene/mesher.hpp"
@@ -18,6 +21,13 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by});
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
+    std::optional<ContactCutStats> cuts;
+    if (o.contact_cuts == ContactCuts::On) {
+        cuts = cut_contacts(model);
+        for (const auto& note : cuts->notes) info("{}", note);
+        info("contact cuts: {} contact polygons cut {} faces into {} (covered area {:.6g})", cuts->contacts, cuts->receivers,
+             cuts->faces, cuts->covered_area);
+    }
     const double load_s = watch.seconds();
     watch.restart();
     MeshOptions mo;
@@ -42,6 +52,14 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("meshing.dropped_degenerate", scene.stats.dropped_degenerate);
     report.set("meshing.non_planar", scene.stats.non_planar);
     report.set("meshing.triangulated_ngons", scene.stats.triangulated_ngons);
+    report.set("meshing.contact_cuts.enabled", cuts.has_value());
+    if (cuts) {
+        report.set("meshing.contact_cuts.contacts", cuts->contacts);
+        report.set("meshing.contact_cuts.receivers", cuts->receivers);
+        report.set("meshing.contact_cuts.faces", cuts->faces);
+        report.set("meshing.contact_cuts.covered_area", cuts->covered_area);
+        report.set("meshing.contact_cuts.skipped", cuts->skipped);
+    }
     const SceneFormat format = o.path.empty() ? SceneFormat::Obj : o.format == SceneFormat::Auto ? format_for_path(o.path) : o.format;
     report.set("loading.format", to_string(format));
     report.set("loading.dropped_degenerate", model.dropped_degenerate);

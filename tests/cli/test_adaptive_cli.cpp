@@ -2,6 +2,8 @@
 // any work, and a run reports what it refined and each object's estimated error.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -75,6 +77,75 @@ TEST(AdaptiveCli, ReportSaysWhatWasRefinedAndEachObjectsError) {
     std::size_t lines = 0;
     for (std::string line; std::getline(csv, line);) ++lines;
     EXPECT_EQ(lines, elements + 1);
+}
+
+// A 0.5 cube standing on a 2 × 2 floor under a light (contact cuts: scene/contact.hpp).
+void write_block_scene(const TempDir& dir) {
+    std::ofstream(dir / "b.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n";
+    std::ofstream(dir / "b.obj") << "mtllib b.mtl\n"
+                                    "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                    "v -0.25 -0.25 0\nv 0.25 -0.25 0\nv 0.25 0.25 0\nv -0.25 0.25 0\n"
+                                    "v -0.25 -0.25 0.5\nv 0.25 -0.25 0.5\nv 0.25 0.25 0.5\nv -0.25 0.25 0.5\n"
+                                    "v -0.5 -0.5 1.5\nv 0.5 -0.5 1.5\nv 0.5 0.5 1.5\nv -0.5 0.5 1.5\n"
+                                    "o floor\nusemtl grey\nf 1 2 3 4\n"
+                                    "o block\nf 5 6 10 9\nf 6 7 11 10\nf 7 8 12 11\nf 8 5 9 12\nf 9 10 11 12\n"
+                                    "o light\nusemtl lamp\nf 13 16 15 14\n";
+}
+
+std::vector<std::vector<std::string>> csv_rows(const std::filesystem::path& path) {
+    std::istringstream in(test::read_text(path));
+    std::vector<std::vector<std::string>> rows;
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::istringstream l(line);
+        for (std::string c; std::getline(l, c, ',');) cells.push_back(c);
+        rows.push_back(cells);
+    }
+    return rows;
+}
+
+// The floor is cut along the block's footprint: the patches under the block receive nothing (the
+// only paths to them pass through the block's back faces, and every pair with them fails the
+// facing test), those around it do, and no patch straddles the contact line.
+TEST(AdaptiveCli, ContactCutsLeaveTheCoveredFloorDark) {
+    TempDir dir;
+    write_block_scene(dir);
+    const std::string mesh = (dir / "b.obj") + " --max-patch-edge 0.3 --contact-cuts on --resolution 32 -q";
+    auto r = run_ffcube("solve " + mesh + " --solver direct --radiosity " + (dir / "p.csv") + " --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto rep = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["contacts"], 1);
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["receivers"], 1);
+    EXPECT_NEAR(double{rep["meshing"]["contact_cuts"]["covered_area"]}, 0.25, 1e-12);
+    // Where the patches lie: the same mesh's patch table.
+    r = run_ffcube("formfactors " + mesh + " --patch-table " + (dir / "t.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto table = csv_rows(dir / "t.csv");
+    const auto b = csv_rows(dir / "p.csv");
+    ASSERT_EQ(table.size(), b.size());
+    double covered = 0, max_lit = 0, min_lit = 1e300;
+    for (std::size_t i = 0; i < b.size(); ++i) {
+        if (table[i][1] != "floor") continue;
+        const double x = std::stod(table[i][3]), y = std::stod(table[i][4]);
+        const double B = std::stod(b[i][3]);
+        // A centroid on the contact line would mean a patch straddling it.
+        EXPECT_FALSE(std::abs(std::abs(x) - 0.25) < 1e-9 && std::abs(y) <= 0.25) << i;
+        if (std::abs(x) < 0.25 && std::abs(y) < 0.25) {
+            covered += std::stod(table[i][2]);
+            EXPECT_EQ(B, 0.0) << "patch " << i << " under the block";
+        } else {
+            max_lit = std::max(max_lit, B);
+            min_lit = std::min(min_lit, B);
+        }
+    }
+    EXPECT_NEAR(covered, 0.25, 1e-12);  // the footprint, 0.5 × 0.5
+    EXPECT_GT(min_lit, 0.0);
+    // --no-subdivide refuses the cuts (the cut faces are n-gons, not one patch each).
+    r = run_ffcube("solve " + (dir / "b.obj") + " --no-subdivide --contact-cuts on --objects " + (dir / "o.csv"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--contact-cuts on with --no-subdivide"), std::string::npos) << r.output;
 }
 
 }  // namespace

@@ -20,6 +20,10 @@
 namespace ffcube {
 
 // Where the scene comes from and how it is meshed.
+
+// --contact-cuts (scene/contact.hpp, docs/adaptive.md): cut receiver faces along the polygons where
+// other objects stand on them before meshing. Auto: on for adaptive solves, off otherwise.
+enum class ContactCuts { Auto, On, Off };
 struct SceneOptions {
     std::string path;            // empty: the built-in Cornell box
     double max_patch_edge = 0;   // > 0: split faces so that no patch edge exceeds it
@@ -28,6 +32,7 @@ struct SceneOptions {
     SceneFormat format = SceneFormat::Auto;  // --format: Auto = by the file's extension
     std::string materials;       // --materials: CSV of Kd and Ke per object (scene/material_map.hpp)
     bool subdivide = true;       // false (--no-subdivide): one patch per input face
+    ContactCuts contact_cuts = ContactCuts::Auto;  // load_and_mesh cuts only when On
 };
 
 enum class RowMethod { Hemicube, Raycast };
@@ -64,6 +69,7 @@ RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
+ContactCuts parse_contact_cuts(std::string_view text);    // auto | on | off
 std::string_view to_string(RowMethod m);
 std::string_view to_string(Correction c);
 std::string_view to_string(FarFieldMode f);
