@@ -228,8 +228,8 @@ ContactCutStats cut_contacts(ObjModel& model) {
                 h = cleaned(h, tol, min_area);
                 if (h.empty()) continue;
                 if (!convex_ccw(h, tol * r.size)) {
-                    ++stats.skipped;
-                    stats.notes.push_back(fmt::format("{}:{}: the contact of object '{}' is not convex; not cut", model.source,
+                    if (++stats.skipped <= 10)  // the rest are counted only
+                        stats.notes.push_back(fmt::format("{}:{}: the contact of object '{}' is not convex; not cut", model.source,
                                                       rface.line, model.objects[object]));
                     continue;
                 }

@@ -32,7 +32,7 @@ struct ContactCutStats {
     std::size_t faces = 0;      // convex faces those receivers became
     double covered_area = 0.0;  // area of those faces inside contact polygons, scene units²
     std::size_t skipped = 0;    // closed contact loops left alone (not convex)
-    std::vector<std::string> notes;  // one line per skipped loop (file:line of the receiver)
+    std::vector<std::string> notes;  // one line per skipped loop (file:line of the receiver), the first 10
 };
 
 // Cuts the receivers of `model` in place (faces replaced in their place in face order, new
