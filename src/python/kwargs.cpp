@@ -16,7 +16,7 @@ namespace py = pybind11;
 namespace ffcube::python {
 namespace {
 
-constexpr const char* kSceneKeywords[] = {"max_patch_edge", "patches", "format", "materials", "no_subdivide", "objects_by"};
+constexpr const char* kSceneKeywords[] = {"max_patch_edge", "patches", "format", "materials", "no_subdivide", "objects_by", "contact_cuts"};
 
 // bool or numpy.bool_ (told by its type's name, so that no call imports numpy: an import can
 // start threads, and a process with threads gets thread workers instead of forked ones).
@@ -134,6 +134,7 @@ void Kwargs::read_scene_options(SceneOptions& o) {
     }
     if (py::object v = take("no_subdivide"); !v.is_none()) o.subdivide = !boolean("no_subdivide", v);
     if (py::object v = take("objects_by"); !v.is_none()) o.objects_by = parse_objects_by(word("objects_by", v));
+    if (py::object v = take("contact_cuts"); !v.is_none()) o.contact_cuts = parse_contact_cuts(word("contact_cuts", v));
     validate(o);
 }
 

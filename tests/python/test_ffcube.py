@@ -60,6 +60,19 @@ class Scene(unittest.TestCase):
         np.testing.assert_array_equal(s.normals[s.patch_object == 1][:, 2], -1.0)
         self.assertEqual(s.report["patches"], 32)
 
+    def test_contact_cuts_are_the_command_lines(self):
+        s = ffcube.load_scene(patches=200, contact_cuts="on", quiet=True)
+        cuts = s.report["meshing"]["contact_cuts"]
+        self.assertEqual((cuts["contacts"], cuts["receivers"]), (2, 1))  # both blocks on the floor
+        with tempfile.TemporaryDirectory() as d:
+            r = run_cli("formfactors", "--patches", 200, "--contact-cuts", "on", "--method", "raycast", "--rays", 1, "-q",
+                        "--report", os.path.join(d, "r.json"))
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(os.path.join(d, "r.json")) as f:
+                report = json.load(f)
+        self.assertEqual(s.fingerprint, report["fingerprint"])
+        self.assertNotEqual(s.fingerprint, ffcube.load_scene(patches=200, quiet=True).fingerprint)
+
     def test_builtin_cornell_box(self):
         s = ffcube.load_scene(patches=200, quiet=True)
         self.assertIn("light", s.objects)
