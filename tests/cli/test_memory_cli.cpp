@@ -54,7 +54,7 @@ TEST(MemoryCli, TwentyThousandPatchesStayUnderTheDocumentedBound) {
 }
 
 struct StreamedRun {
-    double peak = 0, nnz = 0, passes = 0;
+    double peak = 0, nnz = 0, bands = 0;
 };
 StreamedRun streamed_run(const test::TempDir& dir, const std::string& resolution) {
     const std::string tag = "r" + resolution;
@@ -66,7 +66,7 @@ StreamedRun streamed_run(const test::TempDir& dir, const std::string& resolution
     const auto report = nlohmann::json::parse(test::read_text(dir / (tag + ".json")));
     EXPECT_TRUE(report["streamed"].get<bool>());
     return {1024.0 * static_cast<double>(r.maxrss_kib), report["nnz"].get<double>(),
-            report["reciprocity"]["passes"].get<double>()};
+            report["reciprocity"]["bands"].get<double>()};
 }
 
 // Streamed to a .ffm, a run's peak memory does not grow with the number of entries: the same
@@ -77,9 +77,10 @@ TEST(MemoryCli, StreamedPeakDoesNotGrowWithTheEntries) {
     test::TempDir dir;
     const StreamedRun lo = streamed_run(dir, "24"), hi = streamed_run(dir, "96");
     ASSERT_GT(hi.nnz, 2.0 * lo.nnz);
-    EXPECT_GT(hi.passes, 1.0);  // the reciprocity check had to work in bands
+    EXPECT_GT(hi.bands, 1.0);  // the reciprocity check had to work in bands
     // What a streamed run holds that may differ between the two:
-    //  - the reciprocity bands, at most --stats-memory 8 MiB (8 bytes per entry held);
+    //  - the reciprocity check's band of columns, at most --stats-memory 8 MiB (8 bytes per entry
+    //    held), and while they are spilled a 64 KiB buffer per band (a few bands: < 1 MiB);
     //  - the writer's and the reader's block: at most 1 MiB of coded rows plus one row (9 bytes
     //    per entry, at most n = 4000 entries), in at most 4 buffers each (coded, raw, compressed,
     //    decoded): 8 × (1 MiB + 36 KB) < 9 MiB;
@@ -110,7 +111,8 @@ TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
     const auto m = nlohmann::json::parse(test::read_text(dir / "m.ffm.json"));
     EXPECT_TRUE(s["streamed"].get<bool>());
     EXPECT_FALSE(m["streamed"].get<bool>());
-    EXPECT_GT(s["reciprocity"]["passes"].get<int>(), 1);
+    EXPECT_GT(s["reciprocity"]["bands"].get<int>(), 1);  // scratch files, read back one band at a time
+    EXPECT_EQ(s["reciprocity"]["passes"].get<int>(), 2);
     for (const char* k : {"min", "max", "mean"}) EXPECT_EQ(s["row_sums"][k], m["row_sums"][k]) << k;
     for (const char* k : {"patch_max_abs", "object_max_rel"}) EXPECT_EQ(s["reciprocity"][k], m["reciprocity"][k]) << k;
     const FfmFile a = read_ffm(dir / "s.ffm"), b = read_ffm(dir / "m.ffm");
@@ -119,6 +121,66 @@ TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
     EXPECT_EQ(a.matrix.row_ptr(), b.matrix.row_ptr());
     EXPECT_EQ(a.matrix.col(), b.matrix.col());
     EXPECT_EQ(a.matrix.val(), b.matrix.val());
+}
+
+// --enforce with a streamed .ffm (each mode, the transpose in several bands and closure's G in a
+// scratch file, forced by --stats-memory 1) writes the very bytes of the in-memory run (forced by
+// a View3D output, which needs the whole matrix), with the same report figures; a resumed
+// checkpointed run too. The scratch directory is gone afterwards, also when closure is refused.
+TEST(MemoryCli, StreamedEnforceEqualsTheInMemoryRunByteForByte) {
+    test::TempDir dir;
+    const std::string scene = test::example("cube.obj") + " --patches 700 --resolution 32 -q";
+    const auto json = [&](const std::string& name) { return nlohmann::json::parse(test::read_text(dir / name)); };
+    // "both" is closure (parse_enforce_mode); a resume is tried on the mode with most passes.
+    for (const std::string mode : {"reciprocity", "closure"}) {
+        SCOPED_TRACE(mode);
+        const std::string e = " --enforce " + mode;
+        const bool resume = mode == "closure";
+        const std::string ck = resume ? " --checkpoint " + (dir / "ck") : "";
+        const auto m = test::run_ffcube(fmt::format("formfactors {}{} -o {} --view3d {} --report {}", scene, e,
+                                                    dir / "m.ffm", dir / "m.vf", dir / "m.json"));
+        const auto s = test::run_ffcube(fmt::format("formfactors {}{} --stats-memory 1 -o {} --report {}{}", scene, e,
+                                                    dir / "s.ffm", dir / "s.json", ck));
+        const auto r = resume ? test::run_ffcube(fmt::format("formfactors {}{} --stats-memory 1 -o {}{} --resume", scene,
+                                                             e, dir / "r.ffm", ck))
+                              : s;
+        ASSERT_EQ(m.code, 0) << m.output;
+        ASSERT_EQ(s.code, 0) << s.output;
+        ASSERT_EQ(r.code, 0) << r.output;
+        const auto a = json("m.json"), b = json("s.json");
+        EXPECT_FALSE(a["streamed"].get<bool>());
+        EXPECT_TRUE(b["streamed"].get<bool>());
+        EXPECT_GT(b["enforce"]["bands"].get<int>(), 1);
+        EXPECT_EQ(b["enforce"]["passes"].get<int>(), 2);
+        if (mode != "reciprocity") {
+            EXPECT_GT(b["enforce"]["iterations"].get<int>(), 0);
+            // G (about 2 × nnz entries of 12 bytes) is more than 1 MiB: it went to a scratch file.
+            EXPECT_GT(b["enforce"]["scratch_bytes"].get<double>(), 12.0 * b["nnz"].get<double>());
+        }
+        for (const char* k : {"mode", "iterations", "before", "after"}) EXPECT_EQ(a["enforce"][k], b["enforce"][k]) << k;
+        for (const char* k : {"nnz", "row_sums", "reciprocity"}) {
+            if (std::string(k) == "reciprocity") {
+                for (const char* r2 : {"patch_max_abs", "object_max_rel"})
+                    EXPECT_EQ(a[k][r2], b[k][r2]) << r2;
+            } else {
+                EXPECT_EQ(a[k], b[k]) << k;
+            }
+        }
+        const std::string mb = test::read_text(dir / "m.ffm");
+        EXPECT_GT(mb.size(), 0u);
+        EXPECT_TRUE(mb == test::read_text(dir / "s.ffm")) << "streamed .ffm differs from the in-memory one";
+        if (resume) {
+            EXPECT_TRUE(mb == test::read_text(dir / "r.ffm")) << "resumed .ffm differs from the in-memory one";
+        }
+    }
+    // Two squares at 90° are open: closure is refused after the rows were streamed to scratch.
+    const auto open = test::run_ffcube(fmt::format("formfactors {} --max-patch-edge 0.5 --resolution 32 -q "
+                                                   "--enforce closure --stats-memory 1 -o {}",
+                                                   test::example("perpendicular_squares.obj"), dir / "G.ffm"));
+    EXPECT_EQ(open.code, 2) << open.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "G.ffm"));
+    for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+        EXPECT_NE(entry.path().filename().string().front(), '.') << "left behind: " << entry.path();
 }
 
 }  // namespace

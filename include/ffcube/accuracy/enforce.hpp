@@ -20,6 +20,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 
 namespace ffcube {
@@ -91,7 +92,7 @@ MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> ar
 // out gets row i of the enforced matrix in double, and mirror[k] = the enforced F_{col[k], i}
 // (G is exactly symmetric, so the transposed entry is computed locally, in enforce()'s
 // expression). Memory: O(n) besides what the passes hold.
-using RowColumnFn = std::function<void(std::uint32_t i, RowView row, RowView column)>;
+using RowColumnFn = RowAndColumnFn;
 using GRowFn = std::function<void(std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val)>;
 struct EnforcePasses {
     std::function<void(const RowColumnFn&)> rows_and_columns;
