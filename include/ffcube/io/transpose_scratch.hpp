@@ -1,6 +1,6 @@
 // Row i of a matrix together with its column i, in row order, for a matrix streamed to a file and
 // never held in memory (the reciprocity check and --enforce of `ffcube formfactors -o F.ffm`;
-// docs/ffm-format.md, "Statistics and --enforce out of core").
+// docs/robustness.md, "Memory").
 //
 // The columns are cut into bands whose entries fit a memory budget. One pass over the matrix
 // writes every entry F_ij into the scratch file of the band of column j (a run per row and band:
