@@ -35,7 +35,7 @@ ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene, Progr
 
 // The same figures from rows fed one at a time in order (a matrix streamed to a file), in
 // memory independent of the number of entries: O(objects²) for the object factors and O(n) for
-// the entry counts per row and per column (which patch_reciprocity_banded plans with). The
+// the entry counts per row and per column (which io/transpose_scratch.hpp plans with). The
 // in-memory functions above are this class fed every row of F, so both give identical numbers.
 class RowStreamChecks {
 public:
