@@ -14,6 +14,8 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/mtx.hpp"
+#include "ffcube/io/transpose_scratch.hpp"
+#include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/surface_outputs.hpp"
@@ -40,18 +42,26 @@ struct Figures {
 };
 
 // Rows straight to the .ffm as they come, statistics from the stream and from passes over the
-// written file: memory independent of the number of entries (docs/robustness.md).
-Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, RowCheckpoint* checkpoint,
+// written file: memory independent of the number of entries (docs/robustness.md). With --enforce
+// the rows as computed go to a scratch .ffm first, and the enforced rows to the output
+// (pipeline/enforcement.hpp).
+Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheckpoint* checkpoint,
                  const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
+    const bool enforce = rows.options().enforce != EnforceRequest::None;
+    const std::uint64_t budget_bytes = o.stats_memory_mib << 20;
     Figures f;
     RowStreamChecks checks(scene);
     std::vector<double> sums(scene.size(), 0.0);  // for the sky view factors: 8 bytes a patch
+    ScratchDir scratch(o.output);  // removed on return and on error
     {
-        FfmWriter writer(o.output, scene, written);
+        // Without --enforce the computed rows are the output; with it, a scratch file (fast
+        // compression: it is read twice and removed).
+        const std::filesystem::path first = enforce ? scratch.path() / "computed.ffm" : std::filesystem::path(o.output);
+        FfmWriter writer(first, scene, written, enforce ? FfmWriterOptions{1u << 20, 1} : FfmWriterOptions{});
         Stopwatch watch, piece;
         double writing = 0;  // coding, compressing and writing, between the rows
-        stream_rows(provider, checkpoint, progress, [&](std::uint32_t i, RowView row) {
+        stream_rows(rows.provider(), checkpoint, progress, [&](std::uint32_t i, RowView row) {
             piece.restart();
             writer.append_row(row);
             writing += piece.seconds();
@@ -66,31 +76,56 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
         report.set("ffm.bytes", writer.bytes_written());
         report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
     }
-    f.row_sums = checks.row_sums();
-    f.reciprocity.object_max_rel = checks.object_max_rel();
-    if (!o.groups.empty()) f.groups = checks.object_factors();
-
     Stopwatch watch;
     std::vector<double> areas;
     for (const Patch& p : scene.patches) areas.push_back(p.area);
-    // 8 bytes per entry held (a u32 index and a float value).
-    const std::uint64_t budget = std::max<std::uint64_t>(1, (o.stats_memory_mib << 20) / 8);
-    const std::size_t passes = reciprocity_bands(checks.row_counts(), checks.col_counts(), budget).size() - 1;
-    FfmReader reader(o.output);
-    {
-        Progress bar(fmt::format("reciprocity ({} pass{} over {})", passes, passes == 1 ? "" : "es", o.output),
-                     std::uint64_t(scene.size()) * passes, progress);
-        f.reciprocity.patch_max_abs = patch_reciprocity_banded(
-            areas, checks.row_counts(), checks.col_counts(),
-            [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); }, budget, &bar);
+    if (enforce) {
+        RowStreamChecks out_checks(scene);
+        FfmWriter writer(o.output, scene, written);
+        const StreamedEnforcement e = apply_enforcement_streamed(
+            rows, scratch.path() / "computed.ffm", checks, sums, scene, scratch.path(), budget_bytes, progress,
+            [&](std::uint32_t i, RowView row) {
+                writer.append_row(row);
+                out_checks.add(i, row);
+                sums[i] = row.sum();
+            },
+            report);
+        writer.finish();
+        f.nnz = writer.nnz();
+        report.set("ffm.bytes", writer.bytes_written());
+        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
+        f.row_sums = out_checks.row_sums();
+        f.reciprocity.object_max_rel = out_checks.object_max_rel();
+        f.reciprocity.patch_max_abs = e.patch_max_abs;  // computed with the enforced rows
+        if (!o.groups.empty()) f.groups = out_checks.object_factors();
+    } else {
+        f.row_sums = checks.row_sums();
+        f.reciprocity.object_max_rel = checks.object_max_rel();
+        if (!o.groups.empty()) f.groups = checks.object_factors();
+        // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
+        // per entry held): a pass over the file spills the bands to scratch files, a second reads
+        // the rows again with the bands one at a time (io/transpose_scratch.hpp).
+        const TransposePlan plan = plan_transpose(checks.col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
+        FfmReader reader(o.output);
+        PatchReciprocity patch(areas);
+        Progress bar(fmt::format("reciprocity ({} pass{} over {}, {} band{})", plan.passes, plan.passes == 1 ? "" : "es",
+                                 o.output, plan.band_count(), plan.band_count() == 1 ? "" : "s"),
+                     std::uint64_t(scene.size()) * plan.passes, progress);
+        const TransposeFigures t = for_each_row_and_column(
+            [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); }, checks.col_counts(),
+            plan, scratch.path(), [&](std::uint32_t i, RowView row, RowView column) { patch.add(i, row, column); },
+            &bar);
+        f.reciprocity.patch_max_abs = patch.max_abs();
+        report.set("reciprocity.passes", t.passes);
+        report.set("reciprocity.bands", plan.band_count());
+        report.set("reciprocity.scratch_bytes", t.scratch_bytes);
     }
-    report.set("reciprocity.passes", passes);
     report.set("time.statistics", watch.seconds());
     write_surface_outputs(o.outputs, sums, scene, report);
     return f;
 }
 
-// The matrix in memory: --enforce (it needs the whole matrix), .mtx, --ffm-version 1, or no output.
+// The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, mpirun, or no output.
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
 // `seconds`.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
@@ -152,12 +187,11 @@ int run(const Options& o) {
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
     // Under mpirun rank 0 gathers the ranks' rows and writes from memory (the same bytes); View3D's
     // and Elmer's files need the whole matrix too.
-    const bool stream = !distributed && ffm && o.ffm_version == 2 && row_options.enforce == EnforceRequest::None &&
-                        !surface_outputs_need_matrix(o.outputs);
+    const bool stream = !distributed && ffm && o.ffm_version == 2 && !surface_outputs_need_matrix(o.outputs);
     report.set("streamed", stream);
     Figures f;
     if (stream) {
-        f = streamed(o, scene, rows.provider(), cp, written, report);
+        f = streamed(o, scene, rows, cp, written, report);
     } else {
         Stopwatch watch;
         CsrMatrix computed;
@@ -202,7 +236,7 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     add_checkpoint_options(*sub, opts->checkpoint);
     add_surface_output_options(*sub, opts->outputs);
     sub->add_option("--stats-memory", opts->stats_memory_mib,
-                    "MiB for the reciprocity check of a streamed .ffm (more: fewer passes over the file)")
+                    "MiB for the reciprocity check and --enforce of a streamed .ffm (a band of the transpose, and G: less makes more scratch files)")
         ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30));
     sub->add_option("--ffm-version", opts->ffm_version,
                     "write .ffm version 2 (compact, streamed: the default) or 1 (plain arrays, the matrix held in memory)")

@@ -123,80 +123,20 @@ ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene, Progr
     return s;
 }
 
-std::vector<std::uint32_t> reciprocity_bands(std::span<const std::uint32_t> row_counts,
-                                             std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries) {
-    FFCUBE_CHECK(row_counts.size() == col_counts.size());
-    const auto n = static_cast<std::uint32_t>(row_counts.size());
-    std::vector<std::uint32_t> starts{0};
-    std::uint64_t held = 0;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const std::uint64_t e = std::uint64_t(row_counts[i]) + col_counts[i];
-        if (held > 0 && held + e > budget_entries) {
-            starts.push_back(i);
-            held = 0;
-        }
-        held += e;
+void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
+    FFCUBE_CHECK(i < areas_.size());
+    const double ai = areas_[i];
+    std::size_t x = 0, y = 0;
+    while (x < row.col.size() || y < column.col.size()) {
+        const std::uint32_t jr = x < row.col.size() ? row.col[x] : ~0u, jc = y < column.col.size() ? column.col[y] : ~0u;
+        const std::uint32_t j = std::min(jr, jc);
+        const double fij = jr == j ? static_cast<double>(row.val[x++]) : 0.0;
+        const double fji = jc == j ? static_cast<double>(column.val[y++]) : 0.0;
+        const double aj = areas_[j];
+        // The expression of reciprocity_stats, so that both give the same number (a pair with
+        // only F_ji > 0, checked there from row j, gives the same |difference| here).
+        worst_ = std::max(worst_, std::abs(ai * fij - aj * fji) / (0.5 * (ai + aj)));
     }
-    if (n > 0) starts.push_back(n);
-    return starts;
-}
-
-double patch_reciprocity_banded(std::span<const double> areas, std::span<const std::uint32_t> row_counts,
-                                std::span<const std::uint32_t> col_counts, const RowPass& pass,
-                                std::uint64_t budget_entries, Progress* progress) {
-    const std::vector<std::uint32_t> bands = reciprocity_bands(row_counts, col_counts, budget_entries);
-    FFCUBE_CHECK(areas.size() == row_counts.size());
-    double worst = 0.0;
-    std::vector<std::uint64_t> rptr, cptr, rfill, cfill;
-    std::vector<std::uint32_t> rcol, crow;
-    std::vector<float> rval, cval;
-    for (std::size_t b = 0; b + 1 < bands.size(); ++b) {
-        const std::uint32_t lo = bands[b], hi = bands[b + 1], m = hi - lo;
-        rptr.assign(std::size_t(m) + 1, 0);
-        cptr.assign(std::size_t(m) + 1, 0);
-        for (std::uint32_t k = 0; k < m; ++k) {
-            rptr[k + 1] = rptr[k] + row_counts[lo + k];
-            cptr[k + 1] = cptr[k] + col_counts[lo + k];
-        }
-        rcol.resize(rptr[m]);
-        rval.resize(rptr[m]);
-        crow.resize(cptr[m]);
-        cval.resize(cptr[m]);
-        rfill.assign(rptr.begin(), rptr.end() - 1);
-        cfill.assign(cptr.begin(), cptr.end() - 1);
-        pass([&](std::uint32_t j, RowView r) {
-            if (progress) progress->add();
-            if (j >= lo && j < hi) {
-                FFCUBE_CHECK_MSG(r.col.size() == row_counts[j], "a pass over the matrix saw another row");
-                std::copy(r.col.begin(), r.col.end(), rcol.begin() + static_cast<long>(rptr[j - lo]));
-                std::copy(r.val.begin(), r.val.end(), rval.begin() + static_cast<long>(rptr[j - lo]));
-            }
-            // Rows come with j increasing, so each column's list is sorted by j.
-            for (auto it = std::lower_bound(r.col.begin(), r.col.end(), lo); it != r.col.end() && *it < hi; ++it) {
-                const std::uint32_t i = *it - lo;
-                FFCUBE_CHECK_MSG(cfill[i] < cptr[i + 1], "a pass over the matrix saw another column");
-                crow[cfill[i]] = j;
-                cval[cfill[i]++] = r.val[static_cast<std::size_t>(it - r.col.begin())];
-            }
-        });
-        for (std::uint32_t k = 0; k < m; ++k) {
-            FFCUBE_CHECK_MSG(cfill[k] == cptr[k + 1], "a pass over the matrix saw another column");
-            const std::uint32_t i = lo + k;
-            const double ai = areas[i];
-            std::uint64_t x = rptr[k], y = cptr[k];
-            // Merge row i (F_ij) with column i (F_ji) by j; a missing entry is 0.
-            while (x < rptr[k + 1] || y < cptr[k + 1]) {
-                const std::uint32_t jr = x < rptr[k + 1] ? rcol[x] : ~0u, jc = y < cptr[k + 1] ? crow[y] : ~0u;
-                const std::uint32_t j = std::min(jr, jc);
-                const double fij = jr == j ? static_cast<double>(rval[x++]) : 0.0;
-                const double fji = jc == j ? static_cast<double>(cval[y++]) : 0.0;
-                const double aj = areas[j];
-                // The expression of reciprocity_stats, so that both give the same number.
-                worst = std::max(worst, std::abs(ai * fij - aj * fji) / (0.5 * (ai + aj)));
-            }
-        }
-    }
-    return worst;
 }
 
 }  // namespace ffcube

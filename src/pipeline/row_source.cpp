@@ -184,37 +184,6 @@ void report_row_source(Report& r, const RowSource& rows) {
     if (const HemicubeRowProvider* h = rows.hemicube()) report_hemicube(r, *h);
 }
 
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
-    const EnforceRequest request = rows.options().enforce;
-    if (request == EnforceRequest::None) return F;
-    const std::string what(to_string(request));
-    const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) {
-        ClosureEvidence evidence;
-        if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight;
-        if (rows.corrected()) evidence.inner_row_sum_min = rows.corrected()->stats().inner_row_sum_min;
-        require_closed_scene(what, evidence, F);
-    }
-    std::vector<double> areas;
-    areas.reserve(scene.size());
-    for (const Patch& p : scene.patches) areas.push_back(p.area);
-    EnforceStats st;
-    Stopwatch watch;
-    const EnforcedMatrix E = enforce(F, areas, mode, st);
-    report.set("enforce.mode", what);
-    for (const auto& [when, f] : {std::pair{"before", st.before}, std::pair{"after", st.after}}) {
-        report.set(fmt::format("enforce.{}.row_sum_min", when), f.row_sum_min);
-        report.set(fmt::format("enforce.{}.row_sum_max", when), f.row_sum_max);
-        report.set(fmt::format("enforce.{}.reciprocity_max", when), f.reciprocity_max);
-    }
-    report.set("enforce.iterations", st.iterations);
-    report.set("enforce.seconds", watch.seconds());
-    info("--enforce {}: row sums {:.6f}..{:.6f} -> {:.6f}..{:.6f}, reciprocity {:.2e} -> {:.2e} (in double; stored as float)",
-         what, st.before.row_sum_min, st.before.row_sum_max, st.after.row_sum_min, st.after.row_sum_max,
-         st.before.reciprocity_max, st.after.reciprocity_max);
-    return E.to_csr();
-}
-
 void report_matrix_stats(Report& report, std::uint64_t nnz, const RowSumStats& row_sums,
                          const ReciprocityStats& reciprocity) {
     report.set("nnz", nnz);

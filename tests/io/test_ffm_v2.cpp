@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <functional>
 #include <limits>
@@ -14,6 +15,7 @@
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/io/checksum.hpp"
 #include "ffcube/io/ffm.hpp"
+#include "ffcube/io/transpose_scratch.hpp"
 #include "io/io_test_util.hpp"
 
 namespace ffcube::test {
@@ -337,9 +339,11 @@ TEST_F(FfmV2, StructureIsValidatedEvenWithValidChecksums) {
     }
 }
 
-// The bounded-memory reciprocity check gives exactly the in-memory number, whatever the band
-// size (down to one patch per band), on a matrix in many blocks read back by passes.
-TEST_F(FfmV2, BandedReciprocityEqualsTheInMemoryCheck) {
+// Every row with its column, read back from a .ffm in many blocks through column bands and
+// scratch files, whatever the band size (one column per band, more bands than files open at
+// once, one band): each column is the in-memory transpose's, and the reciprocity check on them is
+// reciprocity_stats's number to the last bit. The scratch files are gone afterwards.
+TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
     const std::uint32_t n = 250;
     const Scene scene = big_scene(n);
     const CsrMatrix F = big_matrix(n, 4);
@@ -357,26 +361,106 @@ TEST_F(FfmV2, BandedReciprocityEqualsTheInMemoryCheck) {
     std::vector<double> areas;
     for (const Patch& p : scene.patches) areas.push_back(p.area);
     FfmReader reader(path("F.ffm"));
-    for (std::uint64_t budget : {std::uint64_t(1), std::uint64_t(500), std::uint64_t(4000), F.nnz() * 2}) {
+    for (std::uint64_t budget : {std::uint64_t(1), std::uint64_t(500), std::uint64_t(4000), F.nnz()}) {
         SCOPED_TRACE(budget);
-        const auto bands = reciprocity_bands(checks.row_counts(), checks.col_counts(), budget);
+        const TransposePlan plan = plan_transpose(checks.col_counts(), budget);
+        std::filesystem::create_directory(path("scratch"));
         unsigned passes = 0;
-        const double got = patch_reciprocity_banded(
-            areas, checks.row_counts(), checks.col_counts(),
+        std::uint32_t next = 0;
+        PatchReciprocity patch(areas);
+        const TransposeFigures t = for_each_row_and_column(
             [&](const std::function<void(std::uint32_t, RowView)>& f) {
                 ++passes;
                 reader.for_each_row(f);
             },
-            budget, nullptr);
-        EXPECT_EQ(got, want.patch_max_abs);
-        EXPECT_EQ(passes, bands.size() - 1);
-        if (budget == 1) {
-            EXPECT_EQ(passes, n);
+            checks.col_counts(), plan, path("scratch"),
+            [&](std::uint32_t i, RowView row, RowView column) {
+                ASSERT_EQ(i, next++);
+                ASSERT_TRUE(std::ranges::equal(row.col, F.row(i).col));
+                // Column i: every F_ki > 0 in increasing k.
+                std::size_t c = 0;
+                for (std::uint32_t k = 0; k < n; ++k) {
+                    const double v = F.at(k, i);
+                    if (v == 0) continue;
+                    ASSERT_LT(c, column.col.size());
+                    EXPECT_EQ(column.col[c], k);
+                    EXPECT_EQ(column.val[c], static_cast<float>(v));
+                    ++c;
+                }
+                EXPECT_EQ(c, column.col.size());
+                patch.add(i, row, column);
+            },
+            nullptr);
+        EXPECT_EQ(next, n);
+        EXPECT_EQ(patch.max_abs(), want.patch_max_abs);
+        EXPECT_EQ(passes, plan.passes);
+        EXPECT_EQ(t.passes, plan.passes);
+        EXPECT_TRUE(std::filesystem::is_empty(path("scratch")));
+        std::filesystem::remove(path("scratch"));
+        // At most budget entries per band, but at least one column each.
+        for (std::size_t b = 0; b < plan.band_count(); ++b) {
+            std::uint64_t held = 0;
+            for (std::uint32_t j = plan.bands[b]; j < plan.bands[b + 1]; ++j) held += checks.col_counts()[j];
+            EXPECT_TRUE(held <= budget || plan.bands[b + 1] == plan.bands[b] + 1) << b;
         }
-        if (budget >= 2 * F.nnz()) {
-            EXPECT_EQ(passes, 1u);
+        if (budget == 1) {  // a band per column: 250 bands, spilled 64 at a time (4 passes), then 1
+            EXPECT_EQ(plan.band_count(), n);
+            EXPECT_EQ(passes, 5u);
+            EXPECT_GT(t.scratch_bytes, 8 * F.nnz());  // every entry (u32 + float) and the runs' heads
+        }
+        if (budget == F.nnz()) {  // one band, no scratch file: a pass to collect it, one to merge
+            EXPECT_EQ(plan.band_count(), 1u);
+            EXPECT_EQ(passes, 2u);
+            EXPECT_EQ(t.scratch_bytes, 0u);
         }
     }
+}
+
+// Rows of G held in memory or moved to a scratch file when they outgrow the memory given: the
+// same rows back, pass after pass.
+TEST_F(FfmV2, ScratchRowsGiveTheRowsBackFromMemoryOrDisk) {
+    const CsrMatrix F = big_matrix(120, 7);
+    for (std::uint64_t memory : {std::uint64_t(1) << 30, std::uint64_t(4096), std::uint64_t(0)}) {
+        SCOPED_TRACE(memory);
+        ScratchRows rows(path("G"), memory);
+        std::vector<double> val;
+        for (std::uint32_t i = 0; i < F.size(); ++i) {
+            const RowView r = F.row(i);
+            val.assign(r.val.begin(), r.val.end());
+            for (double& v : val) v = v / 3 + i;  // not a float
+            rows.append(r.col, val);
+        }
+        EXPECT_EQ(rows.on_disk(), memory < (std::uint64_t(1) << 30));
+        for (int pass = 0; pass < 2; ++pass) {
+            std::uint32_t next = 0;
+            rows.for_each([&](std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> v) {
+                ASSERT_EQ(i, next++);
+                const RowView r = F.row(i);
+                ASSERT_TRUE(std::ranges::equal(col, r.col));
+                for (std::size_t k = 0; k < v.size(); ++k) EXPECT_EQ(v[k], static_cast<double>(r.val[k]) / 3 + i);
+            });
+            EXPECT_EQ(next, F.size());
+        }
+    }
+    EXPECT_FALSE(std::filesystem::exists(path("G")));
+}
+
+// A scratch directory is made next to the output and removed with its files, also when an
+// exception unwinds through it.
+TEST_F(FfmV2, ScratchDirIsRemovedOnErrorToo) {
+    std::filesystem::path made;
+    try {
+        ffcube::ScratchDir d(path("F.ffm"));
+        made = d.path();
+        EXPECT_EQ(made.parent_path(), path("F.ffm").parent_path());
+        write_all(made / "columns.0", "x");
+        throw IoError("disk full");
+    } catch (const IoError&) {
+    }
+    ASSERT_FALSE(made.empty());
+    EXPECT_FALSE(std::filesystem::exists(made));
+    EXPECT_TRUE(entries().empty());
+    EXPECT_THROW(ffcube::ScratchDir(path("missing/F.ffm")), IoError);  // names the directory
 }
 
 }  // namespace

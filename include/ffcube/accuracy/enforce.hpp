@@ -13,12 +13,14 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 
 namespace ffcube {
@@ -68,6 +70,8 @@ struct ClosureEvidence {
     double inner_row_sum_min = std::numeric_limits<double>::quiet_NaN();
 };
 void require_closed_scene(std::string_view what, const ClosureEvidence& evidence, const CsrMatrix& F);
+// The same judged on F's row sums (row_sums[i] = F.row(i).sum()), for a matrix streamed to a file.
+void require_closed_scene(std::string_view what, const ClosureEvidence& evidence, std::span<const double> row_sums);
 
 // areas.size() == F.size(), every area > 0 (InputError otherwise). Closure also throws
 // InputError for a row with no entries (nothing to scale) and when 100000 iterations do not
@@ -75,5 +79,29 @@ void require_closed_scene(std::string_view what, const ClosureEvidence& evidence
 EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats);
 
 MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> areas);
+
+// enforce() as passes over rows, for a matrix that is not held in memory (pipeline/
+// streamed_enforce.hpp feeds it from a .ffm and scratch files). enforce() is this function fed
+// from memory, so both give the same numbers to the last bit.
+//  1. rows_and_columns: one pass over every row i of F together with its column i (row i of Fᵀ,
+//     row indices increasing), in order. It gives the `before` figures and row i of G (the union
+//     pattern; each value A_i F_ij / 2 + A_j F_ji / 2). Reciprocity: the enforced row i is then
+//     made and handed to `out` at once. Closure: row i of G goes to store_g.
+//  2. Closure only: each iteration is one stored_g pass (every row of G given to store_g, in
+//     order), and a last one makes the enforced rows.
+// out gets row i of the enforced matrix in double, and mirror[k] = the enforced F_{col[k], i}
+// (G is exactly symmetric, so the transposed entry is computed locally, in enforce()'s
+// expression). Memory: O(n) besides what the passes hold.
+using RowColumnFn = RowAndColumnFn;
+using GRowFn = std::function<void(std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val)>;
+struct EnforcePasses {
+    std::function<void(const RowColumnFn&)> rows_and_columns;
+    GRowFn store_g;                               // closure only
+    std::function<void(const GRowFn&)> stored_g;  // closure only
+};
+using EnforcedRowFn = std::function<void(std::uint32_t i, std::span<const std::uint32_t> col,
+                                         std::span<const double> val, std::span<const double> mirror)>;
+void enforce_passes(std::uint32_t n, std::span<const double> areas, EnforceMode mode, const EnforcePasses& passes,
+                    const EnforcedRowFn& out, EnforceStats& stats);
 
 }  // namespace ffcube

@@ -35,7 +35,7 @@ ReciprocityStats reciprocity_stats(const CsrMatrix& F, const Scene& scene, Progr
 
 // The same figures from rows fed one at a time in order (a matrix streamed to a file), in
 // memory independent of the number of entries: O(objects²) for the object factors and O(n) for
-// the entry counts per row and per column (which patch_reciprocity_banded plans with). The
+// the entry counts per row and per column (which io/transpose_scratch.hpp plans with). The
 // in-memory functions above are this class fed every row of F, so both give identical numbers.
 class RowStreamChecks {
 public:
@@ -58,19 +58,22 @@ private:
 
 // One pass over a matrix: calls its argument with every row, in order (e.g. FfmReader::for_each_row).
 using RowPass = std::function<void(const std::function<void(std::uint32_t, RowView)>&)>;
+// Row i of a matrix with its column i (row i of the transpose: row indices increasing and the
+// values F_ki), as io/transpose_scratch.hpp's for_each_row_and_column gives them.
+using RowAndColumnFn = std::function<void(std::uint32_t i, RowView row, RowView column)>;
 
 // ReciprocityStats::patch_max_abs (the same number as reciprocity_stats gives for the matrix in
-// memory) in bounded memory: the patches are cut into bands whose rows and columns together hold
-// at most budget_entries entries (a band holds at least one patch), and for each band one pass
-// collects its rows and its columns (F_ji for i in the band), which are then merged pair by pair.
-// Memory: 8 bytes per entry of a band + O(n); time: one pass per band. row_counts and col_counts
-// are the entries per row and per column (RowStreamChecks). progress, when given, is advanced by
-// one per row of each pass (total: n × bands, bands from reciprocity_bands).
-double patch_reciprocity_banded(std::span<const double> areas, std::span<const std::uint32_t> row_counts,
-                                std::span<const std::uint32_t> col_counts, const RowPass& pass,
-                                std::uint64_t budget_entries, Progress* progress = nullptr);
-// The bands' first patches (and n at the end) patch_reciprocity_banded uses.
-std::vector<std::uint32_t> reciprocity_bands(std::span<const std::uint32_t> row_counts,
-                                             std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries);
+// memory) from every row i with its column i, fed in any order: row and column merged by j, a
+// missing entry 0. areas must outlive it.
+class PatchReciprocity {
+public:
+    explicit PatchReciprocity(std::span<const double> areas) : areas_(areas) {}
+    void add(std::uint32_t i, RowView row, RowView column);
+    double max_abs() const { return worst_; }
+
+private:
+    std::span<const double> areas_;
+    double worst_ = 0.0;
+};
 
 }  // namespace ffcube

@@ -1,0 +1,44 @@
+// --enforce out of core: for a matrix streamed to a .ffm (`ffcube formfactors -o F.ffm`), never
+// held in memory. apply_enforcement (row_source.hpp) is the in-memory form; both give the same
+// rows, figures and report keys to the last bit (accuracy/enforce.hpp: enforce() is
+// enforce_passes fed from memory).
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <span>
+
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/scene/scene.hpp"
+
+namespace ffcube {
+
+struct StreamedEnforcement {
+    std::size_t passes = 0;         // over the unenforced rows' file
+    std::size_t bands = 0;          // column bands of its transpose
+    std::size_t g_passes = 0;       // closure: passes over G (one per iteration, and one more)
+    bool g_on_disk = false;         // closure: G did not fit budget_bytes and went to a scratch file
+    std::uint64_t scratch_bytes = 0;
+    // ReciprocityStats::patch_max_abs of the float rows handed to the sink (what reciprocity_stats
+    // gives for them in memory): the enforced matrix's F_ji is computed with F_ij, G being symmetric.
+    double patch_max_abs = 0;
+};
+
+// --enforce (rows.options().enforce, not None) on the rows of `raw`, a version-2 .ffm of the
+// rows as computed; raw_checks and raw_row_sums are from the same rows (RowStreamChecks, and
+// RowView::sum per row: closure is refused for an open scene as apply_enforcement refuses it).
+// Each enforced row goes to sink in row order, as float (what apply_enforcement's matrix holds).
+// Scratch files go to scratch_dir; memory: budget_bytes for a band of the transpose and for G
+// (closure; beyond it G goes to a scratch file, read once per iteration), plus O(n). Report keys
+// as apply_enforcement ("enforce.*"), and "enforce.passes", "enforce.scratch_bytes".
+StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std::filesystem::path& raw,
+                                               const RowStreamChecks& raw_checks,
+                                               std::span<const double> raw_row_sums, const Scene& scene,
+                                               const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
+                                               bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
+                                               Report& report);
+
+}  // namespace ffcube

@@ -1,0 +1,131 @@
+// --enforce in memory (apply_enforcement) and out of core (apply_enforcement_streamed).
+#include "ffcube/pipeline/enforcement.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "ffcube/accuracy/enforce.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/core/progress.hpp"
+#include "ffcube/core/timer.hpp"
+#include "ffcube/io/ffm.hpp"
+#include "ffcube/io/transpose_scratch.hpp"
+
+namespace ffcube {
+namespace {
+
+ClosureEvidence closure_evidence(const RowSource& rows) {
+    ClosureEvidence evidence;
+    if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight;
+    if (rows.corrected()) evidence.inner_row_sum_min = rows.corrected()->stats().inner_row_sum_min;
+    return evidence;
+}
+
+std::vector<double> areas_of(const Scene& scene) {
+    std::vector<double> areas;
+    areas.reserve(scene.size());
+    for (const Patch& p : scene.patches) areas.push_back(p.area);
+    return areas;
+}
+
+void report_enforcement(Report& report, const std::string& what, const EnforceStats& st, double seconds) {
+    report.set("enforce.mode", what);
+    for (const auto& [when, f] : {std::pair{"before", st.before}, std::pair{"after", st.after}}) {
+        report.set(fmt::format("enforce.{}.row_sum_min", when), f.row_sum_min);
+        report.set(fmt::format("enforce.{}.row_sum_max", when), f.row_sum_max);
+        report.set(fmt::format("enforce.{}.reciprocity_max", when), f.reciprocity_max);
+    }
+    report.set("enforce.iterations", st.iterations);
+    report.set("enforce.seconds", seconds);
+    info("--enforce {}: row sums {:.6f}..{:.6f} -> {:.6f}..{:.6f}, reciprocity {:.2e} -> {:.2e} (in double; stored as float)",
+         what, st.before.row_sum_min, st.before.row_sum_max, st.after.row_sum_min, st.after.row_sum_max,
+         st.before.reciprocity_max, st.after.reciprocity_max);
+}
+
+}  // namespace
+
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
+    const EnforceRequest request = rows.options().enforce;
+    if (request == EnforceRequest::None) return F;
+    const std::string what(to_string(request));
+    const EnforceMode mode = enforce_mode(request);
+    if (mode == EnforceMode::Closure) require_closed_scene(what, closure_evidence(rows), F);
+    const std::vector<double> areas = areas_of(scene);
+    EnforceStats st;
+    Stopwatch watch;
+    const EnforcedMatrix E = enforce(F, areas, mode, st);
+    report_enforcement(report, what, st, watch.seconds());
+    return E.to_csr();
+}
+
+StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std::filesystem::path& raw,
+                                               const RowStreamChecks& raw_checks,
+                                               std::span<const double> raw_row_sums, const Scene& scene,
+                                               const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
+                                               bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
+                                               Report& report) {
+    const EnforceRequest request = rows.options().enforce;
+    FFCUBE_CHECK(request != EnforceRequest::None);
+    const std::string what(to_string(request));
+    const EnforceMode mode = enforce_mode(request);
+    if (mode == EnforceMode::Closure) require_closed_scene(what, closure_evidence(rows), raw_row_sums);
+    const std::vector<double> areas = areas_of(scene);
+    const auto n = static_cast<std::uint32_t>(scene.size());
+    Stopwatch watch;
+    StreamedEnforcement s;
+
+    // 8 bytes per entry of a band (a u32 row and a float value).
+    const TransposePlan plan = plan_transpose(raw_checks.col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
+    s.bands = plan.band_count();
+    FfmReader reader(raw);
+    ScratchRows g(scratch_dir / "G", budget_bytes);
+    EnforcePasses passes;
+    passes.rows_and_columns = [&](const RowColumnFn& f) {
+        Progress bar(fmt::format("--enforce {}: rows with columns ({} pass{}, {} band{})", what, plan.passes,
+                                 plan.passes == 1 ? "" : "es", s.bands, s.bands == 1 ? "" : "s"),
+                     std::uint64_t(n) * plan.passes, progress);
+        const TransposeFigures t = for_each_row_and_column(
+            [&](const std::function<void(std::uint32_t, RowView)>& r) { reader.for_each_row(r); },
+            raw_checks.col_counts(), plan, scratch_dir, f, &bar);
+        s.passes += t.passes;
+        s.scratch_bytes += t.scratch_bytes;
+    };
+    passes.store_g = [&](std::uint32_t, std::span<const std::uint32_t> col, std::span<const double> val) {
+        g.append(col, val);
+    };
+    passes.stored_g = [&](const GRowFn& f) {
+        ++s.g_passes;
+        g.for_each(f);
+    };
+    std::vector<float> fval;
+    const EnforcedRowFn out = [&](std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val,
+                                  std::span<const double> mirror) {
+        fval.resize(col.size());
+        const double ai = areas[i];
+        for (std::size_t k = 0; k < col.size(); ++k) {
+            fval[k] = static_cast<float>(val[k]);  // as EnforcedMatrix::to_csr rounds
+            const double aj = areas[col[k]];
+            const double fji = static_cast<float>(mirror[k]);
+            // reciprocity_stats's expression on the float matrix.
+            s.patch_max_abs = std::max(s.patch_max_abs,
+                                       std::abs(ai * static_cast<double>(fval[k]) - aj * fji) / (0.5 * (ai + aj)));
+        }
+        sink(i, RowView{col, fval});
+    };
+    EnforceStats st;
+    enforce_passes(n, areas, mode, passes, out, st);
+    s.g_on_disk = g.on_disk();
+    s.scratch_bytes += g.bytes();
+    report_enforcement(report, what, st, watch.seconds());
+    report.set("enforce.passes", s.passes);
+    report.set("enforce.bands", s.bands);
+    report.set("enforce.g_passes", s.g_passes);
+    report.set("enforce.scratch_bytes", s.scratch_bytes);
+    return s;
+}
+
+}  // namespace ffcube
