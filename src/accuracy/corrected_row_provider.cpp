@@ -1,14 +1,13 @@
-// CorrectedRowProvider: wraps a RowProvider and corrects each row as it is handed on, planning
-// each row (sub-hemicubes, skip) from its analysis before the inner provider is asked for it. Owns the
-// scratch space the corrector works in, so that rows allocate nothing in the steady state.
+// CorrectedRowProvider: wraps a RowProvider; each row is planned (sub-hemicubes, skip) from its
+// analysis before the inner provider measures it, and corrected after, both as stages the inner
+// provider runs on its worker threads (RowProvider::RowStages). Owns the scratch space the
+// corrector works in, so that rows allocate nothing in the steady state.
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <atomic>
-#include <future>
+#include <memory>
 #include <mutex>
-#include <thread>
 
 #include "accuracy/scratch.hpp"
 #include "ffcube/accuracy/near_field.hpp"
@@ -17,12 +16,43 @@
 
 namespace ffcube {
 
-// Scratch spaces and analysis buffers, taken and given back under a lock by the plan callbacks
-// (several at once, on the inner provider's threads) and the sink. There are as many as were
-// ever in use at once: the inner provider's threads, and its window of rows in flight.
+namespace {
+
+// Adds one row's statistics (a fresh NearFieldStats filled by correct()) to the call's: sums,
+// and the least and largest, so the totals do not depend on the order rows finish in (but for
+// the seconds, which are timings).
+void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
+    a.rows += b.rows;
+    a.rows_touched += b.rows_touched;
+    a.near_pairs += b.near_pairs;
+    a.replaced += b.replaced;
+    a.refused += b.refused;
+    a.quadrature += b.quadrature;
+    a.rows_quadrature += b.rows_quadrature;
+    a.rows_untouched += b.rows_untouched;
+    a.rows_closed += b.rows_closed;
+    a.rows_capped += b.rows_capped;
+    a.rows_sampled += b.rows_sampled;
+    a.small_receiver_entries += b.small_receiver_entries;
+    a.rows_with_small_receivers += b.rows_with_small_receivers;
+    a.far_rows += b.far_rows;
+    a.far_entries += b.far_entries;
+    a.far_unproven += b.far_unproven;
+    a.rows_analytic += b.rows_analytic;
+    a.closed_scale_max_change = std::max(a.closed_scale_max_change, b.closed_scale_max_change);
+    a.seconds += b.seconds;
+    a.near_seconds += b.near_seconds;
+    a.quadrature_seconds += b.quadrature_seconds;
+    a.inner_row_sum_min = std::min(a.inner_row_sum_min, b.inner_row_sum_min);
+}
+
+}  // namespace
+
+// Scratch spaces and analysis buffers, taken and given back under a lock by the plan and finish
+// stages (several at once, on the inner provider's threads). There are as many as were ever in
+// use at once: the inner provider's threads, and its window of rows in flight.
 struct CorrectedRowProvider::Pools {
     using Entries = std::vector<std::pair<std::uint32_t, double>>;
-    NearFieldScratch sink;  // the rows as they arrive, on the calling thread
     std::mutex mutex;
     std::vector<std::unique_ptr<NearFieldScratch>> scratch;
     std::vector<Entries> entries;
@@ -43,12 +73,28 @@ struct CorrectedRowProvider::Pools {
         }
         return s ? std::move(s) : std::make_unique<NearFieldScratch>();
     }
+    // A scratch space alone (for a correction: its analysis is the row's own).
+    std::unique_ptr<NearFieldScratch> take() {
+        {
+            const std::lock_guard lock(mutex);
+            if (!scratch.empty()) {
+                std::unique_ptr<NearFieldScratch> s = std::move(scratch.back());
+                scratch.pop_back();
+                return s;
+            }
+        }
+        return std::make_unique<NearFieldScratch>();
+    }
+    void add(NearFieldStats& total, const NearFieldStats& row) {
+        const std::lock_guard lock(mutex);
+        add_row_stats(total, row);
+    }
     void give_back(std::unique_ptr<NearFieldScratch> s) {
         const std::lock_guard lock(mutex);
         scratch.push_back(std::move(s));
     }
     // Keeps exact's buffer for a later analysis (when it has one: an analysis made by correct()
-    // itself lives in the sink's scratch, and the slot's is empty).
+    // itself lives in its scratch space, and the slot's is empty).
     void recycle(Entries& exact) {
         if (exact.capacity() == 0) return;
         exact.clear();
@@ -62,8 +108,7 @@ CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inne
     : inner_(inner),
       corrector_(scene, options),
       options_(options),
-      pools_(std::make_unique<Pools>()),
-      plan_threads_(std::max(1u, std::thread::hardware_concurrency())) {
+      pools_(std::make_unique<Pools>()) {
     if (inner.size() != scene.size())
         throw InputError(fmt::format("near-field correction: the provider has {} rows, the scene {} patches", inner.size(),
                                      scene.size()));
@@ -71,76 +116,55 @@ CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inne
 
 CorrectedRowProvider::~CorrectedRowProvider() = default;
 
+
 void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
-    // Near analysis per listed row, made when its row is planned (below: each slot is written
-    // once, by one planning thread, before its row is asked for) or, without plans, when the row
-    // arrives.
+    // Near analysis per listed row (slot k for rows[k]), made when its row is planned or, without
+    // plans, when the row is corrected; slot k is touched only by row k's plan and finish, which
+    // run one after the other on one thread.
     analyses_.assign(rows.size(), NearAnalysis{});
-    std::size_t position = 0;
+    if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
+    // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
+    // quadrature points (the pair keeps a value with its own visibility and sender quadrature);
+    // rows whose every pair is known are not measured. Each row's plan comes from its analysis,
+    // a function of the scene and the row only, and so is its correction: the inner provider
+    // runs both on its worker threads (RowProvider::RowStages), where they overlap the other
+    // workers' measuring, and the rows do not depend on the thread count.
     const bool sample = options_.sub_hemicubes && inner_.can_sample_sender();
-    const RowSink correct_row = [&](std::uint32_t i, const SparseRow& row) {
+    RowStages stages;
+    if (sample) {
+        stages.plan = [&](std::size_t k, std::uint32_t i) {
+            NearAnalysis& a = analyses_[k];
+            std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
+            const RowPlan plan = corrector_.plan_row(i, a, *scratch);
+            pools_->give_back(std::move(scratch));
+            return plan;
+        };
+    }
+    stages.finish = [&](std::size_t k, std::uint32_t i, SparseRow& row) {
         Stopwatch watch;
-        const std::size_t pos = position++;
-        NearAnalysis& a = analyses_[pos];
+        NearAnalysis& a = analyses_[k];
+        NearFieldStats local;
         // Whether light escapes, as measured: for a row not measured, its analytic sum.
         double measured = row.sum();
         if (a.skipped) {
             measured = 0;
             for (const auto& e : a.exact) measured += e.second;
         }
-        stats_.inner_row_sum_min = std::min(stats_.inner_row_sum_min, measured);
-        scratch_ = row;
+        local.inner_row_sum_min = measured;
+        std::unique_ptr<NearFieldScratch> scratch = pools_->take();
         double estimate = 0;
-        corrector_.correct(i, scratch_, stats_, pools_->sink, &estimate, &a, sample && a.done && a.refused > 0);
-        if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
-        row_error_[i] = static_cast<float>(estimate);
+        corrector_.correct(i, row, local, *scratch, &estimate, &a, sample && a.done && a.refused > 0);
+        pools_->give_back(std::move(scratch));
+        row_error_[i] = static_cast<float>(estimate);  // one writer per row: i is listed once
         // Give the analysis's buffer back: with the far field it holds up to a whole row, and
         // every row of the call has a slot (n² entries if none were freed: 225 MB for 3,744
         // patches); the pool holds only as many as were in flight at once.
         pools_->recycle(a.exact);
         a = NearAnalysis{};
-        stats_.seconds += watch.seconds();
-        sink(i, scratch_);
+        local.seconds = watch.seconds();
+        pools_->add(stats_, local);
     };
-    if (!sample) {
-        inner_.compute_rows(rows, correct_row);
-        return;
-    }
-    // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
-    // quadrature points (the pair keeps a value with its own visibility and sender quadrature);
-    // rows whose every pair is known are not measured. Each row's plan comes from its analysis,
-    // worked out here before the inner provider is asked: in batches, the next batch's analyses
-    // (on this machine's cores) overlapping the inner provider's work on the current one. A plan
-    // depends only on its row, so the rows do not depend on the batching or the thread count.
-    plans_.assign(rows.size(), RowPlan::centre);
-    const auto plan_batch = [&](std::size_t begin, std::size_t end) {
-        if (end <= begin) return;  // no rows (e.g. a resumed checkpoint that has them all)
-        std::atomic<std::size_t> next{begin};
-        const auto work = [&] {
-            for (std::size_t pos; (pos = next++) < end;) {
-                NearAnalysis& a = analyses_[pos];
-                std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
-                plans_[pos] = corrector_.plan_row(rows[pos], a, *scratch);
-                pools_->give_back(std::move(scratch));
-            }
-        };
-        const std::size_t helpers = std::min<std::size_t>(plan_threads_, end - begin) - 1;
-        std::vector<std::jthread> threads;
-        threads.reserve(helpers);
-        for (std::size_t t = 0; t < helpers; ++t) threads.emplace_back(work);
-        work();
-    };
-    const std::size_t n = rows.size();
-    plan_batch(0, std::min(kPlanBatch, n));
-    for (std::size_t begin = 0; begin < n; begin += kPlanBatch) {
-        const std::size_t end = std::min(begin + kPlanBatch, n);
-        // Destroyed (joined) before this iteration ends, also when the inner provider throws.
-        std::future<void> next_batch;
-        if (end < n) next_batch = std::async(std::launch::async, plan_batch, end, std::min(end + kPlanBatch, n));
-        inner_.compute_rows_planned(rows.subspan(begin, end - begin), std::span(plans_).subspan(begin, end - begin),
-                                    correct_row);
-        if (next_batch.valid()) next_batch.get();
-    }
+    inner_.compute_rows_staged(rows, stages, sink);
 }
 
 }  // namespace ffcube

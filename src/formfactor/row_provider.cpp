@@ -1,6 +1,8 @@
 #include "ffcube/formfactor/row_provider.hpp"
 
+#include <algorithm>
 #include <numeric>
+#include <vector>
 
 #include "ffcube/core/error.hpp"
 
@@ -15,6 +17,38 @@ void RowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std:
                                        const RowSink& sink) {
     FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
     compute_rows(rows, sink);
+}
+
+void RowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                                      const RowSink& sink) {
+    const bool planned = stages.plan && can_sample_sender();
+    // Batches bound the plans held at once; a plan's own state (the caller's) is per row anyway.
+    constexpr std::size_t kBatch = 64;
+    std::vector<RowPlan> plans;
+    // The row as finish works on it: this thread's, kept from call to call (no allocation per
+    // call once it has grown to the longest row).
+    thread_local SparseRow row;
+    std::size_t k = 0;
+    const RowSink finish = [&](std::uint32_t i, const SparseRow& measured) {
+        if (!stages.finish) {
+            sink(i, measured);
+            ++k;
+            return;
+        }
+        row = measured;
+        stages.finish(k++, i, row);
+        sink(i, row);
+    };
+    for (std::size_t begin = 0; begin < rows.size(); begin += kBatch) {
+        const std::span<const std::uint32_t> batch = rows.subspan(begin, std::min(kBatch, rows.size() - begin));
+        if (planned) {
+            plans.resize(batch.size());
+            for (std::size_t p = 0; p < batch.size(); ++p) plans[p] = stages.plan(begin + p, batch[p]);
+            compute_rows_planned(batch, plans, finish);
+        } else {
+            compute_rows(batch, finish);
+        }
+    }
 }
 
 void MatrixRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {

@@ -60,21 +60,26 @@ struct HemicubeRowProvider::Impl {
     ~Impl() { pool.reset(); }
 
     // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
-    // how to make each row.
-    void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowPlan> plans, const RowSink& sink) {
+    // how to make each row, unless the stages (compute_rows_staged's) plan and finish them.
+    void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowPlan> plans,
+             const RowProvider::RowStages* stages, const RowSink& sink) {
         const OrderedRowPool::Compute compute = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
             using RowPlan = RowProvider::RowPlan;
             HemicubeStats local;
-            const RowPlan plan = plans.empty() ? RowPlan::centre : plans[k];
+            RowPlan plan = plans.empty() ? RowPlan::centre : plans[k];
+            if (stages && stages->plan) plan = stages->plan(k, i);
             if (plan == RowPlan::skip) {
                 out.clear();
                 ++local.skipped_rows;
             } else {
                 engines[w]->row(i, out, local, plan == RowPlan::sampled);
             }
-            // Merged before the row is handed on: the sink sees stats that include its row.
-            std::lock_guard lock(stats_mutex);
-            add_stats(stats, local);
+            {
+                // Merged before the row is handed on: the sink sees stats that include its row.
+                std::lock_guard lock(stats_mutex);
+                add_stats(stats, local);
+            }
+            if (stages && stages->finish) stages->finish(k, i, out);
         };
         pool->run(rows, compute, sink);
     }
@@ -122,14 +127,20 @@ std::uint32_t HemicubeRowProvider::size() const { return static_cast<std::uint32
 
 void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
-    impl_->run(rows, {}, sink);
+    impl_->run(rows, {}, nullptr, sink);
 }
 
 void HemicubeRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                                const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
     FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
-    impl_->run(rows, plans, sink);
+    impl_->run(rows, plans, nullptr, sink);
+}
+
+void HemicubeRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                                              const RowSink& sink) {
+    for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
+    impl_->run(rows, {}, &stages, sink);
 }
 
 std::vector<std::uint32_t> HemicubeRowProvider::item_buffer(std::uint32_t i) {

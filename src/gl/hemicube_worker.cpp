@@ -298,14 +298,17 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
     const std::uint32_t self = p + 1;
     double back = 0.0, miss = 0.0;
     const std::size_t npix = ids.size();
-    for (std::size_t k = 0; k < npix; ++k) {
+    // A patch covers runs of neighbouring pixels: each run is summed in a register and stored
+    // once, the same additions in the same order as pixel by pixel (the row is bitwise the same).
+    for (std::size_t k = 0; k < npix;) {
         const std::uint32_t id = ids[k];
         if (id == 0) {
-            miss += w[k];
+            miss += w[k++];
         } else if (id == kBackFace) {
-            back += w[k];
+            back += w[k++];
         } else if (id == self) {
             ++st.self_hits;
+            ++k;
         } else {
             const std::uint32_t j = id - 1;
             // An id past the last patch means a broken patch lookup (shader or pieces): a bug,
@@ -317,7 +320,11 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
                 acc_[j] = 0.0;
                 touched_.push_back(j);
             }
-            acc_[j] += weight * w[k];
+            double a = acc_[j];
+            do {
+                a += weight * w[k++];
+            } while (k < npix && ids[k] == id);
+            acc_[j] = a;
         }
     }
     st.back_face_weight += weight * back;

@@ -126,6 +126,82 @@ TEST(RowSource, FactoryRowsAreTheHandComposedRows) {
     }
 }
 
+// Forwards to a hemicube provider but keeps RowProvider's own compute_rows_staged: the plans and
+// corrections on the calling thread, one row after the other, as before they ran on the
+// hemicube's workers.
+class CallingThreadStages final : public RowProvider {
+public:
+    explicit CallingThreadStages(HemicubeRowProvider& h) : h_(h) {}
+    std::uint32_t size() const override { return h_.size(); }
+    std::string name() const override { return h_.name(); }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override { h_.compute_rows(rows, sink); }
+    bool can_sample_sender() const override { return true; }
+    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                              const RowSink& sink) override {
+        h_.compute_rows_planned(rows, plans, sink);
+    }
+
+private:
+    HemicubeRowProvider& h_;
+};
+
+// The correction runs on the hemicube's workers (each corrects the rows it measured): the rows,
+// their error estimates and the correction's counts are those of the correction on the calling
+// thread, bitwise, at 1 and 3 workers, processes or threads, far field off and on.
+TEST(RowSource, CorrectedRowsDoNotDependOnWhereTheCorrectionRuns) {
+    // The box with the blocker on its floor (with the far field, rows not measured at all), and
+    // the box with a shelf 0.15 above the floor instead: floor patches and their near neighbours
+    // on the walls are pairs the shelf may occlude (sub-hemicube rows).
+    std::vector<NamedPolygon> polys = test::inward_box(1.0, 1.0, 1.0);
+    polys.push_back(test::square_z("shelf", 0.15, true, 0.5, Vec3(0.25, 0.25, 0.0)));
+    const Scene scenes[] = {box_scene(), test::make_scene(polys, 0.25)};
+    std::uint64_t sampled = 0, analytic = 0, replaced = 0;
+    for (const Scene& scene : scenes) {
+        for (FarFieldMode ff : {FarFieldMode::off, FarFieldMode::on}) {
+            NearFieldOptions nf = near_field_options_for_hemicube(32, 3.0);
+            nf.far_field = ff;
+            HemicubeOptions h;
+            h.resolution = 32;
+            h.threads = 1;
+            HemicubeRowProvider one(scene, h);
+            CallingThreadStages calling(one);
+            CorrectedRowProvider reference(scene, calling, nf);
+            const CsrMatrix F = compute_all_rows(reference);
+            const NearFieldStats& r = reference.stats();
+            sampled += r.rows_sampled;
+            analytic += r.rows_analytic;
+            replaced += r.replaced;
+            for (const bool processes : {true, false}) {
+                h.threads = 3;
+                h.worker_processes = processes;
+                HemicubeRowProvider three(scene, h);
+                CorrectedRowProvider staged(scene, three, nf);
+                SCOPED_TRACE(fmt::format("{} patches, far field {}, {}", scene.size(), to_string(ff),
+                                         processes ? "processes" : "threads"));
+                expect_same_rows(F, compute_all_rows(staged));
+                const NearFieldStats& s = staged.stats();
+                EXPECT_EQ(s.rows, r.rows);
+                EXPECT_EQ(s.rows_sampled, r.rows_sampled);
+                EXPECT_EQ(s.replaced, r.replaced);
+                EXPECT_EQ(s.refused, r.refused);
+                EXPECT_EQ(s.quadrature, r.quadrature);
+                EXPECT_EQ(s.rows_closed, r.rows_closed);
+                EXPECT_EQ(s.rows_analytic, r.rows_analytic);
+                EXPECT_EQ(s.far_entries, r.far_entries);
+                EXPECT_EQ(s.closed_scale_max_change, r.closed_scale_max_change);
+                EXPECT_EQ(s.inner_row_sum_min, r.inner_row_sum_min);
+                EXPECT_EQ(staged.row_error_estimates(), reference.row_error_estimates());
+                EXPECT_EQ(staged.retained_analysis_entries(), 0u);
+            }
+        }
+    }
+    // Every kind of row went through: sub-hemicubes (a possibly occluded near pair), exact near
+    // values, and rows made wholly of analytic values (not measured).
+    EXPECT_GT(sampled, 0u);
+    EXPECT_GT(analytic, 0u);
+    EXPECT_GT(replaced, 0u);
+}
+
 TEST(RowSource, PlainAndRaycastSources) {
     const Scene scene = box_scene();
     RowOptions o;

@@ -111,7 +111,7 @@ struct NearFieldStats {
     std::uint64_t far_unproven = 0;
     std::uint64_t rows_analytic = 0;  // rows made wholly of analytic values, not measured at all
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
-    double seconds = 0;              // wall seconds spent correcting (inner provider excluded)
+    double seconds = 0;              // seconds spent correcting, summed over threads (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
     double quadrature_seconds = 0;   // sender quadrature ratios and the error estimate
     // Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any
@@ -227,21 +227,13 @@ private:
     RowProvider& inner_;
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
-    SparseRow scratch_;
     std::vector<float> row_error_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
-    std::vector<RowPlan> plans_;          // likewise
-    // Scratch space reused across rows: the sink's, one per planning thread running at once,
-    // and the analyses' buffers (corrected_row_provider.cpp).
+    // Scratch spaces and analysis buffers reused across rows, one per row being planned or
+    // corrected at once on the inner provider's threads (corrected_row_provider.cpp).
     struct Pools;
     std::unique_ptr<Pools> pools_;
-    // Rows are planned in batches of kPlanBatch on plan_threads_ threads, the next batch while the
-    // inner provider measures the current one. 64: long enough that the inner provider's workers
-    // rarely wait at a batch's end, short enough that the analyses held at once (with the far
-    // field up to a whole row each) stay small: 128 rows of 20,000 entries are 40 MB.
-    static constexpr std::size_t kPlanBatch = 64;
-    unsigned plan_threads_ = 1;
 };
 
 }  // namespace ffcube

@@ -39,6 +39,22 @@ public:
     virtual bool can_sample_sender() const { return false; }
     virtual void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                       const RowSink& sink);
+
+    // Per-row work of a caller (the near-field correction) that a provider may run on its own
+    // worker threads, overlapped with measuring other rows, instead of on the calling thread:
+    // plan(k, i) says how to measure row i = rows[k] (asked only of providers that
+    // can_sample_sender; empty: centre), finish(k, i, row) works on the row as measured, in place,
+    // before it goes to sink. For one k, plan and finish run on the same thread, plan first; for
+    // different k they may run at the same time on different threads, so both must be
+    // thread-safe, and a row must depend only on k and i, never on the schedule. Rows still go to
+    // sink on the calling thread, in list order. The default runs both on the calling thread:
+    // plans for a batch of rows, then compute_rows_planned (or compute_rows) for the batch.
+    struct RowStages {
+        std::function<RowPlan(std::size_t k, std::uint32_t i)> plan;
+        std::function<void(std::size_t k, std::uint32_t i, SparseRow& row)> finish;
+    };
+    virtual void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                                     const RowSink& sink);
 };
 
 // Rows of a matrix already in memory (loaded from .ffm, or made by hand in a test).

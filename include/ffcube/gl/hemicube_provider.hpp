@@ -69,6 +69,11 @@ public:
     bool can_sample_sender() const override { return true; }
     void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                               const RowSink& sink) override;
+    // The stages run on the worker's thread in the calling process, around its row: plan, the
+    // hemicube (in the worker process, or on the thread's own context), finish; so one worker's
+    // finish overlaps the others' drawing, and the calling thread only hands rows on.
+    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                             const RowSink& sink) override;
 
     // The item buffer of patch i's hemicube: the atlas (3N × N, row 0 at the bottom; see
     // hemicube/layout.hpp), each pixel 0 (nothing), 1 + patch index, or 0xFFFFFFFF (a back face).
