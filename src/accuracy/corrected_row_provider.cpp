@@ -91,7 +91,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         stats_.inner_row_sum_min = std::min(stats_.inner_row_sum_min, measured);
         scratch_ = row;
         double estimate = 0;
-        corrector_.correct(i, scratch_, stats_, pools_->sink, &estimate, &a, sample && a.done && a.refused > 0);
+        corrector_.correct(i, scratch_, stats_, pools_->sink, &estimate, &a, sample && a.done && a.refused_sampled > 0);
         if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
         row_error_[i] = static_cast<float>(estimate);
         // Give the analysis's buffer back: with the far field it holds up to a whole row, and
