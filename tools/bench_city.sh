@@ -6,6 +6,7 @@
 # pieces × hemicubes (what the BVH left out). BASELINE=path/to/ffcube runs an older build on
 # the same city in the same sitting, for a ratio.
 #   bash tools/bench_city.sh [TRIANGLES] [RESOLUTION] [SEED]     (default 22881 256 1; GROUND=lots|grid)
+# ARGS="--sub-hemicube-k 1" adds options to the current build's run (not the baseline's).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build="${FFCUBE_BUILD_DIR:-build}"
@@ -21,7 +22,7 @@ for which in ${BASELINE:+baseline} current; do
   bin="$build/ffcube"
   [ "$which" = baseline ] && bin="$BASELINE"
   /usr/bin/time -f "%e %U %S" -o "$dir/$which.time" "$bin" formfactors -q "$dir/city.stl" --no-subdivide \
-    --resolution "$resolution" -o "$dir/$which.ffm" --report "$dir/$which.json"
+    --resolution "$resolution" -o "$dir/$which.ffm" --report "$dir/$which.json" ${ARGS:+$([ "$which" = current ] && echo $ARGS)}
   python3 - "$dir/$which.time" "$dir/$which.json" "$which" <<'PY'
 import json, sys
 wall, user, system = map(float, open(sys.argv[1]).read().split()[-3:])

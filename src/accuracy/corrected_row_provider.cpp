@@ -153,7 +153,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         local.inner_row_sum_min = measured;
         std::unique_ptr<NearFieldScratch> scratch = pools_->take();
         double estimate = 0;
-        corrector_.correct(i, row, local, *scratch, &estimate, &a, sample && a.done && a.refused > 0);
+        corrector_.correct(i, row, local, *scratch, &estimate, &a, sample && a.done && a.refused_sampled > 0);
         pools_->give_back(std::move(scratch));
         row_error_[i] = static_cast<float>(estimate);  // one writer per row: i is listed once
         // Give the analysis's buffer back: with the far field it holds up to a whole row, and

@@ -40,12 +40,37 @@ struct NearFieldCorrector::Impl {
     const SpatialGrid grid;
     const FarField far;
 
+    bool needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const;
     void add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
     void add_far_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
 };
 
+// Whether a refused pair's centre value may be off by more than e = (1/k)²/20 (k =
+// sub_hemicube_k; 5e-4 at the default 10), so that its row needs sub-hemicubes (docs/accuracy.md,
+// "Which near pairs need sub-hemicubes"). The hemicube measures g(x) = F_{dx_i→j} at i's centroid
+// c; the midpoint rule's error on the mean of g over i is (1/2)·∫(x−c)ᵀH(x−c)/A_i ≤
+// (size_i²/12)·|Δg|/2, and |Δg| ≤ 1.05/δ² (δ = |c − j|, measured over 10,000 random receivers of
+// 0.1 to 50 sender sizes, any distance and orientation; the curvature comes from j's outline,
+// which lies at least δ away): error ≤ (size_i/δ)²/23, taken as /20. So δ ≥ k·size_i keeps it
+// below e, whatever j's size. Where i straddles j's plane, g is 0 behind it and the rule is only
+// first order: the error is at most max g ≤ cos θ_j,max · min(1, Ω_j/π) ≤ (size_i/δ)·min(1,
+// A_j/(πδ²)) (i's points lie within size_i of j's plane).
+bool NearFieldCorrector::Impl::needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const {
+    const double k = options.sub_hemicube_k;
+    if (!(k > 0)) return true;  // the policy before issue 15: every refused pair
+    const Patch& pi = patches.scene.patches[i];
+    const double delta = patches.distance(pi.centroid, j);
+    if (patches.straddles(i, j)) {
+        const double area = patches.scene.patches[j].area;
+        const double bound = pi.size / delta * std::min(1.0, area / (std::numbers::pi * delta * delta));
+        return !(bound <= 1.0 / (20 * k * k));
+    }
+    return !(delta >= k * pi.size);
+}
+
 // Every facing pair within k sizes: exact when the shaft test proves it unoccluded (the 6 × 6
-// rule when the pair's bounding spheres are well apart), refused otherwise.
+// rule when the pair's bounding spheres are well apart), refused otherwise; a refused pair
+// asks for sub-hemicubes when its centre value may be too far off (needs_sub_hemicubes).
 void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const {
     const Scene& scene = patches.scene;
     const Patch& pi = scene.patches[i];
@@ -61,6 +86,7 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
         ++out.near_pairs;
         if (!shaft_unoccluded(patches, grid, i, j, b.shaft)) {
             ++out.refused;
+            out.refused_sampled += needs_sub_hemicubes(i, j);
             continue;
         }
         const double gap = d - patches.radius[i] - patches.radius[j];
@@ -106,6 +132,9 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
 NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOptions& options) {
     if (!(options.k > 0) || !std::isfinite(options.k))
         throw InputError(fmt::format("near-field correction: k = {} must be a positive number", options.k));
+    if (!(options.sub_hemicube_k >= 0) || !std::isfinite(options.sub_hemicube_k))
+        throw InputError(fmt::format("near-field correction: sub-hemicube k = {} must be a number >= 0",
+                                     options.sub_hemicube_k));
     impl_ = std::make_unique<Impl>(scene, options);
 }
 
@@ -156,7 +185,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
 
 RowProvider::RowPlan NearFieldCorrector::plan_row(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const {
     analyse(i, out, scratch);
-    if (out.refused > 0) return RowProvider::RowPlan::sampled;
+    if (out.refused_sampled > 0) return RowProvider::RowPlan::sampled;
     // Every facing pair known: nothing to measure (RowPlan::skip hands on an empty row).
     if (out.complete && impl_->options.skip_complete_rows) {
         out.skipped = true;
@@ -176,6 +205,7 @@ namespace {
 void add_analysis_stats(const NearAnalysis& a, NearFieldStats& stats) {
     stats.near_pairs += a.near_pairs;
     stats.refused += a.refused;
+    stats.refused_sampled += a.refused_sampled;
     stats.far_rows += a.far;
     stats.far_entries += a.far_entries;
     stats.far_unproven += a.far_unproven;

@@ -51,6 +51,34 @@ bool PatchSet::facing(std::uint32_t i, std::uint32_t j) const {
     return front_j > tol && front_i > tol;
 }
 
+bool PatchSet::straddles(std::uint32_t i, std::uint32_t j) const {
+    const Patch& pj = scene.patches[j];
+    const double tol = plane_tolerance(scene.patches[i], pj);
+    bool front = false, back = false;
+    for (std::size_t v = 0; v < polys[i].n; ++v) {
+        const double h = glm::dot(pj.normal, polys[i].v[v] - pj.centroid);
+        front = front || h > tol;
+        back = back || h < -tol;
+    }
+    return front && back;
+}
+
+double PatchSet::distance(const Vec3& p, std::uint32_t j) const {
+    const Poly& q = polys[j];
+    const Vec3& n = scene.patches[j].normal;
+    bool inside = true;
+    double nearest = INFINITY;
+    for (std::size_t a = 0; a < q.n; ++a) {
+        const Vec3& u = q.v[a];
+        const Vec3 e = q.v[(a + 1) % q.n] - u;
+        // Outside this edge (the outline runs counter-clockwise about the normal).
+        if (glm::dot(glm::cross(e, p - u), n) < 0) inside = false;
+        const double t = std::clamp(glm::dot(p - u, e) / std::max(glm::dot(e, e), 1e-300), 0.0, 1.0);
+        nearest = std::min(nearest, glm::length(u + t * e - p));
+    }
+    return inside ? std::min(nearest, std::abs(glm::dot(p - scene.patches[j].centroid, n))) : nearest;
+}
+
 Box PatchSet::pair_box(std::uint32_t i, std::uint32_t j) const {
     return Box{glm::min(boxes[i].lo, boxes[j].lo), glm::max(boxes[i].hi, boxes[j].hi)};
 }

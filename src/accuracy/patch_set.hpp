@@ -47,6 +47,10 @@ struct PatchSet {
     // Facing: some vertex of each farther than plane_tolerance in front of the other's plane (a
     // polygon within it is seen edge-on; coplanar neighbours must not count as facing).
     bool facing(std::uint32_t i, std::uint32_t j) const;
+    // Whether patch i has vertices farther than plane_tolerance on both sides of j's plane.
+    bool straddles(std::uint32_t i, std::uint32_t j) const;
+    // Distance from point p to polygon j (its plane inside the outline, else its nearest edge).
+    double distance(const Vec3& p, std::uint32_t j) const;
     // The bounding box of patches i and j together.
     Box pair_box(std::uint32_t i, std::uint32_t j) const;
 };

@@ -75,9 +75,6 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
     Box inflated{hull[0], hull[0]};
     for (const Vec3& v : hull) inflated = Box{glm::min(inflated.lo, v), glm::max(inflated.hi, v)};
     inflated = Box{inflated.lo - Vec3(tol), inflated.hi + Vec3(tol)};
-    std::vector<std::uint32_t>& candidates = scratch.candidates;
-    grid.query(inflated, candidates);
-
     // Hull-only axes are the same for every q: precompute them.
     std::vector<Vec3>& axes = scratch.axes;
     axes.clear();
@@ -94,8 +91,10 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
     for (std::size_t a = 0; a < m; ++a)
         for (std::size_t b = a + 1; b < m; ++b) seg.push_back(hull[b] - hull[a]);
 
-    for (std::uint32_t qi : candidates) {
-        if (qi == i || qi == j) continue;
+    // Every candidate must be separated: the answer does not depend on the order, so the grid's
+    // visit stops at the first that is not (refused pairs, most of a city's, stop early).
+    return grid.visit(inflated, [&](std::uint32_t qi) {
+        if (qi == i || qi == j) return true;
         const Poly& q = patches.polys[qi];
         bool sep = separated(scene.patches[qi].normal, hull, q, tol);
         for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], hull, q, tol);
@@ -108,9 +107,8 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
                 sep = separated(axis / std::sqrt(len2), hull, q, tol);
             }
         }
-        if (!sep) return false;
-    }
-    return true;
+        return sep;
+    });
 }
 
 }  // namespace ffcube::accuracy

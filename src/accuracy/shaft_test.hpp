@@ -13,7 +13,6 @@ namespace ffcube::accuracy {
 
 // Reused across calls (no heap allocation once grown).
 struct ShaftScratch {
-    std::vector<std::uint32_t> candidates;
     std::vector<Vec3> axes;
     std::vector<Vec3> segments;
 };

@@ -78,6 +78,11 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
         ->default_val(3.0);
+    app.add_option("--sub-hemicube-k", o.sub_hemicube_k,
+                   "--correct near: a possibly occluded near pair makes its row use sub-hemicubes when it lies within "
+                   "K x the sender's size (docs/accuracy.md); 0: every such pair")
+        ->check(CLI::NonNegativeNumber)
+        ->default_val(10.0);
     add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
                     "--correct near: analytic values for every pair beyond the near range that a plane test proves "
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "

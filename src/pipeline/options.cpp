@@ -79,6 +79,8 @@ void validate(const RowOptions& o) {
     if (o.method == RowMethod::Raycast && o.rays == 0) throw InputError("--rays 0: at least 1 ray per patch");
     if (!(o.near_k > 0) || !std::isfinite(o.near_k))
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
+    if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))
+        throw InputError(fmt::format("--sub-hemicube-k {}: must be a finite number >= 0", o.sub_hemicube_k));
 }
 
 HemicubeOptions hemicube_options(const RowOptions& o) {
@@ -111,6 +113,7 @@ NearFieldOptions near_field_options(const RowOptions& o) {
     }
     NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);
     nf.far_field = o.far_field;
+    nf.sub_hemicube_k = o.sub_hemicube_k;
     return nf;
 }
 

@@ -67,6 +67,8 @@ FfmMetadata row_metadata(const RowOptions& o) {
     if (o.correct == Correction::Near) {
         meta.settings += fmt::format(" correct=near k={}", o.near_k);
         if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
+        if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
+            meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
     }
     return meta;
 }
@@ -87,6 +89,7 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected) {
     r.set("corrections.rows_closed_rebalanced", c.rows_closed);
     r.set("corrections.rows_capped_at_one", c.rows_capped);
     r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
+    r.set("corrections.pairs_refused_sub_hemicubes", c.refused_sampled);
     r.set("corrections.small_receiver_entries", c.small_receiver_entries);
     r.set("corrections.far_field", corrected.corrector().far_field_status());
     r.set("corrections.far_field_planes", corrected.corrector().far_field_planes());

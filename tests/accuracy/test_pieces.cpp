@@ -83,6 +83,31 @@ TEST(SpatialGrid, QueriesFindExactlyTheOverlappingBoxes) {
     EXPECT_GT(hits, 2000u);  // the queries do find patches
 }
 
+// visit (the shaft test's search) calls back exactly the overlapping patches, each once, and
+// stops at the first false.
+TEST(SpatialGrid, VisitCallsEachOverlappingBoxOnceAndStopsWhenAsked) {
+    const Scene s = random_scene(17, 400);
+    const accuracy::PatchSet ps(s);
+    const accuracy::SpatialGrid grid(ps);
+    Rng rng(6);
+    std::size_t stopped = 0;
+    for (int q = 0; q < 500; ++q) {
+        const Vec3 c(rng(-1, 5), rng(-1, 5), rng(-1, 5));
+        const Vec3 half = Vec3(rng(), rng(), rng()) * std::pow(10.0, rng(-3, 0.7));
+        const Box box{c - half, c + half};
+        std::vector<std::uint32_t> got;
+        EXPECT_TRUE(grid.visit(box, [&](std::uint32_t p) { got.push_back(p); return true; }));
+        std::sort(got.begin(), got.end());
+        ASSERT_EQ(got, brute_query(ps, box)) << q;  // sorted and equal: each exactly once
+        if (got.size() < 2) continue;
+        std::size_t calls = 0;
+        EXPECT_FALSE(grid.visit(box, [&](std::uint32_t) { return ++calls < 2; }));
+        EXPECT_EQ(calls, 2u);
+        ++stopped;
+    }
+    EXPECT_GT(stopped, 100u);
+}
+
 // The near pairs as the corrector finds them (query a box of k × the largest size about the
 // centroid, then the distance test) are exactly the pairs within k × max(size_i, size_j).
 TEST(SpatialGrid, FindsExactlyTheNearPairs) {

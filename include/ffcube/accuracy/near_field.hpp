@@ -64,6 +64,14 @@ struct NearFieldOptions {
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
     // rows (RowProvider::compute_rows_planned), when it can make them.
     bool sub_hemicubes = true;
+    // Which refused (possibly occluded) near pairs need sub-hemicubes: those whose centre value
+    // may be off by more than 5e-4 (docs/accuracy.md, "Which near pairs need sub-hemicubes").
+    // The midpoint rule's error on F_ij is at most (size_i/δ)²/20, δ the distance from i's
+    // centroid to polygon j: the sender's extent matters, not the receiver's. So a refused pair
+    // asks for them when δ < sub_hemicube_k × size_i (10: (1/10)²/20 = 5e-4), or when i
+    // straddles j's plane and its first-order bound (size_i/δ)·min(1, A_j/(πδ²)) exceeds 5e-4.
+    // 0: every refused near pair (the policy before issue 15).
+    double sub_hemicube_k = 10.0;
     // Far field: every facing pair beyond the near range whose visibility the plane test proves
     // (NearFieldCorrector::far_unoccluded) gets its analytic value too (docs/accuracy.md, "Far
     // field"): exact receiver and 3 × 3 sender rule within 5 sizes, the point kernel on 3 × 3,
@@ -99,6 +107,7 @@ struct NearFieldStats {
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
     std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
     std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (a near pair possibly occluded)
+    std::uint64_t refused_sampled = 0;  // refused pairs that ask for sub-hemicubes (sub_hemicube_k)
     // Receivers worth fewer than 4 of the largest hemicube pixels (F_ij < 4 pixel_delta_ff), as
     // the inner provider made them: detected and counted, not corrected.
     std::uint64_t small_receiver_entries = 0;
@@ -125,6 +134,7 @@ struct NearAnalysis {
     std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     std::uint64_t near_pairs = 0;                         // near, facing pairs examined
     std::uint64_t refused = 0;                            // of which possibly occluded
+    std::uint64_t refused_sampled = 0;                    // of which asking for sub-hemicubes
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
     bool far = false;                                     // the far field was computed

@@ -58,6 +58,7 @@ struct RowOptions {
     // The near-field correction (accuracy/near_field.hpp) and its far field.
     Correction correct = Correction::Near;
     double near_k = 3.0;
+    double sub_hemicube_k = 10.0;  // NearFieldOptions::sub_hemicube_k (0: every refused near pair)
     FarFieldMode far_field = FarFieldMode::automatic;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
