@@ -33,6 +33,7 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows_closed += b.rows_closed;
     a.rows_capped += b.rows_capped;
     a.rows_sampled += b.rows_sampled;
+    a.refused_sampled += b.refused_sampled;
     a.small_receiver_entries += b.small_receiver_entries;
     a.rows_with_small_receivers += b.rows_with_small_receivers;
     a.far_rows += b.far_rows;
