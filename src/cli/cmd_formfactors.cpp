@@ -41,8 +41,8 @@ struct Figures {
 
 // Rows straight to the .ffm as they come, statistics from the stream and from passes over the
 // written file: memory independent of the number of entries (docs/robustness.md).
-Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, RowCheckpoint* checkpoint,
-                 const FfmMetadata& written, Report& report) {
+Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, std::span<const double> obstructed,
+                 RowCheckpoint* checkpoint, const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
     Figures f;
     RowStreamChecks checks(scene);
@@ -86,7 +86,7 @@ Figures streamed(const Options& o, const Scene& scene, RowProvider& provider, Ro
     }
     report.set("reciprocity.passes", passes);
     report.set("time.statistics", watch.seconds());
-    write_surface_outputs(o.outputs, sums, scene, report);
+    write_surface_outputs(o.outputs, sums, scene, report, obstructed);
     return f;
 }
 
@@ -115,7 +115,7 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
         write_mtx(o.output, F, &bar);
     }
     if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
-    write_surface_outputs(o.outputs, F, scene, report, progress);
+    write_surface_outputs(o.outputs, F, scene, report, progress, rows.obstructed());
     report.set("time.writing", watch.seconds());
     return f;
 }
@@ -157,7 +157,7 @@ int run(const Options& o) {
     report.set("streamed", stream);
     Figures f;
     if (stream) {
-        f = streamed(o, scene, rows.provider(), cp, written, report);
+        f = streamed(o, scene, rows.provider(), rows.obstructed(), cp, written, report);
     } else {
         Stopwatch watch;
         CsrMatrix computed;
