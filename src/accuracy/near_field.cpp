@@ -83,6 +83,10 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
         const double d = glm::length(pj.centroid - pi.centroid);
         if (d >= k * std::max(pi.size, pj.size)) continue;
         if (!patches.facing(i, j)) continue;
+        if (j >= scene.obstruction_first && !options.obstruction_receivers) {  // its entry stays as measured
+            out.faces_obstruction = true;
+            continue;
+        }
         ++out.near_pairs;
         if (!shaft_unoccluded(patches, grid, i, j, b.shaft)) {
             ++out.refused;
@@ -114,6 +118,10 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
         const Patch& pj = scene.patches[j];
         const double d = glm::length(pj.centroid - pi.centroid);
         if (d < options.k * std::max(pi.size, pj.size) || !patches.facing(i, j)) continue;
+        if (j >= scene.obstruction_first && !options.obstruction_receivers) {  // its entry stays as measured
+            out.faces_obstruction = true;
+            continue;
+        }
         if (!far.unoccluded(i, j)) {
             ++out.far_unproven;
             continue;
@@ -123,7 +131,7 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
         out.far_error += error;
     }
     out.far_entries = b.far.size();
-    out.complete = out.refused == 0 && out.far_unproven == 0;
+    out.complete = out.refused == 0 && out.far_unproven == 0 && !out.faces_obstruction;
     b.near_exact.assign(out.exact.begin(), out.exact.end());
     out.exact.resize(b.near_exact.size() + b.far.size());
     std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());

@@ -121,7 +121,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheck
         report.set("reciprocity.scratch_bytes", t.scratch_bytes);
     }
     report.set("time.statistics", watch.seconds());
-    write_surface_outputs(o.outputs, sums, scene, report);
+    write_surface_outputs(o.outputs, sums, scene, report, rows.obstructed());
     return f;
 }
 
@@ -150,7 +150,7 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
         write_mtx(o.output, F, &bar);
     }
     if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
-    write_surface_outputs(o.outputs, F, scene, report, progress);
+    write_surface_outputs(o.outputs, F, scene, report, progress, rows.obstructed());
     report.set("time.writing", watch.seconds());
     return f;
 }
@@ -170,6 +170,7 @@ int run(const Options& o) {
     Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
     RowOptions row_options = mpi_row_options(o.rows);
     apply_view3d_controls(scene, row_options, report);  // a .vs3's encl=1: --enforce closure
+    refuse_enforcement_with_obstructions(row_options.enforce, scene);  // before any row
     const FfmMetadata meta = row_metadata(row_options);
     const bool distributed = mpi_distributed();  // under mpirun: a shard per rank instead
     std::optional<RowCheckpoint> checkpoint =

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
 
@@ -20,6 +21,11 @@ void add_checkpoint_options(CLI::App& app, CheckpointOptions& o) {
 std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const Scene& scene, const FfmMetadata& meta,
                                              Report& report) {
     if (o.dir.empty()) return std::nullopt;
+    // A resumed row would come back without the share the obstructions intercepted (the sky).
+    if (scene.drawn)
+        throw InputError(fmt::format("--checkpoint: {} has obstruction-only surfaces (O): checkpoints are not supported for "
+                                     "them yet",
+                                     scene.source));
     CheckpointManifest m;
     m.fingerprint = scene.fingerprint;
     m.patches = static_cast<std::uint32_t>(scene.size());

@@ -88,6 +88,9 @@ void put_material(Writer& w, const Material& m) {
 }  // namespace
 
 std::vector<std::uint8_t> serialize_scene(const Scene& s) {
+    if (s.drawn)
+        throw InputError(fmt::format("{}: obstruction-only surfaces (O) are not supported under mpirun yet (run without mpirun)",
+                                     s.source));
     Writer w;
     w.put(kMagic);
     w.put(s.source);

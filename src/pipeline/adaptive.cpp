@@ -78,6 +78,8 @@ std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::s
 AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
                               const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress) {
     validate(options);
+    if (start.drawn)  // refine_patches would split the radiating patches only, and lose the obstructions
+        throw InputError(fmt::format("adaptive meshing: {} has obstruction-only surfaces (O): not supported yet", start.source));
     if (options.max_elements < start.size())
         throw InputError(fmt::format("--max-elements {}: fewer than the {} patches of the starting mesh", options.max_elements,
                                      start.size()));

@@ -48,12 +48,22 @@ void report_enforcement(Report& report, const std::string& what, const EnforceSt
 
 }  // namespace
 
+void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene) {
+    if (request == EnforceRequest::None || enforce_mode(request) != EnforceMode::Closure || !scene.drawn) return;
+    throw InputError(fmt::format("--enforce {} (or a .vs3's encl=1): {} has obstruction-only surfaces (O), which "
+                                 "absorb energy without rows or columns, so its rows cannot sum to 1",
+                                 to_string(request), scene.source));
+}
+
 CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
     const EnforceRequest request = rows.options().enforce;
     if (request == EnforceRequest::None) return F;
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) require_closed_scene(what, closure_evidence(rows), F);
+    if (mode == EnforceMode::Closure) {
+        refuse_enforcement_with_obstructions(request, scene);
+        require_closed_scene(what, closure_evidence(rows), F);
+    }
     const std::vector<double> areas = areas_of(scene);
     EnforceStats st;
     Stopwatch watch;
@@ -72,7 +82,10 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
     FFCUBE_CHECK(request != EnforceRequest::None);
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) require_closed_scene(what, closure_evidence(rows), raw_row_sums);
+    if (mode == EnforceMode::Closure) {
+        refuse_enforcement_with_obstructions(request, scene);
+        require_closed_scene(what, closure_evidence(rows), raw_row_sums);
+    }
     const std::vector<double> areas = areas_of(scene);
     const auto n = static_cast<std::uint32_t>(scene.size());
     Stopwatch watch;

@@ -109,6 +109,7 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         NearFieldOptions nf;
         nf.k = o.near_k;
         nf.rays = static_cast<double>(o.rays);
+        nf.obstruction_receivers = false;  // it credits either side of an obstruction (raycast_provider.cpp)
         return nf;
     }
     NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);

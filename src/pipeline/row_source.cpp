@@ -2,7 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
+#include <span>
 
 #include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/core/error.hpp"
@@ -16,14 +18,16 @@ namespace ffcube {
 RowSource::~RowSource() = default;
 
 RowProvider& RowSource::provider() {
+    if (leading_) return *leading_;
     if (corrected_) return *corrected_;
     if (hemicube_) return *hemicube_;
     FFCUBE_CHECK_MSG(raycast_ != nullptr, "RowSource::provider() on a source that was never made");
     return *raycast_;
 }
 
-RowSource make_row_source(const Scene& scene, const RowOptions& options) {
+RowSource make_row_source(const Scene& radiating, const RowOptions& options) {
     validate(options);
+    const Scene& scene = radiating.drawn_scene();
     RowSource rows;
     rows.options_ = options;
     Stopwatch watch;
@@ -34,6 +38,12 @@ RowSource make_row_source(const Scene& scene, const RowOptions& options) {
     if (options.correct == Correction::Near) {
         RowProvider& inner = rows.hemicube_ ? static_cast<RowProvider&>(*rows.hemicube_) : *rows.raycast_;
         rows.corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options));
+    }
+    if (radiating.drawn) {
+        RowProvider& inner = rows.corrected_ ? static_cast<RowProvider&>(*rows.corrected_)
+                             : rows.hemicube_ ? static_cast<RowProvider&>(*rows.hemicube_)
+                                              : *rows.raycast_;
+        rows.leading_ = std::make_unique<LeadingRowProvider>(inner, static_cast<std::uint32_t>(radiating.size()));
     }
     rows.setup_seconds_ = watch.seconds();
     return rows;
@@ -75,7 +85,9 @@ FfmMetadata row_metadata(const RowOptions& o) {
 
 namespace {
 
-void report_correction(Report& r, const CorrectedRowProvider& corrected) {
+// `rows`: how many rows the caller asks for (the radiating ones; the estimates cover the scene as
+// drawn).
+void report_correction(Report& r, const CorrectedRowProvider& corrected, std::size_t rows) {
     const NearFieldStats& c = corrected.stats();
     r.set("corrections.kind", "near");
     r.set("corrections.rows", c.rows);
@@ -103,7 +115,8 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected) {
     r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
     // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row
     // (−1 where not computed), then the largest, the mean and the row that has the largest.
-    const std::vector<float>& est = corrected.row_error_estimates();
+    const std::span<const float> est =
+        std::span<const float>(corrected.row_error_estimates()).first(std::min(rows, corrected.row_error_estimates().size()));
     std::vector<double> values;
     values.reserve(est.size());
     double mx = 0, sum = 0;
@@ -164,7 +177,7 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     r.set("time.setup", rows.setup_seconds());
     if (const CorrectedRowProvider* c = rows.corrected()) {
-        report_correction(r, *c);
+        report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size());
         // The analytic kernels' work (geometry/analytic.hpp), summed over this process: every
         // call has a budget, and a fallback is a panel accepted at its fixed rule's value when
         // the budget was spent (its error is within the call's stated bound).

@@ -64,6 +64,15 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("loading.format", to_string(format));
     report.set("loading.dropped_degenerate", model.dropped_degenerate);
     report.set("loading.merged_vertices", model.merged_vertices);
+    if (scene.drawn) {
+        // View3D's O surfaces: drawn (they block), no row, no column (docs/scene-format.md).
+        const std::size_t o_patches = scene.drawn->size() - scene.size();
+        info("{} obstruction-only surfaces ({} patches, drawn from both sides): no rows, no columns", model.obstruction_objects,
+             o_patches);
+        report.set("obstruction.surfaces", model.obstruction_objects);
+        report.set("obstruction.patches", o_patches);
+        report.set("obstruction.rows_not_computed", o_patches);
+    }
     report.set("fingerprint", fmt::format("{:016x}", scene.fingerprint));
     report.set("time.loading", load_s);
     report.set("time.meshing", mesh_s);

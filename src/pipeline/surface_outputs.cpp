@@ -61,8 +61,12 @@ View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) {
 namespace {
 
 // The sky statistics (always) and the files that need only the sky view factors and the scene.
-void write_sky_and_table(const SurfaceOutputOptions& o, const std::vector<double>& svf, const Scene& scene,
-                         Report& report) {
+void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf, const Scene& scene, Report& report,
+                         std::span<const double> obstructed) {
+    if (!obstructed.empty()) {
+        FFCUBE_CHECK(obstructed.size() == svf.size());
+        for (std::size_t i = 0; i < svf.size(); ++i) svf[i] = std::max(0.0, svf[i] - obstructed[i]);
+    }
     const SkyStats s = sky_stats(svf, scene);
     report.set("sky.min", s.min);
     report.set("sky.mean", s.mean);
@@ -82,8 +86,8 @@ void write_sky_and_table(const SurfaceOutputOptions& o, const std::vector<double
 bool surface_outputs_need_matrix(const SurfaceOutputOptions& o) { return !o.view3d.empty() || !o.elmer.empty(); }
 
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress) {
-    write_sky_and_table(o, sky_view_factors(F), scene, report);
+                           bool progress, std::span<const double> obstructed) {
+    write_sky_and_table(o, sky_view_factors(F), scene, report, obstructed);
     if (!o.view3d.empty()) {
         const bool binary = o.view3d_format == FileFormat::Binary ||
                             (o.view3d_format == FileFormat::Auto && scene.view3d.present && scene.view3d.out == 1);
@@ -99,9 +103,9 @@ void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, co
 }
 
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
-                           Report& report) {
+                           Report& report, std::span<const double> obstructed) {
     FFCUBE_CHECK_MSG(!surface_outputs_need_matrix(o), "View3D and Elmer files need the whole matrix");
-    write_sky_and_table(o, sky_view_factors(row_sums), scene, report);
+    write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed);
 }
 
 }  // namespace ffcube

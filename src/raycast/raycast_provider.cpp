@@ -191,7 +191,9 @@ struct RaycastRowProvider::Impl {
                     rh.ray.tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
                     continue;
                 }
-                if (glm::dot(d, scene.patches[j].normal) < 0.0) {  // front face: received
+                // A front face receives; so does either side of an obstruction-only patch, whose
+                // factor is measured only to be left out (Scene::drawn), so that it is not sky.
+                if (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first) {
                     if (acc[j] == 0.0) touched.push_back(j);
                     acc[j] += w;
                 }

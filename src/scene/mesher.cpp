@@ -357,6 +357,41 @@ std::uint64_t fingerprint_of(const Scene& scene) {
     return h.value();
 }
 
+// The radiating part of a scene whose last `obstruction_objects` objects are obstruction-only
+// (their faces come last in the model, so their patches, grids and vertices come last too), with
+// the whole scene as its `drawn` (Scene::drawn).
+Scene split_obstructions(Scene all, std::uint32_t obstruction_objects) {
+    FFCUBE_CHECK(obstruction_objects < all.objects.size());
+    const auto first_object = static_cast<std::uint32_t>(all.objects.size() - obstruction_objects);
+    const auto first = static_cast<std::size_t>(
+        std::find_if(all.patches.begin(), all.patches.end(), [&](const Patch& p) { return p.object >= first_object; }) -
+        all.patches.begin());
+    FFCUBE_CHECK_MSG(std::all_of(all.patches.begin() + static_cast<std::ptrdiff_t>(first), all.patches.end(),
+                                 [&](const Patch& p) { return p.object >= first_object; }),
+                     "obstruction patches must come after every radiating patch");
+    if (first == 0) throw InputError(fmt::format("{}: every surface is an obstruction: the scene has nothing to radiate", all.source));
+    all.obstruction_first = static_cast<std::uint32_t>(first);
+    Scene r;
+    r.source = all.source;
+    r.objects.assign(all.objects.begin(), all.objects.begin() + first_object);
+    r.materials = all.materials;
+    r.stats = all.stats;
+    r.stats.how += fmt::format(", {} of them obstruction-only", all.patches.size() - first);
+    r.view3d = all.view3d;
+    r.patches.assign(all.patches.begin(), all.patches.begin() + static_cast<std::ptrdiff_t>(first));
+    for (const PatchGrid& g : all.grids)
+        if (g.first_patch < first) r.grids.push_back(g);
+    std::uint32_t vertices = 0;
+    for (const Patch& p : r.patches)
+        for (std::uint32_t k = 0; k < p.count; ++k) vertices = std::max(vertices, p.v[k] + 1);
+    r.positions.assign(all.positions.begin(), all.positions.begin() + vertices);
+    r.bbox_min = all.bbox_min;  // the whole scene's box: its extent sets the tolerances of both
+    r.bbox_max = all.bbox_max;
+    r.fingerprint = all.fingerprint;  // the obstructions change every row
+    r.drawn = std::make_shared<const Scene>(std::move(all));
+    return r;
+}
+
 void check_max_edge(double max_edge) {
     if (!(std::isfinite(max_edge) && max_edge > 0.0))
         throw InputError(fmt::format("--max-patch-edge {} is invalid: it must be a positive, finite length in scene units",
@@ -459,6 +494,7 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
     scene.stats.how = how + fmt::format(" ({} patches)", scene.patches.size());
     scene.stats.warnings = std::move(d.warnings);
     scene.fingerprint = fingerprint_of(scene);
+    if (model.obstruction_objects > 0) return split_obstructions(std::move(scene), model.obstruction_objects);
     return scene;
 }
 

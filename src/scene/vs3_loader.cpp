@@ -45,10 +45,7 @@ public:
             case 'F': geometry_format(line); break;
             case 'V': vertex(line); break;
             case 'S': surface(line); break;
-            case 'O':
-                fail_at(source_, number_,
-                        "obstruction surfaces (O) are not supported yet: ffcube's scene has no surface that blocks views "
-                        "without a row and a column of its own (model it as an S surface, or leave it out)");
+            case 'O': surface(line, true); break;
             case 'M':
             case 'N':
                 fail_at(source_, number_, fmt::format("{} surfaces ({}) are not supported yet", kind == 'M' ? "masking" : "null",
@@ -59,6 +56,7 @@ public:
             }
         }
         if (model_.faces.empty()) throw InputError(fmt::format("{}: no S surfaces: the scene has no geometry", source_));
+        append_obstructions();
         if (!saw_format_)
             model_.warnings.push_back(fmt::format("{}: no F line: read as geometry format F 3 (vertices, then surfaces)", source_));
         for (const ObjFace& f : model_.faces)
@@ -149,7 +147,25 @@ private:
         model_.positions.push_back(p);
     }
 
-    void surface(std::string_view line) {
+    // The O surfaces after every S surface (faces and objects: Scene::drawn's order), each as
+    // two faces back to back, so that it blocks and intercepts from both sides (View3D's rule):
+    // what a radiating surface sees of it, front or back, is measured and then left out, and so
+    // never counts as sky.
+    void append_obstructions() {
+        const auto first_object = static_cast<std::uint32_t>(model_.objects.size());
+        for (ObjFace& f : obstruction_faces_) {
+            f.object += first_object;
+            ObjFace back = f;
+            std::reverse(back.v.begin(), back.v.end());
+            model_.faces.push_back(std::move(f));
+            model_.faces.push_back(std::move(back));
+        }
+        model_.objects.insert(model_.objects.end(), obstruction_objects_.begin(), obstruction_objects_.end());
+        model_.obstruction_objects = static_cast<std::uint32_t>(obstruction_objects_.size());
+    }
+
+    // S (radiating) or O (obstruction-only) surface: the same fields, numbered in one sequence.
+    void surface(std::string_view line, bool obstruction = false) {
         const long long n = integer(line, "surface number");
         if (n != static_cast<long long>(surface_object_.size()) + 1)
             fail_at(source_, number_, fmt::format("surface number {} is out of order (expected {}: surfaces are numbered 1, 2, "
@@ -173,6 +189,18 @@ private:
         const std::string_view name = required(line, "the surface name (S n v1 v2 v3 v4 base cmb emit name)");
         std::string_view extra;
         if (token(line, extra)) fail_at(source_, number_, fmt::format("unexpected {} after the surface name", shown(extra)));
+        if (obstruction && base != 0)
+            fail_at(source_, number_, fmt::format("obstruction surface {} has base {}: an O surface cannot be a subsurface (it "
+                                                  "has no row or column to subtract from its base; base must be 0)",
+                                                  n, base));
+        if (obstruction && cmb != 0)
+            fail_at(source_, number_, fmt::format("obstruction surface {} has cmb {}: an O surface cannot be combined (it has "
+                                                  "no row or column; cmb must be 0)",
+                                                  n, cmb));
+        if (base != 0 && base < n && surface_obstruction_[static_cast<std::size_t>(base - 1)])
+            fail_at(source_, number_, fmt::format("base {} is an obstruction surface (O): radiating subsurfaces of O surfaces are "
+                                                  "not supported yet",
+                                                  base));
         if (base != 0)
             fail_at(source_, number_, "subsurfaces (base != 0) are not supported yet: give the surface and its base as separate "
                                       "surfaces that do not overlap");
@@ -182,26 +210,31 @@ private:
         if (cmb != 0) {
             if (cmb >= n)
                 fail_at(source_, number_, fmt::format("cmb {} must name an earlier surface (this is surface {})", cmb, n));
+            if (surface_obstruction_[static_cast<std::size_t>(cmb - 1)])
+                fail_at(source_, number_, fmt::format("cmb {} names an obstruction surface (O), which has no row or column to "
+                                                      "combine with",
+                                                      cmb));
             if (surface_cmb_[static_cast<std::size_t>(cmb - 1)] != 0)
                 fail_at(source_, number_, fmt::format("cmb {} names a surface that is itself combined with surface {} (name the "
                                                       "lowest-numbered surface of the group: no chains)",
                                                       cmb, surface_cmb_[static_cast<std::size_t>(cmb - 1)]));
             object = surface_object_[static_cast<std::size_t>(cmb - 1)];
         } else {
-            const auto [it, inserted] = object_of_name_.try_emplace(std::string(name), static_cast<std::uint32_t>(model_.objects.size()));
+            const auto [it, inserted] = line_of_name_.try_emplace(std::string(name), number_);
             if (!inserted)
                 fail_at(source_, number_, fmt::format("surface name {} is already used on line {} (names must be unique; combine "
                                                       "surfaces with cmb)",
-                                                      shown(name), line_of_object_[it->second]));
-            model_.objects.emplace_back(name);
-            line_of_object_.push_back(number_);
-            object = it->second;
+                                                      shown(name), it->second));
+            std::vector<std::string>& objects = obstruction ? obstruction_objects_ : model_.objects;
+            object = static_cast<std::uint32_t>(objects.size());  // O: counted after the S objects (append_obstructions)
+            objects.emplace_back(name);
         }
         face.object = object;
         face.material = material(emit);
         surface_object_.push_back(object);
         surface_cmb_.push_back(cmb);
-        model_.faces.push_back(std::move(face));
+        surface_obstruction_.push_back(obstruction);
+        (obstruction ? obstruction_faces_ : model_.faces).push_back(std::move(face));
     }
 
     // An opaque grey surface of emissivity ε reflects ρ = 1 − ε (Kirchhoff), emits nothing itself.
@@ -218,8 +251,10 @@ private:
     bool saw_format_ = false;
     std::vector<std::uint32_t> surface_object_;
     std::vector<long long> surface_cmb_;
-    std::unordered_map<std::string, std::uint32_t> object_of_name_;
-    std::vector<std::uint32_t> line_of_object_;
+    std::vector<bool> surface_obstruction_;  // per surface: an O line
+    std::unordered_map<std::string, std::uint32_t> line_of_name_;  // surface name -> its line
+    std::vector<ObjFace> obstruction_faces_;         // O surfaces, objects counted from 0
+    std::vector<std::string> obstruction_objects_;
     std::map<double, std::uint32_t> material_of_emissivity_;
 };
 

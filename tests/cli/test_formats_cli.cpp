@@ -112,10 +112,12 @@ TEST(FormatsCli, RefusalsExitTwoAndWriteNothing) {
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("cut.stl: binary STL cut short"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("facet 12 is incomplete"), std::string::npos) << r.output;
-    write(dir / "o.vs3", "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nO 1 1 2 3 0 0 0 0.9 box\n");
+    // An obstruction-only surface has no row to combine with another's.
+    write(dir / "o.vs3", "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nS 1 1 2 3 0 0 0 0.9 a\nO 2 1 2 3 0 0 1 0.9 box\n");
     r = run_ffcube("formfactors " + (dir / "o.vs3") + " -q -o " + (dir / "F.ffm"));
     EXPECT_EQ(r.code, 2) << r.output;
-    EXPECT_NE(r.output.find("o.vs3:5: obstruction surfaces (O) are not supported yet"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("o.vs3:6: obstruction surface 2 has cmb 1: an O surface cannot be combined"), std::string::npos)
+        << r.output;
     r = run_ffcube("formfactors " + test::example("cube.obj") + " --no-subdivide --patches 10 -q -o " + (dir / "F.ffm"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm"));

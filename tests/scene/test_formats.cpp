@@ -3,6 +3,8 @@
 // a temporary directory.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <unistd.h>
 
 #include <array>
@@ -315,10 +317,78 @@ S 3 2 5 6 0 0 0 0.9 tri
     EXPECT_EQ(m.faces[0].material, m.faces[1].material);
 }
 
+// O surfaces: numbered with the S surfaces, their objects and faces after every S surface's, each
+// as two faces back to back; the mesher keeps them out of the scene's patches (no row, no column)
+// and in Scene::drawn.
+TEST(View3d, ObstructionSurfacesAreDrawnButHaveNoPatchIndex) {
+    const ObjModel m = parse_vs3(R"(F 3
+V 1 0 0 0
+V 2 1 0 0
+V 3 1 1 0
+V 4 0 1 0
+V 5 0 0 1
+V 6 1 0 1
+V 7 1 1 1
+V 8 0 1 1
+S 1 1 2 3 4 0 0 0.9 lower
+O 2 5 6 7 8 0 0 0.9 lid
+S 3 5 8 7 6 0 0 0.5 upper
+)",
+                                 "o.vs3");
+    EXPECT_EQ(m.objects, (std::vector<std::string>{"lower", "upper", "lid"}));
+    EXPECT_EQ(m.obstruction_objects, 1u);
+    ASSERT_EQ(m.faces.size(), 4u);
+    EXPECT_EQ(m.faces[1].line, 12u);  // upper, before the lid's faces
+    EXPECT_EQ(m.faces[2].v, (std::vector<std::uint32_t>{4, 5, 6, 7}));
+    EXPECT_EQ(m.faces[3].v, (std::vector<std::uint32_t>{7, 6, 5, 4}));  // the back side
+    EXPECT_EQ(m.faces[2].object, 2u);
+    EXPECT_EQ(m.faces[3].line, 11u);
+    MeshOptions o;
+    o.max_patch_edge = 0.5;
+    const Scene s = build_scene(m, o);
+    ASSERT_EQ(s.size(), 8u);  // lower and upper, 4 patches each
+    EXPECT_EQ(s.objects, (std::vector<std::string>{"lower", "upper"}));
+    ASSERT_NE(s.drawn, nullptr);
+    const Scene& d = *s.drawn;
+    ASSERT_EQ(d.size(), 16u);
+    EXPECT_EQ(d.obstruction_first, 8u);
+    EXPECT_EQ(s.obstruction_first, std::numeric_limits<std::uint32_t>::max());
+    for (std::size_t i = 0; i < s.size(); ++i) {
+        EXPECT_EQ(s.patch_vertices(i), d.patch_vertices(i)) << i;
+        EXPECT_EQ(s.patches[i].object, d.patches[i].object) << i;
+    }
+    for (std::size_t i = 8; i < 16; ++i) EXPECT_EQ(d.patches[i].object, 2u) << i;
+    EXPECT_NEAR(d.patches[8].normal.z, 1.0, 1e-15);
+    EXPECT_NEAR(d.patches[12].normal.z, -1.0, 1e-15);
+    EXPECT_EQ(s.grids.size(), 2u);
+    EXPECT_EQ(d.grids.size(), 4u);
+    EXPECT_EQ(s.fingerprint, d.fingerprint);  // the obstructions change every row
+    // Without the lid the fingerprint differs.
+    ObjModel bare = m;
+    bare.faces.resize(2);
+    bare.objects.resize(2);
+    bare.obstruction_objects = 0;
+    EXPECT_NE(build_scene(bare, o).fingerprint, s.fingerprint);
+    EXPECT_EQ(build_scene(bare, o).drawn, nullptr);
+}
+
 TEST(View3d, RefusalsNameTheLine) {
     const std::string head = "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nV 4 0 1 0\n";
     const auto err = [&](const std::string& tail) { return error_of([&] { parse_vs3(head + tail, "r.vs3"); }); };
-    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\n"), "r.vs3:6: obstruction surfaces (O) are not supported yet");
+    // Obstruction-only surfaces have no row or column: nothing to subtract from, combine with, or
+    // radiate.
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nO 2 1 2 3 4 1 0 0.9 block\n"),
+                    "r.vs3:7: obstruction surface 2 has base 1: an O surface cannot be a subsurface");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nO 2 1 2 3 4 0 1 0.9 block\n"),
+                    "r.vs3:7: obstruction surface 2 has cmb 1: an O surface cannot be combined");
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 4 0 1 0.9 a\n"),
+                    "r.vs3:7: cmb 1 names an obstruction surface (O)");
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 4 1 0 0.9 a\n"),
+                    "r.vs3:7: base 1 is an obstruction surface (O)");
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 0 0 0 0.9 block\n"),
+                    "r.vs3:7: surface name 'block' is already used on line 6");
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\n"), "r.vs3: no S surfaces");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nO 2 1 2 3 9 0 0 0.9 b\n"), "r.vs3:7: vertex 9 is not defined");
     EXPECT_CONTAINS(err("S 1 1 2 3 9 0 0 0.9 a\n"), "r.vs3:6: vertex 9 is not defined (the file defines 4 vertices)");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 1.5 a\n"), "r.vs3:6: emissivity 1.5 must be within [0,1]");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 1 0 0.9 a\n"), "r.vs3:6: subsurfaces (base != 0) are not supported yet");

@@ -39,6 +39,11 @@ namespace ffcube {
 
 struct NearFieldOptions {
     double k = 3.0;  // near: centroid distance < k × max(size_i, size_j); k > 0
+    // Exact values also for obstruction-only patches (Scene::obstruction_first, two faces back to
+    // back) that a patch faces. Right for an inner provider that credits the facing one of the
+    // two (the hemicube, which never draws a back face with a twin); false for one that credits
+    // whichever it hits, front or back (the ray caster): their entries then stay as measured.
+    bool obstruction_receivers = true;
     // Sender quadrature for the entries that are not near, for inner providers that sample the
     // sender at its centre only (the hemicube; not the ray caster, which samples the whole
     // patch): F_ij ← F_ij · Q_ij / M_ij, where M_ij is Lambert's point-to-polygon factor from
@@ -141,6 +146,9 @@ struct NearAnalysis {
     // Every facing pair of the row has its value here (far field on, nothing refused or
     // unproven): the row is known without measuring it.
     bool complete = false;
+    // The patch faces an obstruction-only patch (Scene::obstruction_first): those are occluders,
+    // never receivers here, so their entries stay as measured and the row must be measured.
+    bool faces_obstruction = false;
     bool skipped = false;  // and the inner provider was told not to measure it
     double far_error = 0;  // Σ of the error bounds of its integrated values (far and separated near)
     double seconds = 0;                                   // spent making it

@@ -6,6 +6,7 @@
 #include <functional>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "ffcube/formfactor/sparse.hpp"
 
@@ -67,6 +68,30 @@ public:
 
 private:
     const CsrMatrix& m_;
+};
+
+// Rows 0 .. n−1 of an inner provider that measures a larger scene, each cut to its columns below
+// n: the radiating part of a scene with obstruction-only surfaces (Scene::drawn: their patches
+// come last and get no row or column). What a row's cut entries sum to is kept: the share of the
+// energy leaving that patch that the left-out patches intercept (not sky, not in F).
+class LeadingRowProvider final : public RowProvider {
+public:
+    LeadingRowProvider(RowProvider& inner, std::uint32_t n);
+    std::uint32_t size() const override { return n_; }
+    std::string name() const override { return inner_.name(); }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+    bool can_sample_sender() const override { return inner_.can_sample_sender(); }
+    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                              const RowSink& sink) override;
+    // Per row: Σ of the entries cut from it (0 for rows not computed through this provider).
+    std::span<const double> cut() const { return cut_; }
+
+private:
+    RowSink cutting(const RowSink& sink);
+    RowProvider& inner_;
+    std::uint32_t n_;
+    SparseRow row_;
+    std::vector<double> cut_;
 };
 
 // Computes every row 0..n-1 through the provider into a CSR matrix.

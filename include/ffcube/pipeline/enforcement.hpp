@@ -16,6 +16,11 @@
 
 namespace ffcube {
 
+// Closure cannot hold where obstruction-only (O) surfaces absorb energy without rows or columns
+// (docs/scene-format.md): InputError naming the scene. Called before any row is computed, and by
+// both apply_enforcement forms.
+void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene);
+
 struct StreamedEnforcement {
     std::size_t passes = 0;         // over the unenforced rows' file
     std::size_t bands = 0;          // column bands of its transpose

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,12 @@ public:
     HemicubeRowProvider* hemicube() const { return hemicube_.get(); }
     RaycastRowProvider* raycast() const { return raycast_.get(); }
     CorrectedRowProvider* corrected() const { return corrected_.get(); }
+    // Per row, the share of its energy that obstruction-only surfaces intercept (Scene::drawn;
+    // left out of F, and not sky); empty when the scene has none. Filled as rows pass through
+    // provider().
+    std::span<const double> obstructed() const {
+        return leading_ ? leading_->cut() : std::span<const double>{};
+    }
     // Wall seconds spent starting it (GL contexts, worker processes, Embree, near-field setup).
     double setup_seconds() const { return setup_seconds_; }
 
@@ -51,10 +58,15 @@ private:
     std::unique_ptr<HemicubeRowProvider> hemicube_;
     std::unique_ptr<RaycastRowProvider> raycast_;
     std::unique_ptr<CorrectedRowProvider> corrected_;
+    // With obstruction-only surfaces: the radiating rows, cut to the radiating columns; holds a
+    // reference to the providers above, so it is declared after them.
+    std::unique_ptr<LeadingRowProvider> leading_;
     double setup_seconds_ = 0;
 };
 
-// Validates the options (InputError) and starts the provider they name. Start it before this
+// Validates the options (InputError) and starts the provider they name, on the scene as drawn
+// (Scene::drawn_scene(): obstruction-only surfaces included, their rows never asked for and their
+// columns cut). Start it before this
 // process makes a GL context of its own, so that hemicube workers can be forked processes.
 RowSource make_row_source(const Scene& scene, const RowOptions& options);
 

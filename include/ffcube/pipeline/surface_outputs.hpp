@@ -43,14 +43,16 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report)
 // mean of RGB; a .vs3 gives Kd = 1 − ε). With the scene's emit=1, Hottel's exchange factors.
 View3dTable view3d_table(const CsrMatrix& F, const Scene& scene);
 
-// Sky statistics into the report (always), then every file asked for. F is the finished matrix.
+// Sky statistics into the report (always), then every file asked for. F is the finished matrix;
+// `obstructed` (RowSource::obstructed(): empty, or per row the share obstruction-only surfaces
+// intercepted) is taken off the sky view factors.
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress);
+                           bool progress, std::span<const double> obstructed = {});
 // Whether the outputs asked for need the whole matrix (View3D's and Elmer's files do; the sky view
 // factors and the patch table need only each row's sum).
 bool surface_outputs_need_matrix(const SurfaceOutputOptions& o);
 // The same from each row's sum, for a streamed matrix; the options must not need the matrix.
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
-                           Report& report);
+                           Report& report, std::span<const double> obstructed = {});
 
 }  // namespace ffcube

@@ -4,6 +4,8 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -52,6 +54,10 @@ struct ObjModel {
     std::size_t dropped_degenerate = 0;
     std::size_t merged_vertices = 0;
     View3dControls view3d;              // a .vs3 file's control keys and title
+    // The last `obstruction_objects` objects (and their faces, which come after every other
+    // face) are obstruction-only (View3D's O surfaces): they block views but get no row and no
+    // column. The mesher keeps them out of the Scene's patches and puts them in Scene::drawn.
+    std::uint32_t obstruction_objects = 0;
 };
 
 // A patch: a planar triangle or convex quad, the unit of the form-factor matrix.
@@ -107,8 +113,21 @@ struct Scene {
     // mesh the same file with the same options get the same value; materials do not enter it,
     // so a form-factor matrix stays valid when only Kd/Ke change.
     std::uint64_t fingerprint = 0;
+    // Obstruction-only surfaces (View3D's O; docs/scene-format.md). When the model has them,
+    // this Scene (its patches, grids, objects: every row and column of every output) holds the
+    // radiating surfaces only, and `drawn` the whole scene as the row providers draw it: the
+    // same patches in the same order (indices 0 .. size() − 1 agree), then the obstruction
+    // patches from index `obstruction_first` on, in objects after this Scene's. The fingerprint
+    // is the whole scene's. Null when there are none (then the providers draw this Scene).
+    std::shared_ptr<const Scene> drawn;
+    // In a scene that is drawn: patches from this index on are obstruction-only (two-sided
+    // blockers whose factors are measured only to be left out, so that the sky view factor does
+    // not count what they intercept); the maximum when there are none.
+    std::uint32_t obstruction_first = std::numeric_limits<std::uint32_t>::max();
 
     std::size_t size() const { return patches.size(); }
+    // The scene the row providers draw: `drawn`, or this one.
+    const Scene& drawn_scene() const { return drawn ? *drawn : *this; }
     // Length of the bounding-box diagonal, scene units.
     double extent() const;
     // Positions of patch i's vertices (a triangle's [3] repeats its [2]).
