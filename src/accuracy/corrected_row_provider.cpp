@@ -91,9 +91,18 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         stats_.inner_row_sum_min = std::min(stats_.inner_row_sum_min, measured);
         scratch_ = row;
         double estimate = 0;
-        corrector_.correct(i, scratch_, stats_, pools_->sink, &estimate, &a, sample && a.done && a.refused > 0);
+        const bool sampled = sample && a.done && a.sampled;
+        corrector_.correct(i, scratch_, stats_, pools_->sink, &estimate, &a, sampled);
         if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
         row_error_[i] = static_cast<float>(estimate);
+        if (row_measure_.size() != inner_.size()) row_measure_.assign(inner_.size(), RowMeasure::not_computed);
+        row_measure_[i] = a.skipped ? RowMeasure::analytic
+                          : !sampled ? RowMeasure::centre
+                          : a.occluder == 2 ? RowMeasure::sampled_touching
+                          : a.refused > 0   ? RowMeasure::sampled_near_pair
+                          : a.occluder == 1 ? RowMeasure::sampled_occluder
+                          : a.sampled_unproven ? RowMeasure::sampled_unproven
+                                            : RowMeasure::sampled_near_pair;
         // Give the analysis's buffer back: with the far field it holds up to a whole row, and
         // every row of the call has a slot (n² entries if none were freed: 225 MB for 3,744
         // patches); the pool holds only as many as were in flight at once.
