@@ -159,22 +159,19 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
 
 RowProvider::RowPlan NearFieldCorrector::plan_row(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const {
     analyse(i, out, scratch);
-    // An occluder touching the sender: 4 × 4 sub-hemicubes, whatever else holds (refused near
-    // pairs included: the wall that hides them is usually that occluder).
-    if (impl_->options.sample_beside_occluders)
-        out.occluder = static_cast<std::uint8_t>(impl_->visibility.occluder_level(i, scratch.buffers().near));
-    if (out.refused > 0 || out.occluder == 2) {
-        out.sampled = true;
-        return out.occluder == 2 ? RowProvider::RowPlan::sampled_fine : RowProvider::RowPlan::sampled;
-    }
     // Every facing pair known: nothing to measure (RowPlan::skip hands on an empty row).
     if (out.complete && impl_->options.skip_complete_rows) {
         out.skipped = true;
         return RowProvider::RowPlan::skip;
     }
-    if (out.occluder > 0) {
+    // A near pair that may be occluded, or an occluder beside the sender: sub-hemicubes, at 4 × 4
+    // points when the occluder touches the sender (refused near pairs included: the wall that
+    // hides them is usually that occluder).
+    if (impl_->options.sample_beside_occluders)
+        out.occluder = static_cast<std::uint8_t>(impl_->visibility.occluder_level(i, scratch.buffers().near));
+    if (out.refused > 0 || out.occluder > 0) {
         out.sampled = true;
-        return RowProvider::RowPlan::sampled;
+        return out.occluder == 2 ? RowProvider::RowPlan::sampled_fine : RowProvider::RowPlan::sampled;
     }
     if (impl_->options.sample_unproven_rows && out.far && out.far_unproven > 0) {
         out.sampled = out.sampled_unproven = true;
