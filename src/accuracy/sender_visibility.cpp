@@ -47,6 +47,9 @@ int SenderVisibility::occluder_level(std::uint32_t i, std::vector<std::uint32_t>
         // Something may lie beyond q's plane, seen from i: a corner of the scene's box strictly on
         // the other side of it from i's centroid (either side when the centroid is in the plane).
         const double side = glm::dot(pq.normal, pi.centroid - pq.centroid);
+        // Seen from behind (i's centre inside a block standing on it): q shows its back, the
+        // centre sees nothing past it, and neither do points under the block.
+        if (side < -tol) continue;
         bool behind = false;
         for (int c = 0; c < 8 && !behind; ++c) {
             const Vec3 corner(c & 1 ? scene_box_.hi.x : scene_box_.lo.x, c & 2 ? scene_box_.hi.y : scene_box_.lo.y,

@@ -24,7 +24,8 @@ public:
     SenderVisibility(const PatchSet& patches, const SpatialGrid& grid, double k);
 
     // An occluder of i is a patch q near i (centroids closer than k × the larger size) that rises
-    // in front of i's plane (a vertex farther than plane_tolerance in front of it) with something
+    // in front of i's plane (a vertex farther than plane_tolerance in front of it), facing i (i's
+    // centre not behind q's plane: a block's walls seen from under it hide nothing), with something
     // possibly behind it as seen from i: the scene's bounding box reaches strictly beyond q's
     // plane on the side away from i's centroid. An occluder with nothing behind it (the walls of a
     // closed room, the ground under a wall) hides nothing and does not count.
