@@ -37,10 +37,22 @@ def read_sky(path):
         return [float(line.rsplit(",", 1)[1]) for line in f]
 
 
+def read_objects(path):
+    with open(path) as f:
+        next(f)
+        return [line.split(",")[1] for line in f]
+
+
+def surface_class(name):
+    """gen_vs3_blocks.py's surface names: ground_I_J, bXYroof_I_J, bXY{s,n,w,e}_I_J."""
+    return "ground" if name.startswith("ground") else "roof" if "roof" in name else "wall"
+
+
 def run(binary, scene, extra, out):
     mtx, sky = os.path.join(out, "F.mtx"), os.path.join(out, "sky.csv")
     t = time.time()
     subprocess.run([binary, "formfactors", scene, "--no-subdivide", "-q", "-o", mtx, "--sky", sky] + extra, check=True)
+    run.objects = read_objects(sky)
     return read_mtx(mtx), read_sky(sky), time.time() - t
 
 
@@ -69,6 +81,12 @@ def main():
     print(f"SVF: mean (hemicube - raycast) = {sum(sky) / n:+.2e}, mean |d| = {sum(map(abs, sky)) / n:.2e}, "
           f"max |d| = {max(map(abs, sky)):.2e}; raycast noise per patch <= {0.5 / math.sqrt(a.rays):.1e}, "
           f"of the mean <= {0.5 / math.sqrt(a.rays * n):.1e}")
+    by = {}
+    for name, d in zip(run.objects, sky):
+        by.setdefault(surface_class(name), []).append(d)
+    for c, ds in sorted(by.items()):
+        print(f"SVF by surface class: {c} ({len(ds)}): mean (hemicube - raycast) = {sum(ds) / len(ds):+.2e}, "
+              f"max |d| = {max(map(abs, ds)):.2e}")
     w = max(range(n), key=lambda i: abs(sky[i]))
     print(f"mean SVF: hemicube {sum(hs) / n:.5f}, raycast {sum(rs) / n:.5f}; largest difference at patch {w} "
           f"(0-based): hemicube {hs[w]:.5f}, raycast {rs[w]:.5f}")

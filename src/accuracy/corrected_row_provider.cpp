@@ -21,6 +21,9 @@ namespace {
 // Adds one row's statistics (a fresh NearFieldStats filled by correct()) to the call's: sums,
 // and the least and largest, so the totals do not depend on the order rows finish in (but for
 // the seconds, which are timings).
+// Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
+// its size, and this count with it (a statistic left out of the merge reads 0 in the report).
+static_assert(sizeof(NearFieldStats) == 26 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
@@ -34,6 +37,9 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows_capped += b.rows_capped;
     a.rows_sampled += b.rows_sampled;
     a.refused_sampled += b.refused_sampled;
+    a.rows_sampled_occluder += b.rows_sampled_occluder;
+    a.rows_sampled_fine += b.rows_sampled_fine;
+    a.rows_sampled_unproven += b.rows_sampled_unproven;
     a.small_receiver_entries += b.small_receiver_entries;
     a.rows_with_small_receivers += b.rows_with_small_receivers;
     a.far_rows += b.far_rows;
@@ -124,6 +130,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     // run one after the other on one thread.
     analyses_.assign(rows.size(), NearAnalysis{});
     if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
+    if (row_measure_.size() != inner_.size()) row_measure_.assign(inner_.size(), RowMeasure::not_computed);
     // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
     // quadrature points (the pair keeps a value with its own visibility and sender quadrature);
     // rows whose every pair is known are not measured. Each row's plan comes from its analysis,
@@ -154,9 +161,18 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         local.inner_row_sum_min = measured;
         std::unique_ptr<NearFieldScratch> scratch = pools_->take();
         double estimate = 0;
-        corrector_.correct(i, row, local, *scratch, &estimate, &a, sample && a.done && a.refused_sampled > 0);
+        const bool sampled = sample && a.done && a.sampled;
+        corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled);
         pools_->give_back(std::move(scratch));
-        row_error_[i] = static_cast<float>(estimate);  // one writer per row: i is listed once
+        // One writer per row (i is listed once); both are sized before the stages start.
+        row_error_[i] = static_cast<float>(estimate);
+        row_measure_[i] = a.skipped ? RowMeasure::analytic
+                          : !sampled ? RowMeasure::centre
+                          : a.occluder == 2 ? RowMeasure::sampled_touching
+                          : a.refused_sampled > 0 ? RowMeasure::sampled_near_pair
+                          : a.occluder == 1 ? RowMeasure::sampled_occluder
+                          : a.sampled_unproven ? RowMeasure::sampled_unproven
+                                               : RowMeasure::sampled_near_pair;
         // Give the analysis's buffer back: with the far field it holds up to a whole row, and
         // every row of the call has a slot (n² entries if none were freed: 225 MB for 3,744
         // patches); the pool holds only as many as were in flight at once.

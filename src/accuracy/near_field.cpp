@@ -18,6 +18,7 @@
 #include "accuracy/row_merge.hpp"
 #include "accuracy/scratch.hpp"
 #include "accuracy/sender_quadrature.hpp"
+#include "accuracy/sender_visibility.hpp"
 #include "accuracy/shaft_test.hpp"
 #include "accuracy/spatial_grid.hpp"
 #include "ffcube/core/error.hpp"
@@ -33,12 +34,14 @@ NearFieldScratch::NearFieldScratch(NearFieldScratch&&) noexcept = default;
 NearFieldScratch& NearFieldScratch::operator=(NearFieldScratch&&) noexcept = default;
 
 struct NearFieldCorrector::Impl {
-    Impl(const Scene& s, const NearFieldOptions& o) : options(o), patches(s), grid(patches), far(patches, grid, options) {}
+    Impl(const Scene& s, const NearFieldOptions& o)
+        : options(o), patches(s), grid(patches), far(patches, grid, options), visibility(patches, grid, options.k) {}
 
     const NearFieldOptions options;
     const PatchSet patches;
     const SpatialGrid grid;
     const FarField far;
+    const SenderVisibility visibility;
 
     bool needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const;
     void add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
@@ -193,11 +196,23 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
 
 RowProvider::RowPlan NearFieldCorrector::plan_row(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const {
     analyse(i, out, scratch);
-    if (out.refused_sampled > 0) return RowProvider::RowPlan::sampled;
     // Every facing pair known: nothing to measure (RowPlan::skip hands on an empty row).
     if (out.complete && impl_->options.skip_complete_rows) {
         out.skipped = true;
         return RowProvider::RowPlan::skip;
+    }
+    // A near pair that may be occluded, or an occluder beside the sender: sub-hemicubes, at 4 × 4
+    // points when the occluder touches the sender (refused near pairs included: the wall that
+    // hides them is usually that occluder).
+    if (impl_->options.sample_beside_occluders)
+        out.occluder = static_cast<std::uint8_t>(impl_->visibility.occluder_level(i, scratch.buffers().near));
+    if (out.refused_sampled > 0 || out.occluder > 0) {
+        out.sampled = true;
+        return out.occluder == 2 ? RowProvider::RowPlan::sampled_fine : RowProvider::RowPlan::sampled;
+    }
+    if (impl_->options.sample_unproven_rows && out.far && out.far_unproven > 0) {
+        out.sampled = out.sampled_unproven = true;
+        return RowProvider::RowPlan::sampled;
     }
     return RowProvider::RowPlan::centre;
 }
@@ -248,7 +263,12 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     }
     add_analysis_stats(*analysis, stats);
     Stopwatch quadrature_watch;
-    if (sampled_row) ++stats.rows_sampled;
+    if (sampled_row) {
+        ++stats.rows_sampled;
+        stats.rows_sampled_occluder += analysis->occluder > 0 && analysis->refused_sampled == 0;
+        stats.rows_sampled_fine += analysis->occluder == 2;
+        stats.rows_sampled_unproven += analysis->sampled_unproven;
+    }
     // A sampled row is already the 2 × 2 sender quadrature (sub-hemicubes): no ratio on top.
     const bool quadrature = im.options.sender_quadrature && !sampled_row;
     const double inner_sum = row.sum();

@@ -15,9 +15,10 @@ class Engine {
 public:
     virtual ~Engine() = default;
     virtual void start() = 0;  // on the worker thread, before the first request
-    // Row p (sampled: the average of sub-hemicubes) into out; the work done is added to st.
+    // Row p into out (sub_points ≥ 2: the average of sub-hemicubes at sub_points × sub_points
+    // quadrature points; 0: one hemicube at the centre); the work done is added to st.
     // Errors are thrown as the class they were raised as, wherever that was (core/error.hpp).
-    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) = 0;
+    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) = 0;
     virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
     virtual void stop() = 0;  // on the worker thread, after the last request
 };

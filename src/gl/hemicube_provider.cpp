@@ -72,7 +72,7 @@ struct HemicubeRowProvider::Impl {
                 out.clear();
                 ++local.skipped_rows;
             } else {
-                engines[w]->row(i, out, local, plan == RowPlan::sampled);
+                engines[w]->row(i, out, local, plan == RowPlan::sampled ? 2 : plan == RowPlan::sampled_fine ? 4 : 0);
             }
             {
                 // Merged before the row is handed on: the sink sees stats that include its row.

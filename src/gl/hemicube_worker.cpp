@@ -257,19 +257,19 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     st.hemicubes += 1;
 }
 
-// Row p: one hemicube at the centroid, or (sampled) the average of sub-hemicubes at the
-// patch's 2 × 2 quadrature points (geometry/quadrature.hpp, the points the near-field
-// correction's sender quadrature uses), each with its own visibility.
-void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
+// Row p: one hemicube at the centroid, or the average of sub-hemicubes at the patch's 2 × 2
+// quadrature points (geometry/quadrature.hpp, the points the near-field correction's sender
+// quadrature uses; 4 × 4 for a sender with an occluder touching it), each with its own visibility.
+void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
     if (test_fail_ != 0) fail_for_test(test_fail_, p);
     ++epoch_;
     touched_.clear();
-    if (!sampled) {
+    if (sub_points < 2) {
         render(p, st);
         accumulate(p, 1.0, false, st);
     } else {
         const auto v = scene_.patch_vertices(p);
-        patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
+        patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
         // At half the resolution: four of them cost about one full hemicube, and their
         // average has about the pixel noise of one (each has twice the relative noise).
         for (std::size_t q = 0; q < points_.size(); ++q) {
@@ -407,8 +407,8 @@ void LocalEngine::start() {
     worker_ = std::make_unique<Worker>(*ctx_, scene_, pieces_, layout_, opt_);
 }
 
-void LocalEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
-    worker_->row(p, out, st, sampled);
+void LocalEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
+    worker_->row(p, out, st, sub_points);
 }
 
 void LocalEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {

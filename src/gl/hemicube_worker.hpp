@@ -37,9 +37,9 @@ public:
     // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
     // (half) the half-resolution one of sub-hemicubes.
     void render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st);
-    // Row p: one hemicube at the centroid, or (sampled) the average of sub-hemicubes at the
-    // patch's 2 × 2 quadrature points, each with its own visibility.
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled = false);
+    // Row p: one hemicube at the centroid (sub_points 0), or the average of sub-hemicubes at the
+    // patch's sub_points × sub_points quadrature points (2 or 4), each with its own visibility.
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points = 0);
     const std::vector<std::uint32_t>& ids() const { return ids_; }
 
 private:
@@ -81,7 +81,7 @@ public:
         : ctx_(std::move(ctx)), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {}
     ~LocalEngine() override { ctx_.reset(); }
     void start() override;
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override;
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
     void stop() override;
 

@@ -25,7 +25,7 @@ namespace ffcube {
 
 // The wire protocol between a ProcessEngine and its child: fixed-size headers and raw arrays
 // over a Unix socket pair (both ends are the same binary).
-enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2 };
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2, SampledFineRow = 3 };
 struct RequestMsg {
     Request kind;
     std::uint32_t patch;
@@ -104,8 +104,9 @@ void send_current_error(int fd) {
         while (recv_all(fd, &req, sizeof req)) {
             try {
                 ReplyMsg r{0, 0, {}};
-                if (req.kind == Request::Row || req.kind == Request::SampledRow) {
-                    worker.row(req.patch, row, r.stats, req.kind == Request::SampledRow);
+                if (req.kind == Request::Row || req.kind == Request::SampledRow || req.kind == Request::SampledFineRow) {
+                    worker.row(req.patch, row, r.stats,
+                               req.kind == Request::SampledRow ? 2 : req.kind == Request::SampledFineRow ? 4 : 0);
                     r.count = row.nnz();
                     send_all(fd, &r, sizeof r);
                     send_vector(fd, row.col);
@@ -193,8 +194,9 @@ std::pair<std::string, std::string> ProcessEngine::hello() {
     return {text.substr(0, nl), nl == std::string::npos ? std::string() : text.substr(nl + 1)};
 }
 
-void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) {
-    const Reply r = request(static_cast<std::uint32_t>(sampled ? Request::SampledRow : Request::Row), p);
+void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
+    const Request kind = sub_points >= 4 ? Request::SampledFineRow : sub_points >= 2 ? Request::SampledRow : Request::Row;
+    const Reply r = request(static_cast<std::uint32_t>(kind), p);
     out.col.resize(r.count);
     out.val.resize(r.count);
     if (r.count) {

@@ -35,7 +35,7 @@ public:
     std::pair<std::string, std::string> hello();
     void start() override {}
     void stop() override {}
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, bool sampled) override;
+    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
 
     struct Reply;  // the wire format's reply header (process_engine.cpp)

@@ -102,6 +102,9 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.rows_capped_at_one", c.rows_capped);
     r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
     r.set("corrections.pairs_refused_sub_hemicubes", c.refused_sampled);
+    r.set("corrections.rows_sub_hemicubes_occluder", c.rows_sampled_occluder);
+    r.set("corrections.rows_sub_hemicubes_4x4", c.rows_sampled_fine);
+    r.set("corrections.rows_sub_hemicubes_unproven", c.rows_sampled_unproven);
     r.set("corrections.small_receiver_entries", c.small_receiver_entries);
     r.set("corrections.far_field", corrected.corrector().far_field_status());
     r.set("corrections.far_field_planes", corrected.corrector().far_field_planes());
@@ -136,6 +139,12 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("row_error_estimate.mean", counted ? sum / static_cast<double>(counted) : 0.0);
     r.set("row_error_estimate.worst_row", worst);
     r.set_array("row_error_estimate.rows", values);
+    // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
+    // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
+    // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs
+    // not proven unoccluded.
+    const std::vector<std::int8_t>& measures = corrected.row_measures();
+    r.set_array("corrections.row_measure", std::vector<std::int64_t>(measures.begin(), measures.end()));
     r.set("corrections.seconds", c.seconds);
     r.set("corrections.near_seconds", c.near_seconds);
     r.set("corrections.quadrature_seconds", c.quadrature_seconds);

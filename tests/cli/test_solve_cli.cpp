@@ -263,11 +263,12 @@ TEST(SolveCli, OutputsAreConsistentWithEachOther) {
     EXPECT_EQ(rep["row_cache"]["rows_computed"].get<std::size_t>() + rep["row_cache"]["patches_without_row"].get<std::size_t>(),
               patches.size());
     // One hemicube per computed row, and for the rows made of sub-hemicubes (near pairs that may
-    // be occluded) 4 on a quad, 3 on a triangle: 2 or 3 more each.
+    // be occluded, occluders beside the sender) 4 on a quad, 3 on a triangle: 2 or 3 more each;
+    // 16 (15 more) for those at 4 × 4 points (an occluder touching the sender).
     const std::size_t rows = rep["row_cache"]["rows_computed"], hemicubes = rep["hemicubes"],
-                      sub = rep["sub_hemicube_rows"];
-    EXPECT_GE(hemicubes, rows + 2 * sub);
-    EXPECT_LE(hemicubes, rows + 3 * sub);
+                      sub = rep["sub_hemicube_rows"], fine = rep["corrections"]["rows_sub_hemicubes_4x4"];
+    EXPECT_GE(hemicubes, rows + 2 * sub + 12 * fine);
+    EXPECT_LE(hemicubes, rows + 3 * sub + 12 * fine);
     // Energy: emitted = absorbed + escaped + unshot, per channel.
     for (int c = 0; c < 3; ++c) {
         const double e = rep["energy"]["emitted"][c], a = rep["energy"]["absorbed"][c], s = rep["energy"]["escaped"][c],

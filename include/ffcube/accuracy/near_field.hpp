@@ -77,6 +77,16 @@ struct NearFieldOptions {
     // straddles j's plane and its first-order bound (size_i/δ)·min(1, A_j/(πδ²)) exceeds 5e-4.
     // 0: every refused near pair (the policy before issue 15).
     double sub_hemicube_k = 10.0;
+    // ... and so are rows whose sender has an occluder beside it (a patch within the near range
+    // that rises in front of its plane with scene behind it: a ground cell beside a wall), where
+    // what the centre sees is not what the sender sees on average (docs/accuracy.md, "Senders
+    // beside an occluder"; accuracy/sender_visibility.hpp). Only with sub_hemicubes.
+    bool sample_beside_occluders = true;
+    // ... and, where the far field ran, rows with a facing pair beyond the near range that it
+    // could not prove unoccluded: a far occluder's shadow moves across the receivers as the
+    // point on the sender moves (a wall cell seeing the ground past another building), which
+    // the centre's single visibility and the unoccluded quadrature ratio miss.
+    bool sample_unproven_rows = true;
     // Far field: every facing pair beyond the near range whose visibility the plane test proves
     // (NearFieldCorrector::far_unoccluded) gets its analytic value too (docs/accuracy.md, "Far
     // field"): exact receiver and 3 × 3 sender rule within 5 sizes, the point kernel on 3 × 3,
@@ -111,8 +121,11 @@ struct NearFieldStats {
     std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
     std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
-    std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (a near pair possibly occluded)
     std::uint64_t refused_sampled = 0;  // refused pairs that ask for sub-hemicubes (sub_hemicube_k)
+    std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (either reason below)
+    std::uint64_t rows_sampled_occluder = 0;  // of which for an occluder beside the sender only
+    std::uint64_t rows_sampled_fine = 0;      // rows at 4 × 4 points: an occluder touches the sender
+    std::uint64_t rows_sampled_unproven = 0;  // for far pairs not proven unoccluded only
     // Receivers worth fewer than 4 of the largest hemicube pixels (F_ij < 4 pixel_delta_ff), as
     // the inner provider made them: detected and counted, not corrected.
     std::uint64_t small_receiver_entries = 0;
@@ -150,6 +163,11 @@ struct NearAnalysis {
     // never receivers here, so their entries stay as measured and the row must be measured.
     bool faces_obstruction = false;
     bool skipped = false;  // and the inner provider was told not to measure it
+    // plan_row asked for sub-hemicubes: a near pair may be occluded (refused > 0), or an
+    // occluder stands beside the sender (occluder 1: 2 × 2 sub-hemicubes; 2, touching it: 4 × 4).
+    bool sampled = false;
+    std::uint8_t occluder = 0;
+    bool sampled_unproven = false;  // sampled for far pairs not proven unoccluded only
     double far_error = 0;  // Σ of the error bounds of its integrated values (far and separated near)
     double seconds = 0;                                   // spent making it
     bool done = false;
@@ -184,7 +202,9 @@ public:
     // The same with the caller's scratch space (out's buffer is reused too).
     void analyse(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const;
     // How row i must be measured, from its analysis (made into out): sampled (sub-hemicubes)
-    // when a near pair may be occluded, skip when every facing pair is known analytically (and
+    // when a near pair may be occluded or (NearFieldOptions::sample_beside_occluders) an occluder
+    // stands beside the sender and not every pair is known (out.sampled, out.occluder;
+    // sampled_fine when the occluder touches the sender), skip when every facing pair is known analytically (and
     // NearFieldOptions::skip_complete_rows; out.skipped is then set), centre otherwise. A
     // function of the scene and i only, so it may run before the row is asked of anyone.
     RowProvider::RowPlan plan_row(std::uint32_t i, NearAnalysis& out, NearFieldScratch& scratch) const;
@@ -232,6 +252,17 @@ public:
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }
+    // Per row, how it was measured (RowMeasure; empty before the first row).
+    enum RowMeasure : std::int8_t {
+        not_computed = -1,
+        analytic = 0,           // every pair known: not measured (NearAnalysis::skipped)
+        centre = 1,             // one hemicube (or whatever the inner provider does) at the centre
+        sampled_near_pair = 2,  // sub-hemicubes: a near pair may be occluded
+        sampled_occluder = 3,   // 2 × 2 sub-hemicubes: an occluder beside the sender
+        sampled_touching = 4,   // 4 × 4 sub-hemicubes: an occluder touching the sender
+        sampled_unproven = 5,   // 2 × 2 sub-hemicubes: far pairs not proven unoccluded
+    };
+    const std::vector<std::int8_t>& row_measures() const { return row_measure_; }
     const NearFieldCorrector& corrector() const { return corrector_; }
     // Entries still held by the analyses of rows already handed on (0 after compute_rows: each
     // row's analysis, up to a whole row with the far field, is freed once the row is corrected).
@@ -246,6 +277,7 @@ private:
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
     std::vector<float> row_error_;
+    std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
     // Scratch spaces and analysis buffers reused across rows, one per row being planned or

@@ -33,10 +33,11 @@ public:
     // own visibility ("sub-hemicubes"), and to leave out rows its caller can make without it.
     // compute_rows_planned takes one plan per listed row, worked out by the caller before it asks
     // (the provider never calls back into its caller): centre (as compute_rows), sampled
-    // (sub-hemicubes) or skip (nothing measured: the row handed to sink is empty). Rows go to
+    // (sub-hemicubes), sampled_fine (sub-hemicubes at 4 × 4 quadrature points, for senders with
+    // an occluder touching them) or skip (nothing measured: the row handed to sink is empty). Rows go to
     // sink in list order like compute_rows. plans.size() == rows.size(). The default samples
     // nothing and skips nothing.
-    enum class RowPlan : std::uint8_t { centre, sampled, skip };
+    enum class RowPlan : std::uint8_t { centre, sampled, skip, sampled_fine };
     virtual bool can_sample_sender() const { return false; }
     virtual void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                       const RowSink& sink);
