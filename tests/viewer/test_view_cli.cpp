@@ -229,7 +229,8 @@ TEST(ViewCli, ExrHoldsTheLinearRadiance) {
 TEST(ViewCli, BadOptionsAreRefusedBeforeAnyWindow) {
     // No display needed: validation comes first, exit code 2 (bad input).
     for (const char* args : {"--screenshot x.png", "--frames 2 --pick 5", "--size 320x240 --frames 2 --pick 999,5", "--size 10x10",
-                             "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png"}) {
+                             "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png", "--target-error 0",
+                             "--max-elements 10"}) {  // the last: fewer than the ~500 patches of the adaptive start
         const RunResult r = test::run_ffcube(std::string("view -q ") + args);
         EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
         EXPECT_NE(r.output.find("error"), std::string::npos) << args;
