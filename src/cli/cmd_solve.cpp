@@ -43,9 +43,7 @@ struct Options {
     CLI::Option* exposure_option = nullptr;
     bool allow_unconverged = false;
     // Adaptive meshing (docs/adaptive.md): on when either is given.
-    AdaptiveOptions adaptive;
-    CLI::Option* target_error_option = nullptr;
-    CLI::Option* max_elements_option = nullptr;
+    AdaptiveFlags adaptive;
 };
 
 int run(const Options& o) {
@@ -77,16 +75,12 @@ int run(const Options& o) {
     std::optional<Camera> camera;
     if (!o.camera.empty()) camera = parse_camera(o.camera);
 
-    const bool adaptive = o.target_error_option->count() > 0 || o.max_elements_option->count() > 0;
+    const bool adaptive = o.adaptive.on();
     SceneOptions scene_options = o.scene.scene;
+    prepare_adaptive(o.adaptive, scene_options);
     if (adaptive) {
-        validate(o.adaptive);
         if (!o.matrix.empty()) throw InputError("--matrix with --target-error/--max-elements: adaptive meshing computes the rows of the elements it makes");
         if (mpi_distributed()) throw InputError("--target-error/--max-elements under mpirun: adaptive meshing runs in one process (docs/scaling.md)");
-        if (scene_options.patches == 0 && scene_options.max_patch_edge == 0.0 && scene_options.subdivide)
-            scene_options.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
-        if (scene_options.contact_cuts == ContactCuts::Auto && scene_options.subdivide)
-            scene_options.contact_cuts = ContactCuts::On;  // contact lines: docs/adaptive.md
     }
 
     Stopwatch total;
@@ -125,13 +119,13 @@ int run(const Options& o) {
     std::optional<AdaptiveResult> refined;
     if (adaptive) {  // the levels' solves, each on its own rows; the rest runs on the last level's scene
         const SolverOptions level_options = front_end_solver_options(so);
-        refined = solve_adaptive(scene, o.rows, level_options, o.adaptive,
+        refined = solve_adaptive(scene, o.rows, level_options, o.adaptive.options,
                                  [](const std::string& line) { info("{}", line); });
         info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined->stop,
              refined->scene.size(), scene.size(), refined->max_relative_error);
         for (const std::string& line : describe(refined->rows)) info("{}", line);
         report.set("rows", refined->rows.provider().name());
-        report_adaptive(report, *refined, o.adaptive);
+        report_adaptive(report, *refined, o.adaptive.options);
         scene = refined->scene;
         computed_rows = std::move(refined->rows);
         report_solve(scene, refined->result, level_options, report);
@@ -247,12 +241,7 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     opts->exposure_option =
         sub->add_option("--exposure", opts->exposure, "PNG and PLY colours: display value = exposure x radiance (default: automatic)");
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
-    opts->target_error_option = sub->add_option("--target-error", opts->adaptive.target_error,
-                                                 "adaptive meshing: refine until every object's estimated relative error is below E")
-                                      ->default_val(opts->adaptive.target_error);
-    opts->max_elements_option =
-        sub->add_option("--max-elements", opts->adaptive.max_elements, "adaptive meshing: most elements (patches after refinement)")
-            ->default_val(opts->adaptive.max_elements);
+    add_adaptive_options(*sub, opts->adaptive);
     sub->add_flag("--allow-unconverged", opts->allow_unconverged,
                   "write the results of a solve that stopped before its tolerance (else exit 5, report only)");
     sub->callback([opts, &action] {

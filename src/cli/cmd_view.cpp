@@ -10,6 +10,7 @@
 #include "cli/common.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/solve.hpp"
@@ -20,6 +21,7 @@ namespace {
 
 struct Options {
     SceneFlags scene;
+    AdaptiveFlags adaptive;  // --target-error, --max-elements: as solve
     RowOptions rows;
     SolverOptions solver;
     ViewerOptions viewer;
@@ -55,8 +57,23 @@ int run(Options& o) {
     check_output_path("--exr", o.viewer.exr);
     validate(o.rows);
 
+    SceneOptions scene_options = o.scene.scene;
+    prepare_adaptive(o.adaptive, scene_options);
+
     Report report;
-    const Scene scene = load_and_mesh(o.scene.scene, report);
+    const Scene scene = load_and_mesh(scene_options, report);
+    if (o.adaptive.on()) {
+        // The levels as `ffcube solve --target-error` runs them (pipeline/adaptive.hpp), before the
+        // window; the window then shows the last level's elements converge on that level's rows
+        // (their workers too were forked while this process had no GL context).
+        AdaptiveResult refined = solve_adaptive(scene, o.rows, front_end_solver_options(o.solver), o.adaptive.options,
+                                                [](const std::string& line) { info("{}", line); });
+        info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
+             refined.scene.size(), scene.size(), refined.max_relative_error);
+        for (const std::string& line : describe(refined.rows)) info("{}", line);
+        run_viewer(refined.scene, refined.rows.provider(), refined.rows.hemicube(), o.solver, o.viewer, refined.origin);
+        return 0;
+    }
     // Before the window: with no GL context in this process yet, the provider can fork its
     // workers (each with its own headless context) instead of sharing one process's llvmpipe.
     RowSource rows = make_row_source(scene, o.rows);
@@ -72,6 +89,7 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     CLI::App* sub = app.add_subcommand("view", "watch progressive radiosity converge in a window (docs/viewer.md)");
     add_scene_options(*sub, opts->scene);
     add_row_options(*sub, opts->rows);
+    add_adaptive_options(*sub, opts->adaptive);
     auto& s = opts->solver;
     sub->add_option("--tolerance", s.tolerance, "stop shooting when unshot power <= tolerance x emitted power")
         ->default_val(s.tolerance);

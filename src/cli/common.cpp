@@ -56,6 +56,23 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
     app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
 }
 
+void add_adaptive_options(CLI::App& app, AdaptiveFlags& o) {
+    o.target_error = app.add_option("--target-error", o.options.target_error,
+                                    "adaptive meshing: refine until every object's estimated relative error is below E")
+                         ->default_val(o.options.target_error);
+    o.max_elements = app.add_option("--max-elements", o.options.max_elements, "adaptive meshing: most elements (patches after refinement)")
+                         ->default_val(o.options.max_elements);
+}
+
+void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {
+    if (!o.on()) return;
+    validate(o.options);
+    if (scene.patches == 0 && scene.max_patch_edge == 0.0 && scene.subdivide)
+        scene.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
+    if (scene.contact_cuts == ContactCuts::Auto && scene.subdivide)
+        scene.contact_cuts = ContactCuts::On;  // contact lines: docs/adaptive.md
+}
+
 void add_row_options(CLI::App& app, RowOptions& o) {
     add_word_option(app, "--method", o.method, parse_row_method, {"hemicube", "raycast"},
                     "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)", "hemicube");

@@ -8,9 +8,23 @@
 #include <cstdint>
 #include <string>
 
+#include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/pipeline/options.hpp"
 
 namespace ffcube::cli {
+
+// --target-error, --max-elements (solve and view; docs/adaptive.md): adaptive meshing, on when
+// either is given.
+struct AdaptiveFlags {
+    AdaptiveOptions options;
+    CLI::Option* target_error = nullptr;
+    CLI::Option* max_elements = nullptr;
+    bool on() const { return (target_error && target_error->count() > 0) || (max_elements && max_elements->count() > 0); }
+};
+void add_adaptive_options(CLI::App& app, AdaptiveFlags& o);
+// When on: validates the options and, when the command line names no mesh (--patches,
+// --max-patch-edge), starts from the coarse mesh of kAdaptiveStartPatches.
+void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene);
 
 // The scene flags, and --quiet (which the subcommand applies before its work).
 struct SceneFlags {

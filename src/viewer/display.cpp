@@ -12,9 +12,10 @@
 
 namespace ffcube {
 
-DisplayMesh build_display_mesh(const Scene& scene) {
+DisplayMesh build_display_mesh(const Scene& scene, std::span<const std::uint32_t> origin) {
     DisplayMesh m;
     const std::size_t n = scene.size();
+    FFCUBE_CHECK_MSG(origin.empty() || origin.size() == n, "one origin per patch");
     m.first_vertex.reserve(n + 1);
     m.first_line.reserve(n + 1);
     for (std::uint32_t p = 0; p < n; ++p) {
@@ -45,6 +46,24 @@ DisplayMesh build_display_mesh(const Scene& scene) {
                    std::llround(m.positions[3 * v + 2] / q)};
     };
     for (std::uint32_t v = 0; v < m.vertex_count(); ++v) at_point[key(v)].push_back(v);
+
+    // An element's edge lies inside its starting patch when another element of that patch has an
+    // edge with the same two end points (either way round): the splits of scene/refine.hpp put
+    // children's corners on the parent's grid, so inner edges are shared whole.
+    using Edge = std::tuple<std::uint32_t, Key, Key>;
+    const auto edge_key = [&](std::size_t line) {
+        const std::uint32_t a = m.lines[line], b = m.lines[line + 1];
+        const Key ka = key(a), kb = key(b);
+        return Edge{origin.empty() ? m.patch[a] : origin[m.patch[a]], std::min(ka, kb), std::max(ka, kb)};
+    };
+    std::map<Edge, std::uint32_t> edge_count;
+    if (!origin.empty())
+        for (std::size_t l = 0; l < m.lines.size(); l += 2) ++edge_count[edge_key(l)];
+    for (std::size_t l = 0; l < m.lines.size(); l += 2) {
+        const bool inner = !origin.empty() && edge_count[edge_key(l)] >= 2;
+        auto& out = inner ? m.element_lines : m.patch_lines;
+        out.insert(out.end(), {m.lines[l], m.lines[l + 1]});
+    }
 
     const double cos_crease = std::cos(10.0 * 3.14159265358979323846 / 180.0);
     m.smooth_first.reserve(m.vertex_count() + 1);

@@ -41,6 +41,8 @@ SceneRenderer::SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh)
     gl.VertexAttribIPointer(2, 1, GL_UNSIGNED_INT, 0, nullptr);
     triangles_ = make_static_buffer(gl, GL_ELEMENT_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.triangles));
     lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.lines));
+    patch_lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.patch_lines));
+    element_lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.element_lines));
     gl.BindVertexArray(0);
     gl.BindBuffer(GL_ARRAY_BUFFER, 0);
     gl::check_gl(gl, "uploading the viewer's mesh");
@@ -101,12 +103,19 @@ void SceneRenderer::draw(const DrawSettings& s, int width, int height) {
         gl_.UseProgram(line_.id());
         gl_.UniformMatrix4fv(gl_.GetUniformLocation(line_.id(), "u_view_proj"), 1, GL_FALSE, glm::value_ptr(s.view_projection));
         gl_.BindVertexArray(vao_.id());
-        gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, lines_.id());
         const GLint color = gl_.GetUniformLocation(line_.id(), "u_color");
         if (s.wireframe) {
-            gl_.Uniform3f(color, 0.05f, 0.05f, 0.05f);
-            gl_.DrawElements(GL_LINES, static_cast<GLsizei>(mesh_.lines.size()), GL_UNSIGNED_INT, nullptr);
+            // Element edges first, patch outlines over them where they meet.
+            const auto draw_lines = [&](const gl::Buffer& buffer, std::size_t count, const Vec3& c) {
+                if (count == 0) return;
+                gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, buffer.id());
+                gl_.Uniform3f(color, static_cast<float>(c.r), static_cast<float>(c.g), static_cast<float>(c.b));
+                gl_.DrawElements(GL_LINES, static_cast<GLsizei>(count), GL_UNSIGNED_INT, nullptr);
+            };
+            draw_lines(element_lines_, mesh_.element_lines.size(), kElementEdge);
+            draw_lines(patch_lines_, mesh_.patch_lines.size(), kPatchEdge);
         }
+        gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, lines_.id());
         if (s.outline >= 0) {
             const auto p = static_cast<std::size_t>(s.outline);
             gl_.Uniform3f(color, 1.0f, 1.0f, 1.0f);

@@ -23,7 +23,7 @@ struct DrawSettings {
     bool radiance = true;      // colours are radiosity (exposure, tone map, sRGB) or display colours
     float exposure = 0.0f;     // stops: colour × 2^exposure
     ToneMap tone_map = ToneMap::Reinhard;
-    bool wireframe = false;    // every patch outline
+    bool wireframe = false;    // every patch outline (kPatchEdge) and element edge (kElementEdge)
     std::int64_t outline = -1;  // one patch to outline brightly (the picked one), -1 for none
 };
 
@@ -51,7 +51,7 @@ private:
     const DisplayMesh& mesh_;
     gl::Program scene_, id_, line_;
     gl::VertexArray vao_;
-    gl::Buffer positions_, colors_, patches_, triangles_, lines_;
+    gl::Buffer positions_, colors_, patches_, triangles_, lines_, patch_lines_, element_lines_;
 };
 
 // The window's back buffer as RGBA8, top row first (read before the buffers are swapped).

@@ -128,7 +128,7 @@ std::string next_file_name(const char* extension) {
 class Viewer {
 public:
     Viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-           const ViewerOptions& o)
+           const ViewerOptions& o, std::span<const std::uint32_t> origin)
         : scene_(scene),
           provider_(rows),
           hemicube_(hemicube),
@@ -136,7 +136,7 @@ public:
           solver_(scene, rows, solver_options),
           window_(o.width, o.height, scene.source.empty() ? "ffcube view" : "ffcube view: " + scene.source),
           imgui_(window_.window()),
-          mesh_(build_display_mesh(scene)),
+          mesh_(build_display_mesh(scene, origin)),
           renderer_(window_.api(), mesh_),
           camera_(OrbitCamera::frame(scene)),
           tone_map_(parse_tone_map(o.tone_map)),
@@ -145,6 +145,7 @@ public:
           wireframe_(o.wireframe),
           show_ui_(!o.hide_ui),
           paused_(o.paused) {
+        if (!origin.empty()) start_patches_ = 1 + static_cast<std::size_t>(*std::max_element(origin.begin(), origin.end()));
         exposure_ = static_cast<float>(o.exposure ? *o.exposure : default_exposure());
         glfwSwapInterval(o.frames > 0 ? 0 : 1);  // scripted runs do not wait for the display
         info("viewer: {} patches, window {}x{} on {} ({})", scene.size(), o.width, o.height, window_.renderer(),
@@ -392,6 +393,8 @@ private:
             ImGui::Text("%zu patches, hemicube %d px, %s", scene_.size(), hemicube_->resolution(), hemicube_->backend().c_str());
         else
             ImGui::Text("%zu patches, rows by %s", scene_.size(), provider_.name().c_str());
+        if (start_patches_ > 0)
+            ImGui::Text("adaptive: %zu elements in %zu patches (W: amber patches, blue elements)", scene_.size(), start_patches_);
         ImGui::Text("shots %llu   unshot %.3e", static_cast<unsigned long long>(solver_.shots()), solver_.unshot_fraction());
         ImGui::Text("%.0f shots/s   %s", shots_per_second(),
                     solver_.status() == StopReason::Running ? (paused_ ? "paused" : "running")
@@ -485,6 +488,7 @@ private:
     double shooting_start_ = 0.0, shooting_end_ = 0.0;
     std::uint64_t shots_while_shooting_ = 0;
     double draw_seconds_ = 0.0;  // the last frame's drawing, on this thread
+    std::size_t start_patches_ = 0;  // patches of the adaptive start mesh; 0 when not adaptive
 };
 
 }  // namespace
@@ -504,9 +508,11 @@ void validate(const ViewerOptions& o) {
 }
 
 void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-                const ViewerOptions& options) {
+                const ViewerOptions& options, std::span<const std::uint32_t> origin) {
     validate(options);
-    Viewer viewer(scene, rows, hemicube, solver_options, options);
+    if (!origin.empty() && origin.size() != scene.size())
+        throw InternalError(fmt::format("run_viewer: {} origins for {} patches", origin.size(), scene.size()));
+    Viewer viewer(scene, rows, hemicube, solver_options, options, origin);
     viewer.run();
 }
 

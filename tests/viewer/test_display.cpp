@@ -4,6 +4,12 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <set>
+
+#include "ffcube/scene/refine.hpp"
 #include "ffcube/viewer/display.hpp"
 #include "support/scenes.hpp"
 
@@ -37,6 +43,53 @@ TEST(DisplayMesh, OneVertexPerCornerTwoTrianglesPerQuad) {
         const Vec3 a = pos(m.triangles[t]), b = pos(m.triangles[t + 1]), c = pos(m.triangles[t + 2]);
         EXPECT_GT(glm::dot(glm::cross(b - a, c - a), s.patches[m.patch[m.triangles[t]]].normal), 0.0);
     }
+}
+
+// Adaptive refinement's wireframe: patch 0 of the 2 × 2 floor split into 2 × 2 elements. Its
+// inner cross is 4 segments, each an edge of two children: 8 element edges, every one on the
+// patch's midlines (x = 0.25 or y = 0.25, inside [0, 0.5]²). Everything else (the 7 elements'
+// 28 edges less those 8) is a patch edge, including the children's halves of patch 0's outline
+// and the unsplit patches' shared edges (different starting patches).
+TEST(DisplayMesh, ElementEdgesInsideASplitPatchArePatchEdgesElsewhere) {
+    const Scene s = two_by_two();
+    const std::uint32_t split[4] = {2, 1, 1, 1};
+    const RefinedScene r = refine_patches(s, split);
+    ASSERT_EQ(r.scene.size(), 7u);
+    const DisplayMesh m = build_display_mesh(r.scene, r.parent);
+    EXPECT_EQ(m.element_lines.size(), 8u * 2);
+    EXPECT_EQ(m.patch_lines.size(), (28u - 8u) * 2);
+    EXPECT_EQ(m.lines.size(), 28u * 2);
+    // Patch 0: the split one, whichever quarter of the floor it is.
+    double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300};
+    for (std::uint32_t k = 0; k < s.patches[0].count; ++k)
+        for (int a = 0; a < 2; ++a) {
+            lo[a] = std::min(lo[a], s.positions[s.patches[0].v[k]][a]);
+            hi[a] = std::max(hi[a], s.positions[s.patches[0].v[k]][a]);
+        }
+    const auto pos = [&](std::uint32_t v, int a) { return static_cast<double>(m.positions[3 * v + a]); };
+    std::set<std::pair<std::array<long, 2>, std::array<long, 2>>> distinct;
+    for (std::size_t l = 0; l < m.element_lines.size(); l += 2) {
+        const std::uint32_t a = m.element_lines[l], b = m.element_lines[l + 1];
+        EXPECT_EQ(r.parent[m.patch[a]], 0u);
+        for (int ax = 0; ax < 2; ++ax) {
+            // Inside patch 0, not on its outline (1e-9: the corners are sums of exact binary fractions).
+            const double mid = 0.5 * (pos(a, ax) + pos(b, ax));
+            EXPECT_GT(mid, lo[ax] - 1e-9);
+            EXPECT_LT(mid, hi[ax] + 1e-9);
+        }
+        const bool on_x_mid = std::abs(pos(a, 0) - 0.5 * (lo[0] + hi[0])) < 1e-9 && std::abs(pos(b, 0) - 0.5 * (lo[0] + hi[0])) < 1e-9;
+        const bool on_y_mid = std::abs(pos(a, 1) - 0.5 * (lo[1] + hi[1])) < 1e-9 && std::abs(pos(b, 1) - 0.5 * (lo[1] + hi[1])) < 1e-9;
+        EXPECT_TRUE(on_x_mid || on_y_mid) << "element edge " << l / 2 << " is not on a midline of patch 0";
+        std::array<long, 2> ka{std::lround(pos(a, 0) * 1e6), std::lround(pos(a, 1) * 1e6)};
+        std::array<long, 2> kb{std::lround(pos(b, 0) * 1e6), std::lround(pos(b, 1) * 1e6)};
+        distinct.insert({std::min(ka, kb), std::max(ka, kb)});
+    }
+    EXPECT_EQ(distinct.size(), 4u);
+
+    // Without an origin (no refinement) every edge is a patch edge.
+    const DisplayMesh plain = build_display_mesh(r.scene);
+    EXPECT_TRUE(plain.element_lines.empty());
+    EXPECT_EQ(plain.patch_lines, plain.lines);
 }
 
 TEST(DisplayMesh, FlatGivesEveryCornerItsPatchValue) {

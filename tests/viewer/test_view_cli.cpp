@@ -175,6 +175,35 @@ TEST(ViewCli, ScriptedPickShowsTheRowAsAHeatMap) {
     EXPECT_GT(ramp_px, 2000);     // ceiling, side walls and floor that the patch sees
 }
 
+// `view --target-error`: the adaptive levels run before the window (as `solve --target-error`),
+// then the wireframe outlines the starting patches in kPatchEdge and the elements inside split
+// patches in kElementEdge. Without refinement no element edge exists, so none of its colour may be
+// drawn (it is not a radiosity colour of this scene: the control for the count with refinement).
+TEST(ViewCli, WireframeShowsTheElementsOfAdaptiveRefinement) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    // At most 420 elements from 300 patches: one refinement of up to 40 patches, then the budget
+    // stops it (two solves of about 300 and 400 rows at 64 pixels: the run took 8.4 s on
+    // llvmpipe with the machine's 2 cores at load average 18).
+    const RunResult adaptive = view("--target-error 0.05 --max-elements 420 --wireframe --frames 3 --screenshot " + dir / "a.png");
+    const RunResult plain = view("--wireframe --frames 3 --screenshot " + dir / "p.png");
+    ASSERT_EQ(adaptive.code, 0) << adaptive.output;
+    ASSERT_EQ(plain.code, 0) << plain.output;
+    auto count = [](const Image& im, const Vec3& colour) {
+        int n = 0;
+        for (int y = 0; y < im.height; ++y)
+            for (int x = 0; x < im.width; ++x) n += glm::length(im.at(x, y) - 255.0 * colour) < 1.5;
+        return n;
+    };
+    const Image a = load_png(dir / "a.png"), p = load_png(dir / "p.png");
+    ASSERT_EQ(a.width, 320);
+    // Each split patch's inner cross is about 2 × 20 pixels at this size; at least a few are in view.
+    EXPECT_GT(count(a, kElementEdge), 100);
+    EXPECT_GT(count(a, kPatchEdge), 1000);
+    EXPECT_EQ(count(p, kElementEdge), 0);
+    EXPECT_GT(count(p, kPatchEdge), 1000);
+}
+
 TEST(ViewCli, ExrHoldsTheLinearRadiance) {
     REQUIRE_XVFB();
     TempDir dir;
@@ -200,7 +229,8 @@ TEST(ViewCli, ExrHoldsTheLinearRadiance) {
 TEST(ViewCli, BadOptionsAreRefusedBeforeAnyWindow) {
     // No display needed: validation comes first, exit code 2 (bad input).
     for (const char* args : {"--screenshot x.png", "--frames 2 --pick 5", "--size 320x240 --frames 2 --pick 999,5", "--size 10x10",
-                             "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png"}) {
+                             "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png", "--target-error 0",
+                             "--max-elements 10"}) {  // the last: fewer than the ~500 patches of the adaptive start
         const RunResult r = test::run_ffcube(std::string("view -q ") + args);
         EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
         EXPECT_NE(r.output.find("error"), std::string::npos) << args;

@@ -25,11 +25,21 @@ struct DisplayMesh {
     // 10° (so colours do not bleed across creases or between differently coloured surfaces).
     std::vector<std::uint32_t> smooth_first;
     std::vector<std::uint32_t> smooth_patch;
+    // The wireframe (W), split by where an edge lies when the scene's patches are elements of an
+    // adaptive refinement (build_display_mesh's origin): 2 indices into the vertices per edge.
+    // element_lines: the edges inside a patch of the starting mesh (an edge shared with an
+    // element of the same patch: a 2 × 2 split's inner cross, drawn once per element, so twice);
+    // patch_lines: every other edge (the starting patches' outlines). Without an origin every
+    // edge is a patch edge.
+    std::vector<std::uint32_t> patch_lines;
+    std::vector<std::uint32_t> element_lines;
 
     std::size_t vertex_count() const { return patch.size(); }
 };
 
-DisplayMesh build_display_mesh(const Scene& scene);
+// origin (empty, or one per patch of `scene`): the patch of the starting mesh each patch (element)
+// lies in, as AdaptiveResult::origin; it only sorts the wireframe's edges (see DisplayMesh).
+DisplayMesh build_display_mesh(const Scene& scene, std::span<const std::uint32_t> origin = {});
 
 // RGB per vertex (3 floats each) from a value per patch: every corner gets its patch's value.
 void flat_colors(const DisplayMesh& mesh, std::span<const Vec3> per_patch, std::vector<float>& out);
@@ -47,6 +57,10 @@ Vec3 heat_color(double t);
 // Exact in 8 bits (multiples of 1/255) so that tests can find them in a screenshot.
 inline const Vec3 kNoContribution{40.0 / 255.0, 60.0 / 255.0, 80.0 / 255.0};
 inline const Vec3 kPicked{0.0, 1.0, 1.0};
+// Wireframe colours, exact in 8 bits: the starting patches' outlines bright amber, the element
+// edges inside them dim blue (a split patch shows its 2 × 2 children inside an amber outline).
+inline const Vec3 kPatchEdge{1.0, 200.0 / 255.0, 0.0};
+inline const Vec3 kElementEdge{0.0, 90.0 / 255.0, 160.0 / 255.0};
 
 // RGBA8 (R in the low byte) for a hemicube item-buffer value: 0 (nothing) black, 0xFFFFFFFF (a
 // back face) dark grey, 1 + patch index a bright colour from a hash of the index, so that

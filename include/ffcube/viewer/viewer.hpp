@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "ffcube/gl/hemicube_provider.hpp"
@@ -46,7 +47,10 @@ void validate(const ViewerOptions& options);
 // before any shot (the emitted power spread over the scene and all its bounces: the average
 // radiosity to expect). Throws GlError when no window can be opened, InputError for bad options,
 // IoError when a file cannot be written.
+// origin (empty, or one per patch): after adaptive meshing, the patch of the starting mesh each
+// patch of `scene` (an element) lies in (AdaptiveResult::origin); the wireframe then draws the
+// starting patches' outlines and the element edges inside them in two colours (display.hpp).
 void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-                const ViewerOptions& options);
+                const ViewerOptions& options, std::span<const std::uint32_t> origin = {});
 
 }  // namespace ffcube
