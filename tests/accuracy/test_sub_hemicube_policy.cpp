@@ -153,6 +153,10 @@ TEST(SubHemicubePolicy, OnlyPairsWithinKSenderSizesAskForSubHemicubes) {
         for (const double k : {10.0, 0.0}) {
             NearFieldOptions o;
             o.sub_hemicube_k = k;
+            // The post also stands beside the sender with the wall behind it, which asks for
+            // sub-hemicubes on its own (docs/accuracy.md, "Senders beside an occluder"): this
+            // test is about the refused pair's policy alone.
+            o.sample_beside_occluders = false;
             const NearFieldCorrector c(s, o);
             ASSERT_FALSE(c.provably_unoccluded(0, 1));
             NearAnalysis a;

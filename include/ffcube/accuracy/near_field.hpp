@@ -39,11 +39,6 @@ namespace ffcube {
 
 struct NearFieldOptions {
     double k = 3.0;  // near: centroid distance < k × max(size_i, size_j); k > 0
-    // Exact values also for obstruction-only patches (Scene::obstruction_first, two faces back to
-    // back) that a patch faces. Right for an inner provider that credits the facing one of the
-    // two (the hemicube, which never draws a back face with a twin); false for one that credits
-    // whichever it hits, front or back (the ray caster): their entries then stay as measured.
-    bool obstruction_receivers = true;
     // Sender quadrature for the entries that are not near, for inner providers that sample the
     // sender at its centre only (the hemicube; not the ray caster, which samples the whole
     // patch): F_ij ← F_ij · Q_ij / M_ij, where M_ij is Lambert's point-to-polygon factor from
@@ -103,6 +98,12 @@ struct NearFieldOptions {
     // NearAnalysis::complete) needs no measurement: it is not asked of the inner provider at
     // all (RowPlan::skip), when the provider can be asked (sub_hemicubes and can_sample_sender).
     bool skip_complete_rows = true;
+    // Exact values also for obstruction-only patches (Scene::obstruction_first, two faces back to
+    // back) that a patch faces. Right for an inner provider that credits the facing one of the
+    // two (the hemicube, which never draws a back face with a twin); false for one that credits
+    // whichever it hits, front or back (the ray caster): their entries then stay as measured.
+    bool obstruction_receivers = true;
+    // (New fields go last: tests initialise the first ones by position, {k, sender_quadrature}.)
 };
 
 // The options `--correct near` uses on rows of a hemicube at resolution N: sender quadrature,
