@@ -11,6 +11,8 @@
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
 #include "cli/mpi_glue.hpp"
+#include "cli/row_store.hpp"
+#include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
@@ -21,6 +23,7 @@
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/solve.hpp"
+#include "ffcube/pipeline/surface_outputs.hpp"
 #include "ffcube/render/renderer.hpp"
 #include "ffcube/render/solved_scene.hpp"
 #include "ffcube/solver/solver.hpp"
@@ -44,7 +47,18 @@ struct Options {
     bool allow_unconverged = false;
     // Adaptive meshing (docs/adaptive.md): on when either is given.
     AdaptiveFlags adaptive;
+    SurfaceOutputOptions sky;  // --sky, --sky-by only (add_sky_options)
 };
+
+// Each row's sum for the sky view factors (--sky), as `ffcube formfactors` takes them: every row
+// of F, not only the shooters' (the solve asks only for those). From the .ffm given with
+// --matrix, or through the solve's own provider, so the rows are those formfactors computes for
+// the same options.
+std::vector<double> sky_row_sums(RowProvider& provider, std::size_t n, bool progress) {
+    std::vector<double> sums(n, 0.0);
+    stream_rows(provider, nullptr, progress, [&](std::uint32_t i, RowView row) { sums[i] = row.sum(); });
+    return sums;
+}
 
 int run(const Options& o) {
     // Everything that can be refused is refused before any work.
@@ -71,6 +85,10 @@ int run(const Options& o) {
     for (const auto& [option, path] : {std::pair{"--objects", &o.objects}, {"--radiosity", &o.radiosity},
                                        {"--report", &o.report}, {"--render", &o.render}, {"--mesh", &o.mesh}})
         check_output_path(option, *path);
+    check_surface_output_paths(o.sky);
+    if (!o.sky.sky.empty() && mpi_distributed())
+        throw InputError("--sky under mpirun: ffcube solve's ranks hold only their block of rows; use `mpirun ... ffcube "
+                         "formfactors --sky` (the same file)");
     validate(o.rows);
     std::optional<Camera> camera;
     if (!o.camera.empty()) camera = parse_camera(o.camera);
@@ -87,6 +105,10 @@ int run(const Options& o) {
     Report report;
     report.set("command", "solve");
     Scene scene = mpi_load_and_mesh(scene_options, report);  // under mpirun: rank 0's, broadcast
+    if (!o.sky.sky.empty() && !o.matrix.empty() && scene.drawn)
+        throw InputError(fmt::format("--sky with --matrix: {} has obstruction-only surfaces, and a .ffm does not record the "
+                                     "share of each row they intercept; run without --matrix, or `ffcube formfactors --sky`",
+                                     scene.source));
     // Under mpirun each rank solves its block of rows (docs/scaling.md).
     const std::unique_ptr<RowBlocks> blocks = mpi_row_blocks(scene, o.rows);
     so.blocks = blocks.get();
@@ -131,6 +153,22 @@ int run(const Options& o) {
         report_solve(scene, refined->result, level_options, report);
     }
     const SolveResult res = refined ? std::move(refined->result) : solve_and_report(scene, *provider, so, report);
+    // Sky view factors need every row: computed now, while the row workers are up and before this
+    // process makes a GL context of its own (the picture's). Not for a solve that stops at exit 5.
+    std::vector<double> sky_sums;
+    std::vector<double> obstructed;  // copied: it outlives computed_rows
+    if (!o.sky.sky.empty() && mpi_root() && (res.converged() || o.allow_unconverged)) {
+        watch.restart();
+        if (ffm) {
+            sky_sums.resize(scene.size());
+            for (std::uint32_t i = 0; i < scene.size(); ++i) sky_sums[i] = ffm->matrix.row(i).sum();
+        } else {
+            sky_sums = sky_row_sums(computed_rows.provider(), scene.size(), !o.scene.quiet);
+            const std::span<const double> cut = computed_rows.obstructed();
+            obstructed.assign(cut.begin(), cut.end());
+        }
+        report.set("time.sky_rows", watch.seconds());
+    }
     if (o.matrix.empty()) {
         report_row_source(report, computed_rows);
         computed_rows = RowSource{};  // its workers are done
@@ -197,6 +235,7 @@ int run(const Options& o) {
         }
         write_patch_radiosity_csv(o.radiosity, object, area, res.radiosity, scene.objects);
     }
+    if (!o.sky.sky.empty()) write_surface_outputs(o.sky, sky_sums, scene, report, obstructed);
     if (!o.mesh.empty()) {
         write_ply(o.mesh, solved_ply_mesh(scene, res.radiosity, shading, exposure),
                   fmt::format("ffcube solve of {}: colours = sRGB of exposure {:.6g} x radiosity / pi; radiosity_* = B", scene.source,
@@ -242,6 +281,7 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
         sub->add_option("--exposure", opts->exposure, "PNG and PLY colours: display value = exposure x radiance (default: automatic)");
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
     add_adaptive_options(*sub, opts->adaptive);
+    add_sky_options(*sub, opts->sky);
     sub->add_flag("--allow-unconverged", opts->allow_unconverged,
                   "write the results of a solve that stopped before its tolerance (else exit 5, report only)");
     sub->callback([opts, &action] {

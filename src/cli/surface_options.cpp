@@ -4,13 +4,17 @@
 
 namespace ffcube::cli {
 
-void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
+void add_sky_options(CLI::App& app, SurfaceOutputOptions& o) {
     app.add_option("--sky", o.sky, "write sky view factors 1 - sum_j F_ij as CSV (per patch, or per object with --sky-by)");
     app.add_option_function<std::string>(
            "--sky-by", [&o](const std::string& w) { o.sky_by = parse_sky_by(w); },
            "rows of --sky: patch (patch,object,area,sky_view_factor) or object (object,area,sky_view_factor)")
         ->check(CLI::IsMember({"patch", "object"}))
         ->default_str("patch");
+}
+
+void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
+    add_sky_options(app, o);
     app.add_option("--view3d", o.view3d, "write View3D's view-factor file (one surface per object, cmb groups combined)");
     app.add_option_function<std::string>(
            "--view3d-format", [&o](const std::string& w) { o.view3d_format = parse_file_format(w); },

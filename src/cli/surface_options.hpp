@@ -9,6 +9,8 @@
 namespace ffcube::cli {
 
 void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o);
+// Only --sky and --sky-by (ffcube solve: the same file and report keys as formfactors').
+void add_sky_options(CLI::App& app, SurfaceOutputOptions& o);
 // Refuses an output whose directory is missing, before any work (check_output_path).
 void check_surface_output_paths(const SurfaceOutputOptions& o);
 
