@@ -18,7 +18,8 @@ namespace ffcube {
 Scene load_and_mesh(const SceneOptions& o, Report& report) {
     validate(o);
     Stopwatch watch;
-    ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by});
+    ImportedMaterials imported;  // filled by the assimp reader
+    ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by}, &imported);
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
     std::optional<ContactCutStats> cuts;
@@ -64,6 +65,18 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("loading.format", to_string(format));
     report.set("loading.dropped_degenerate", model.dropped_degenerate);
     report.set("loading.merged_vertices", model.merged_vertices);
+    if (const ImportedMaterials& m = imported; m.present) {
+        // The assimp reader's material mapping (docs/scene-format.md, "Materials through assimp").
+        info("materials: {} in the file; faces: {} from a material, {} from vertex colours, {} default (Kd 0.5, Ke 0); {} "
+             "textured material{} (textures ignored){}",
+             m.from_file, m.faces_material, m.faces_vertex_colour, m.faces_default, m.textured, m.textured == 1 ? "" : "s",
+             o.materials.empty() ? "" : "; --materials overrides the objects it names");
+        report.set("loading.materials.from_file", m.from_file);
+        report.set("loading.materials.faces_material", m.faces_material);
+        report.set("loading.materials.faces_vertex_colour", m.faces_vertex_colour);
+        report.set("loading.materials.faces_default", m.faces_default);
+        report.set("loading.materials.textured_ignored", m.textured);
+    }
     if (scene.drawn) {
         // View3D's O surfaces: drawn (they block), no row, no column (docs/scene-format.md).
         const std::size_t o_patches = scene.drawn->size() - scene.size();

@@ -4,6 +4,8 @@
 #include "ffcube/scene/assimp_loader.hpp"
 
 #include <assimp/Importer.hpp>
+#include <assimp/commonMetaData.h>
+#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <fmt/format.h>
@@ -12,6 +14,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <string>
 #include <unordered_map>
 
@@ -23,12 +26,36 @@ namespace {
 
 constexpr double kMaxCoordinate = 1e15;
 
+// What the file's first 64 KiB say that assimp does not pass on.
+struct FileHead {
+    bool ply_materials = false;      // a PLY header with an `element material`
+    bool ply_material_index = false; // ... and faces that pick one by material_index
+    bool gltf_emissive_strength = false;  // KHR_materials_emissive_strength (not read by assimp 5.2.5)
+};
+
+// A material of the file as Kd and Ke (docs/scene-format.md, "Materials through assimp").
+struct FileMaterial {
+    bool from_file = false;  // false: assimp's own default (no material in the file for these faces)
+    bool textured = false;
+    std::string name;
+    Vec3 kd{1.0}, ke{0.0};   // kd: the factor vertex colours are multiplied by (1 without a material)
+    std::uint32_t index = std::numeric_limits<std::uint32_t>::max();  // in ObjModel::materials, once used
+};
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
 class Collector {
 public:
-    Collector(const aiScene& scene, const std::string& source) : scene_(scene) {
+    Collector(const aiScene& scene, const std::string& source, const FileHead& head) : scene_(scene), head_(head) {
         model_.source = source;
         model_.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
+        counts_.present = true;
+        aiString format;
+        if (scene.mMetaData != nullptr) scene.mMetaData->Get(AI_METADATA_SOURCE_FORMAT, format);
+        importer_ = format.C_Str();
+        for (unsigned m = 0; m < scene.mNumMaterials; ++m) file_materials_.push_back(read_material(m));
     }
+
+    const ImportedMaterials& counts() const { return counts_; }
 
     ObjModel run() {
         visit(*scene_.mRootNode, aiMatrix4x4());
@@ -37,17 +64,112 @@ public:
                                                   model_.source, skipped_));
         if (model_.faces.empty())
             throw InputError(fmt::format("{}: no faces: the scene has no geometry (points and lines are not surfaces)", model_.source));
-        if (scene_.mNumMaterials > 1 || (scene_.mNumMaterials == 1 && has_colour(*scene_.mMaterials[0])))
-            model_.warnings.push_back(fmt::format("{}: the file's materials are not read: every face gets the default (Kd 0.5 0.5 "
-                                                  "0.5, Ke 0 0 0); give Kd and Ke per object with --materials",
-                                                  model_.source));
+        warn_about_materials();
         return std::move(model_);
     }
 
 private:
-    static bool has_colour(const aiMaterial& m) {
-        aiColor3D c;
-        return m.Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS || m.Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS;
+    // assimp gives every importer's scene a material per mesh; which of them the file defined:
+    // glTF 2's importer appends its default (baseColor 1) last; the PLY importer makes one unless
+    // the header has `element material`; the others name theirs AI_DEFAULT_MATERIAL_NAME.
+    bool from_file(unsigned m) const {
+        const aiMaterial& mat = *scene_.mMaterials[m];
+        if (importer_.starts_with("glTF2")) return m + 1 < scene_.mNumMaterials;
+        if (importer_.find("(PLY)") != std::string::npos) return head_.ply_materials;
+        return mat.GetName() != aiString(AI_DEFAULT_MATERIAL_NAME);
+    }
+
+    FileMaterial read_material(unsigned m) {
+        const aiMaterial& mat = *scene_.mMaterials[m];
+        FileMaterial out;
+        out.from_file = from_file(m);
+        if (!out.from_file) return out;
+        ++counts_.from_file;
+        out.name = mat.GetName().length > 0 ? std::string(mat.GetName().C_Str()) : fmt::format("material{}", m);
+        const auto where = [&] { return fmt::format("{}: material '{}' (number {} of the file)", model_.source, out.name, m + 1); };
+        aiColor4D c;
+        // glTF's baseColorFactor is also the diffuse colour; other formats have only the latter.
+        if (mat.Get(AI_MATKEY_BASE_COLOR, c) == AI_SUCCESS || mat.Get(AI_MATKEY_COLOR_DIFFUSE, c) == AI_SUCCESS)
+            out.kd = colour(c, where, "diffuse colour (Kd)", 1.0);
+        else
+            out.kd = Vec3(0.5);  // a material without a colour: OBJ's default
+        if (mat.Get(AI_MATKEY_COLOR_EMISSIVE, c) == AI_SUCCESS) out.ke = colour(c, where, "emissive colour (Ke)", 0.0);
+        float intensity = 1.0f;
+        if (mat.Get(AI_MATKEY_EMISSIVE_INTENSITY, intensity) == AI_SUCCESS) {
+            if (!(std::isfinite(intensity) && intensity >= 0.0f))
+                throw InputError(fmt::format("{}: emissive intensity {} must be a finite number >= 0", where(), intensity));
+            out.ke *= double(intensity);
+        }
+        for (aiTextureType t : {aiTextureType_DIFFUSE, aiTextureType_BASE_COLOR, aiTextureType_EMISSIVE, aiTextureType_EMISSION_COLOR})
+            out.textured = out.textured || mat.GetTextureCount(t) > 0;
+        if (out.textured && ++counts_.textured == 1) first_textured_ = out.name;
+        return out;
+    }
+
+    // A colour from the file: finite, each channel >= 0, and <= `max` when max > 0 (reflectance).
+    // `where` names the place for the message (called only when refusing).
+    template <typename Where>
+    static Vec3 colour(const aiColor4D& c, const Where& where, const char* what, double max) {
+        const Vec3 v(c.r, c.g, c.b);
+        for (int k = 0; k < 3; ++k)
+            if (!(std::isfinite(v[k]) && v[k] >= 0.0 && (max <= 0.0 || v[k] <= max)))
+                throw InputError(fmt::format("{}: {} {} {} {}: each channel must be {}", where(), what, v.r, v.g, v.b,
+                                             max > 0.0 ? "within [0,1] (diffuse reflectance)" : "finite and >= 0 (emitted radiosity)"));
+        return v;
+    }
+
+    // The ffcube material of (kd, ke), one per distinct pair.
+    std::uint32_t material(const std::string& name, const Vec3& kd, const Vec3& ke) {
+        const std::array<double, 6> key{kd.r, kd.g, kd.b, ke.r, ke.g, ke.b};
+        const auto [it, inserted] = material_index_.try_emplace(key, static_cast<std::uint32_t>(model_.materials.size()));
+        if (inserted) model_.materials.push_back(Material{name, kd, ke});
+        return it->second;
+    }
+
+    // The material of one face of `mesh`: the mesh's material, times the mean of the face's vertex
+    // colours when the mesh has them.
+    std::uint32_t face_material(const aiMesh& mesh, const aiFace& face, unsigned f) {
+        if (mesh.mMaterialIndex >= file_materials_.size())
+            throw InputError(fmt::format("{}: mesh '{}' refers to material {} of {}", model_.source, mesh.mName.C_Str(),
+                                         mesh.mMaterialIndex, file_materials_.size()));
+        FileMaterial& m = file_materials_[mesh.mMaterialIndex];
+        ImportedMaterials& counts = counts_;
+        if (!mesh.HasVertexColors(0)) {
+            if (!m.from_file) {
+                ++counts.faces_default;
+                return 0;
+            }
+            ++counts.faces_material;
+            if (m.index == kNone) m.index = material(m.name, m.kd, m.ke);
+            return m.index;
+        }
+        Vec3 mean(0.0);
+        for (unsigned i = 0; i < face.mNumIndices; ++i) {
+            const aiColor4D& c = mesh.mColors[0][face.mIndices[i]];
+            const auto where = [&] {
+                return fmt::format("{}: mesh '{}' face {} vertex {}", model_.source, mesh.mName.C_Str(), f + 1, face.mIndices[i] + 1);
+            };
+            mean += colour(c, where, "vertex colour", 1.0);
+        }
+        ++counts.faces_vertex_colour;
+        const std::string name = m.from_file ? m.name + " x vertex colours" : "vertex colours";
+        return material(name, m.kd * (mean / double(face.mNumIndices)), m.ke);
+    }
+
+    void warn_about_materials() {
+        const ImportedMaterials& c = counts_;
+        if (c.textured > 0)
+            model_.warnings.push_back(fmt::format("{}: {} material{} with colour textures (first '{}'): textures are ignored, "
+                                                  "the material's colour factor is Kd",
+                                                  model_.source, c.textured, c.textured == 1 ? "" : "s", first_textured_));
+        if (head_.ply_material_index && c.from_file > 1)
+            model_.warnings.push_back(fmt::format("{}: per-face material_index is not applied (assimp 5.2.5 drops it): every face "
+                                                  "takes the file's first material; give Kd and Ke per object with --materials",
+                                                  model_.source));
+        if (head_.gltf_emissive_strength)
+            model_.warnings.push_back(fmt::format("{}: KHR_materials_emissive_strength is not read (assimp 5.2.5): Ke is "
+                                                  "emissiveFactor alone (at most 1); give larger Ke per object with --materials",
+                                                  model_.source));
     }
 
     void visit(const aiNode& node, const aiMatrix4x4& parent) {
@@ -105,12 +227,19 @@ private:
                                                  mesh.mName.C_Str(), f + 1, face.mIndices[i], mesh.mNumVertices));
                 out.v.push_back(static_cast<std::uint32_t>(base + face.mIndices[i]));
             }
+            out.material = face_material(mesh, face, f);
             if (mirrored) std::reverse(out.v.begin(), out.v.end());
             model_.faces.push_back(std::move(out));
         }
     }
 
     const aiScene& scene_;
+    const FileHead head_;
+    std::string importer_;  // AI_METADATA_SOURCE_FORMAT: which of assimp's importers read the file
+    std::vector<FileMaterial> file_materials_;  // per aiMaterial
+    std::map<std::array<double, 6>, std::uint32_t> material_index_;
+    std::string first_textured_;
+    ImportedMaterials counts_;
     ObjModel model_;
     std::unordered_map<std::string, std::uint32_t> objects_;
     std::uint32_t face_number_ = 0;
@@ -118,18 +247,25 @@ private:
 };
 
 // Debian's assimp 5.2.5 loops forever on a PLY file whose header has no 'end_header' (a file cut
-// short inside its header): refuse that before assimp sees it.
-void refuse_known_hangs(const std::filesystem::path& path) {
+// short inside its header): refuse that before assimp sees it. Returns what the head says about
+// materials that assimp does not pass on.
+FileHead read_head(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     std::string head(1 << 16, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
-    if (head.rfind("ply", 0) != 0) return;
+    FileHead out;
+    out.gltf_emissive_strength = head.find("KHR_materials_emissive_strength") != std::string::npos;
+    if (head.rfind("ply", 0) != 0) return out;
     const std::size_t end = head.find("end_header");
     if (end == std::string::npos)
         throw InputError(fmt::format("{}: PLY header without 'end_header' in its first {} bytes (a file cut short, or not a PLY "
                                      "file)",
                                      path.string(), head.size()));
+    const std::string_view header(head.data(), end);
+    out.ply_materials = header.find("\nelement material ") != std::string_view::npos;
+    out.ply_material_index = header.find(" material_index") != std::string_view::npos;
+    return out;
 }
 
 }  // namespace
@@ -140,14 +276,14 @@ bool assimp_reads_extension(std::string_view extension) {
     return Assimp::Importer().IsExtensionSupported(ext.c_str());
 }
 
-ObjModel load_with_assimp(const std::filesystem::path& path) {
+ObjModel load_with_assimp(const std::filesystem::path& path, ImportedMaterials* materials) {
     std::error_code ec;
     const auto status = std::filesystem::status(path, ec);
     if (!std::filesystem::exists(status))
         throw InputError(fmt::format("{}: cannot read the scene: no such file", path.string()));
     if (!std::filesystem::is_regular_file(status))
         throw InputError(fmt::format("{}: is not a regular file, not a scene file", path.string()));
-    refuse_known_hangs(path);
+    const FileHead head = read_head(path);
     Assimp::Importer importer;
     // Keep quads and n-gons (the mesher makes grids of quads); only merge identical vertices.
     const aiScene* scene = importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
@@ -155,7 +291,10 @@ ObjModel load_with_assimp(const std::filesystem::path& path) {
         throw InputError(fmt::format("{}: cannot be imported: {}", path.string(), importer.GetErrorString()));
     if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr)
         throw InputError(fmt::format("{}: the import is incomplete (no geometry, or a file cut short)", path.string()));
-    return Collector(*scene, path.string()).run();
+    Collector collector(*scene, path.string(), head);
+    ObjModel model = collector.run();
+    if (materials != nullptr) *materials = collector.counts();
+    return model;
 }
 
 }  // namespace ffcube

@@ -49,13 +49,14 @@ SceneFormat format_for_path(const std::filesystem::path& path) {
     return SceneFormat::Obj;
 }
 
-ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj) {
+ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj,
+                    ImportedMaterials* materials) {
     if (format == SceneFormat::Auto) format = format_for_path(path);
     switch (format) {
     case SceneFormat::Obj: return load_obj(path, obj);
     case SceneFormat::Stl: return load_stl(path);
     case SceneFormat::View3d: return load_vs3(path);
-    case SceneFormat::Assimp: return load_with_assimp(path);
+    case SceneFormat::Assimp: return load_with_assimp(path, materials);
     case SceneFormat::Auto: break;
     }
     throw InternalError("load_model: no format");

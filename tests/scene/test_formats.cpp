@@ -23,6 +23,7 @@
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/stl_loader.hpp"
 #include "ffcube/scene/vs3_loader.hpp"
+#include "support/gltf.hpp"
 
 namespace ffcube {
 namespace {
@@ -497,25 +498,7 @@ end_header
     EXPECT_CONTAINS(error_of([&] { load_model(t.write("cut.ply", text.substr(0, text.find("4 0 1")))); }), "cut.ply: ");
 }
 
-std::string base64(const std::string& bytes) {
-    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    std::size_t i = 0;
-    for (; i + 2 < bytes.size(); i += 3) {
-        const auto n = (std::uint32_t(std::uint8_t(bytes[i])) << 16) | (std::uint32_t(std::uint8_t(bytes[i + 1])) << 8) |
-                       std::uint8_t(bytes[i + 2]);
-        for (int s = 18; s >= 0; s -= 6) out += k[(n >> s) & 63];
-    }
-    if (i < bytes.size()) {
-        std::uint32_t n = std::uint32_t(std::uint8_t(bytes[i])) << 16;
-        if (i + 1 < bytes.size()) n |= std::uint32_t(std::uint8_t(bytes[i + 1])) << 8;
-        out += k[(n >> 18) & 63];
-        out += k[(n >> 12) & 63];
-        out += i + 1 < bytes.size() ? k[(n >> 6) & 63] : '=';
-        out += '=';
-    }
-    return out;
-}
+using test::base64;  // support/gltf.hpp
 
 TEST(Assimp, GltfWithAnEmbeddedBufferAndANodeTransform) {
     // A unit square as two triangles, scaled by 2 in x by its node: area 2, object "roof".

@@ -9,6 +9,7 @@
 #include <string>
 #include <string_view>
 
+#include "ffcube/scene/assimp_loader.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -27,8 +28,9 @@ SceneFormat format_for_path(const std::filesystem::path& path);
 
 // Loads a scene file in the given format (Auto: by extension).
 // obj: how an OBJ file names its objects (--objects-by); other formats name theirs themselves.
+// materials: filled (present = true) when the file was read through assimp.
 ObjModel load_model(const std::filesystem::path& path, SceneFormat format = SceneFormat::Auto,
-                    const ObjLoadOptions& obj = {});
+                    const ObjLoadOptions& obj = {}, ImportedMaterials* materials = nullptr);
 
 // Reads a scene file into memory: InputError naming the file when it is missing, a directory,
 // not a regular file, or unreadable. 'kind' names the format in messages ("an STL file").
