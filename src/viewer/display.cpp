@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <set>
 #include <tuple>
 
 #include "ffcube/core/error.hpp"
@@ -82,6 +83,38 @@ DisplayMesh build_display_mesh(const Scene& scene, std::span<const std::uint32_t
                              m.smooth_patch.end());
     }
     m.smooth_first.push_back(static_cast<std::uint32_t>(m.smooth_patch.size()));
+    return m;
+}
+
+ObstructionMesh build_obstruction_mesh(const Scene& scene) {
+    ObstructionMesh m;
+    if (!scene.drawn) return m;
+    const Scene& drawn = *scene.drawn;
+    // The .vs3 reader makes each O surface two faces back to back (it blocks from both sides):
+    // draw one of them, without culling, so that the glass is one layer seen from either side.
+    // The two faces are meshed each from its own corner order, so their grid points agree only up
+    // to rounding: corners are compared quantised to 1e-7 of the extent (as build_display_mesh's).
+    const double q = std::max(drawn.extent(), 1e-300) * 1e-7;
+    std::set<std::vector<std::array<long long, 3>>> seen;
+    for (std::uint32_t p = drawn.obstruction_first; p < drawn.size(); ++p) {
+        const Patch& patch = drawn.patches[p];
+        std::vector<std::array<long long, 3>> corners;
+        for (std::uint32_t k = 0; k < patch.count; ++k) {
+            const Vec3& v = drawn.positions[patch.v[k]];
+            corners.push_back({std::llround(v.x / q), std::llround(v.y / q), std::llround(v.z / q)});
+        }
+        std::sort(corners.begin(), corners.end());
+        if (!seen.insert(std::move(corners)).second) continue;
+        const auto base = static_cast<std::uint32_t>(m.positions.size() / 3);
+        for (std::uint32_t k = 0; k < patch.count; ++k) {
+            const Vec3& v = drawn.positions[patch.v[k]];
+            m.positions.insert(m.positions.end(), {static_cast<float>(v.x), static_cast<float>(v.y), static_cast<float>(v.z)});
+            m.lines.insert(m.lines.end(), {base + k, base + (k + 1) % patch.count});
+        }
+        m.triangles.insert(m.triangles.end(), {base, base + 1, base + 2});
+        if (patch.count == 4) m.triangles.insert(m.triangles.end(), {base, base + 2, base + 3});
+        ++m.patches;
+    }
     return m;
 }
 

@@ -20,13 +20,15 @@ void flip_rows(std::span<std::uint8_t> pixels, std::size_t row_bytes, int height
 
 }  // namespace
 
-SceneRenderer::SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh)
+SceneRenderer::SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh, const ObstructionMesh& obstructions)
     : gl_(gl),
       mesh_(mesh),
       scene_(gl::make_program(gl, "view_scene", shaders::view_scene_vert, shaders::view_scene_frag)),
       id_(gl::make_program(gl, "view_id", shaders::view_scene_vert, shaders::view_id_frag)),
       line_(gl::make_program(gl, "view_line", shaders::view_scene_vert, shaders::view_line_frag)),
-      vao_(gl::make_vertex_array(gl)) {
+      vao_(gl::make_vertex_array(gl)),
+      obstructions_(obstructions),
+      obstruction_vao_(gl::make_vertex_array(gl)) {
     gl.BindVertexArray(vao_.id());
     positions_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const float>(mesh.positions));
     gl.EnableVertexAttribArray(0);
@@ -43,6 +45,12 @@ SceneRenderer::SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh)
     lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.lines));
     patch_lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.patch_lines));
     element_lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(mesh.element_lines));
+    gl.BindVertexArray(obstruction_vao_.id());
+    obstruction_positions_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const float>(obstructions.positions));
+    gl.EnableVertexAttribArray(0);
+    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 0, nullptr);
+    obstruction_triangles_ = make_static_buffer(gl, GL_ELEMENT_ARRAY_BUFFER, std::span<const std::uint32_t>(obstructions.triangles));
+    obstruction_lines_ = make_static_buffer(gl, GL_ARRAY_BUFFER, std::span<const std::uint32_t>(obstructions.lines));
     gl.BindVertexArray(0);
     gl.BindBuffer(GL_ARRAY_BUFFER, 0);
     gl::check_gl(gl, "uploading the viewer's mesh");
@@ -82,6 +90,33 @@ void prepare(const gl::Api& gl, int width, int height) {
 
 }  // namespace
 
+// Translucent glass over what is already drawn: no depth writes (what lies behind stays visible
+// through a second layer too), both sides; with the wireframe, the patch outlines opaque.
+void SceneRenderer::draw_obstructions(const glm::mat4& view_projection, bool outlines) {
+    if (obstructions_.triangles.empty()) return;
+    gl_.UseProgram(line_.id());
+    gl_.UniformMatrix4fv(gl_.GetUniformLocation(line_.id(), "u_view_proj"), 1, GL_FALSE, glm::value_ptr(view_projection));
+    const GLint color = gl_.GetUniformLocation(line_.id(), "u_color");
+    const GLint alpha = gl_.GetUniformLocation(line_.id(), "u_alpha");
+    gl_.Uniform3f(color, static_cast<float>(kObstruction.r), static_cast<float>(kObstruction.g), static_cast<float>(kObstruction.b));
+    gl_.BindVertexArray(obstruction_vao_.id());
+    gl_.Disable(GL_CULL_FACE);
+    gl_.Enable(GL_BLEND);
+    gl_.BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    gl_.DepthMask(GL_FALSE);
+    gl_.Uniform1f(alpha, kObstructionAlpha);
+    gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, obstruction_triangles_.id());
+    gl_.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(obstructions_.triangles.size()), GL_UNSIGNED_INT, nullptr);
+    gl_.Disable(GL_BLEND);
+    gl_.DepthMask(GL_TRUE);
+    gl_.Uniform1f(alpha, 1.0f);
+    if (outlines) {
+        gl_.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, obstruction_lines_.id());
+        gl_.DrawElements(GL_LINES, static_cast<GLsizei>(obstructions_.lines.size()), GL_UNSIGNED_INT, nullptr);
+    }
+    gl_.Enable(GL_CULL_FACE);
+}
+
 void SceneRenderer::draw(const DrawSettings& s, int width, int height) {
     prepare(gl_, width, height);
     const float background[4] = {0.08f, 0.08f, 0.09f, 1.0f};
@@ -98,6 +133,7 @@ void SceneRenderer::draw(const DrawSettings& s, int width, int height) {
     gl_.Uniform1i(gl_.GetUniformLocation(scene_.id(), "u_tone_map"), static_cast<int>(s.tone_map));
     draw_triangles(s.view_projection, scene_);
     gl_.Disable(GL_POLYGON_OFFSET_FILL);
+    if (s.obstructions) draw_obstructions(s.view_projection, s.wireframe);
 
     if (s.wireframe || s.outline >= 0) {
         gl_.UseProgram(line_.id());

@@ -25,12 +25,15 @@ struct DrawSettings {
     ToneMap tone_map = ToneMap::Reinhard;
     bool wireframe = false;    // every patch outline (kPatchEdge) and element edge (kElementEdge)
     std::int64_t outline = -1;  // one patch to outline brightly (the picked one), -1 for none
+    bool obstructions = true;   // draw the obstruction-only surfaces (ObstructionMesh)
 };
 
 class SceneRenderer {
 public:
-    // Uploads the mesh; gl must be the current context's table and outlive this.
-    SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh);
+    // Uploads the meshes; gl must be the current context's table and outlive this, and so must
+    // the meshes. `obstructions` (may be empty) is drawn by draw() only: picking and the linear
+    // render see through it (it has no patch index and no radiance).
+    SceneRenderer(const gl::Api& gl, const DisplayMesh& mesh, const ObstructionMesh& obstructions);
 
     // RGB per vertex, 3 floats each (flat_colors, smooth_colors).
     void set_colors(std::span<const float> rgb);
@@ -46,12 +49,16 @@ public:
 
 private:
     void draw_triangles(const glm::mat4& view_projection, const gl::Program& program);
+    void draw_obstructions(const glm::mat4& view_projection, bool outlines);
 
     const gl::Api& gl_;
     const DisplayMesh& mesh_;
     gl::Program scene_, id_, line_;
     gl::VertexArray vao_;
     gl::Buffer positions_, colors_, patches_, triangles_, lines_, patch_lines_, element_lines_;
+    const ObstructionMesh& obstructions_;
+    gl::VertexArray obstruction_vao_;
+    gl::Buffer obstruction_positions_, obstruction_triangles_, obstruction_lines_;
 };
 
 // The window's back buffer as RGBA8, top row first (read before the buffers are swapped).

@@ -137,7 +137,8 @@ public:
           window_(o.width, o.height, scene.source.empty() ? "ffcube view" : "ffcube view: " + scene.source),
           imgui_(window_.window()),
           mesh_(build_display_mesh(scene, origin)),
-          renderer_(window_.api(), mesh_),
+          obstructions_(build_obstruction_mesh(scene)),
+          renderer_(window_.api(), mesh_, obstructions_),
           camera_(OrbitCamera::frame(scene)),
           tone_map_(parse_tone_map(o.tone_map)),
           ambient_(o.ambient),
@@ -150,6 +151,9 @@ public:
         glfwSwapInterval(o.frames > 0 ? 0 : 1);  // scripted runs do not wait for the display
         info("viewer: {} patches, window {}x{} on {} ({})", scene.size(), o.width, o.height, window_.renderer(),
              window_.version());
+        if (obstructions_.patches > 0)
+            info("viewer: {} obstruction-only patches drawn as translucent glass (no radiosity; O toggles them)",
+                 obstructions_.patches);
     }
 
     void run() {
@@ -287,6 +291,7 @@ private:
         s.exposure = exposure_;
         s.tone_map = tone_map_;
         s.wireframe = wireframe_;
+        s.obstructions = show_obstructions_;
         s.outline = inspected_ ? static_cast<std::int64_t>(inspected_->patch) : -1;
         return s;
     }
@@ -313,6 +318,7 @@ private:
         if (ImGui::IsKeyPressed(GLFW_KEY_E, false)) save_exr_ = next_file_name("exr");
         if (ImGui::IsKeyPressed(GLFW_KEY_F, false)) smooth_ = !smooth_;
         if (ImGui::IsKeyPressed(GLFW_KEY_W, false)) wireframe_ = !wireframe_;
+        if (ImGui::IsKeyPressed(GLFW_KEY_O, false)) show_obstructions_ = !show_obstructions_;
         if (ImGui::IsKeyPressed(GLFW_KEY_A, false)) ambient_ = !ambient_;
         if (ImGui::IsKeyPressed(GLFW_KEY_H, false)) show_ui_ = !show_ui_;
         if (ImGui::IsKeyPressed(GLFW_KEY_T, false)) tone_map_ = static_cast<ToneMap>((static_cast<int>(tone_map_) + 1) % 3);
@@ -419,6 +425,10 @@ private:
         ImGui::Checkbox("ambient", &ambient_);
         ImGui::SameLine();
         ImGui::Checkbox("wireframe", &wireframe_);
+        if (obstructions_.patches > 0) {
+            ImGui::SameLine();
+            ImGui::Checkbox("obstructions", &show_obstructions_);
+        }
         if (!status_.empty()) ImGui::TextUnformatted(status_.c_str());
         ImGui::TextDisabled("drag: orbit, right/shift-drag: pan\nwheel: zoom, click: inspect a patch");
         ImGui::PopItemWidth();
@@ -470,6 +480,7 @@ private:
     WindowContext window_;
     ImGuiSession imgui_;
     DisplayMesh mesh_;
+    ObstructionMesh obstructions_;  // a .vs3's O surfaces (empty otherwise)
     SceneRenderer renderer_;
     std::unique_ptr<Inspected> inspected_;
 
@@ -478,6 +489,7 @@ private:
     float exposure_ = 0.0f;
     bool ambient_, smooth_, wireframe_, show_ui_, paused_;
     bool row_mode_ = false;
+    bool show_obstructions_ = true;
     bool close_inspector_ = false;
     std::vector<float> colors_;
     ConvergencePlot plot_;

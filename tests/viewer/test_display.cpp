@@ -9,6 +9,8 @@
 #include <cmath>
 #include <set>
 
+#include "ffcube/scene/load_model.hpp"
+#include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/refine.hpp"
 #include "ffcube/viewer/display.hpp"
 #include "support/scenes.hpp"
@@ -165,6 +167,58 @@ TEST(RowHeatMap, RampBrightensMonotonicallyAndAvoidsTheMarkers) {
         EXPECT_GT(glm::length(c - kPicked), 0.1);
         EXPECT_GT(glm::length(c - kNoContribution), 0.1);
     }
+}
+
+// examples/lidded_box.vs3: the open unit box (5 S surfaces) and an obstruction-only lid (O) at
+// z = 1, each surface one patch.
+Scene lidded_box() {
+    MeshOptions o;
+    o.subdivide = false;
+    return build_scene(load_model(std::string(FFCUBE_SOURCE_DIR) + "/examples/lidded_box.vs3"), o);
+}
+
+TEST(ObstructionMesh, TheLidIsDrawnApartAndHasNoPatchColour) {
+    const Scene s = lidded_box();
+    ASSERT_EQ(s.size(), 5u);
+    ASSERT_TRUE(s.drawn);
+    const ObstructionMesh o = build_obstruction_mesh(s);
+    EXPECT_EQ(o.patches, 1u);
+    ASSERT_EQ(o.positions.size(), 4u * 3);  // the lid's 4 corners
+    EXPECT_EQ(o.triangles.size(), 2u * 3);
+    EXPECT_EQ(o.lines.size(), 4u * 2);
+    for (std::size_t v = 0; v < 4; ++v) {
+        EXPECT_EQ(o.positions[3 * v + 2], 1.0f);  // z = 1
+        for (int c = 0; c < 2; ++c) EXPECT_TRUE(o.positions[3 * v + c] == 0.0f || o.positions[3 * v + c] == 1.0f);
+    }
+    // The radiating mesh holds the five S surfaces only: colours (radiosity, heat maps) are per
+    // radiating patch, and no vertex of it lies inside the lid (z = 1 only on the walls' top edges).
+    const DisplayMesh m = build_display_mesh(s);
+    EXPECT_EQ(m.first_vertex.size(), s.size() + 1);
+    for (std::uint32_t p : m.patch) EXPECT_LT(p, s.size());
+    std::vector<float> colours;
+    flat_colors(m, std::vector<Vec3>(s.size(), Vec3(1.0)), colours);
+    EXPECT_EQ(colours.size(), 3 * m.vertex_count());
+    // Meshed, the lid is a grid on each of its two back-to-back faces, each face's grid points
+    // made from its own corner order: drawn once all the same (one layer of glass), every cell.
+    MeshOptions fine;
+    fine.max_patch_edge = 0.15;  // 7 x 7 cells
+    const Scene meshed = build_scene(load_model(std::string(FFCUBE_SOURCE_DIR) + "/examples/lidded_box.vs3"), fine);
+    ASSERT_TRUE(meshed.drawn);
+    EXPECT_EQ(meshed.drawn->size() - meshed.drawn->obstruction_first, 2u * 49);
+    const ObstructionMesh grid = build_obstruction_mesh(meshed);
+    EXPECT_EQ(grid.patches, 49u);
+    double area = 0.0;
+    for (std::size_t t = 0; t < grid.triangles.size(); t += 3) {
+        auto pos = [&](std::uint32_t v) { return Vec3(grid.positions[3 * v], grid.positions[3 * v + 1], grid.positions[3 * v + 2]); };
+        area += 0.5 * glm::length(glm::cross(pos(grid.triangles[t + 1]) - pos(grid.triangles[t]), pos(grid.triangles[t + 2]) - pos(grid.triangles[t])));
+    }
+    EXPECT_NEAR(area, 1.0, 1e-6);  // the unit lid once (float corners)
+    // A scene without O surfaces draws none.
+    EXPECT_EQ(build_obstruction_mesh(two_by_two()).patches, 0u);
+    EXPECT_TRUE(build_obstruction_mesh(two_by_two()).triangles.empty());
+    // The glass colour stays apart from the row heat map's markers.
+    EXPECT_GT(glm::length(kObstruction - kNoContribution), 0.1);
+    EXPECT_GT(glm::length(kObstruction - kPicked), 0.1);
 }
 
 TEST(ItemColor, BackgroundBackFacesAndDistinctPatches) {

@@ -37,6 +37,18 @@ struct DisplayMesh {
     std::size_t vertex_count() const { return patch.size(); }
 };
 
+// View3D's obstruction-only O surfaces (Scene::drawn's patches from obstruction_first on): they
+// block views but have no row, no column and no radiosity, so the viewer draws them apart from
+// DisplayMesh (whose colours are per radiating patch): one neutral colour, translucent, from both
+// sides, with their outlines in wireframe mode. Empty for a scene without them.
+struct ObstructionMesh {
+    std::vector<float> positions;          // xyz per vertex
+    std::vector<std::uint32_t> triangles;  // 3 indices per triangle
+    std::vector<std::uint32_t> lines;      // 2 indices per edge
+    std::size_t patches = 0;               // obstruction-only patches drawn (a back-to-back pair once)
+};
+ObstructionMesh build_obstruction_mesh(const Scene& scene);
+
 // origin (empty, or one per patch of `scene`): the patch of the starting mesh each patch (element)
 // lies in, as AdaptiveResult::origin; it only sorts the wireframe's edges (see DisplayMesh).
 DisplayMesh build_display_mesh(const Scene& scene, std::span<const std::uint32_t> origin = {});
@@ -61,6 +73,12 @@ inline const Vec3 kPicked{0.0, 1.0, 1.0};
 // edges inside them dim blue (a split patch shows its 2 × 2 children inside an amber outline).
 inline const Vec3 kPatchEdge{1.0, 200.0 / 255.0, 0.0};
 inline const Vec3 kElementEdge{0.0, 90.0 / 255.0, 160.0 / 255.0};
+
+// Obstruction-only surfaces: kObstruction blended over what lies behind with kObstructionAlpha
+// (a pale blue-grey glass, whatever the exposure: it is not radiosity), outlines (wireframe)
+// opaque. Exact in 8 bits.
+inline const Vec3 kObstruction{150.0 / 255.0, 170.0 / 255.0, 190.0 / 255.0};
+inline constexpr float kObstructionAlpha = 0.375f;
 
 // RGBA8 (R in the low byte) for a hemicube item-buffer value: 0 (nothing) black, 0xFFFFFFFF (a
 // back face) dark grey, 1 + patch index a bright colour from a hash of the index, so that
