@@ -134,14 +134,14 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
 
 // The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, mpirun, or no output.
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
-// `seconds`.
+// `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
-                  const FfmMetadata& written, Report& report) {
+                  const FfmMetadata& written, Report& report, const std::optional<RanksFigures>& ranks) {
     const bool progress = !o.scene.quiet;
     Figures f;
     Stopwatch watch;
     f.seconds = seconds;
-    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
+    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report, ranks ? &ranks->evidence : nullptr);
     f.nnz = F.nnz();
     f.row_sums = row_sum_stats(F);
     {
@@ -214,15 +214,17 @@ int run(const Options& o) {
     } else {
         Stopwatch watch;
         CsrMatrix computed;
+        std::optional<RanksFigures> ranks;
         if (distributed) {  // every rank its block; rank 0 gathers them and goes on alone
+            ranks.emplace();
             std::optional<CsrMatrix> all =
-                mpi_compute_matrix(rows.provider(), scene, row_options, o.checkpoint, meta, report, !o.scene.quiet);
+                mpi_compute_matrix(rows, scene, row_options, o.checkpoint, meta, report, !o.scene.quiet, &*ranks);
             if (!all) return 0;
             computed = std::move(*all);
         } else {
             computed = compute_matrix(rows.provider(), cp, !o.scene.quiet);
         }
-        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report);
+        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report, ranks);
     }
     const double seconds = f.seconds;
     report.set("seconds", seconds);

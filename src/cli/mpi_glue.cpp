@@ -89,6 +89,18 @@ void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t fir
     store.sync();
 }
 
+// The closure evidence of every rank's rows (a process's providers saw only its own), on rank 0.
+// Collective.
+RanksFigures reduce_figures(const RowSource& rows) {
+    RanksFigures figures;
+    figures.evidence = closure_evidence(rows);
+    double miss = std::isnan(figures.evidence.hemicube_miss_weight) ? 0.0 : figures.evidence.hemicube_miss_weight;
+    mpi::reduce_sum_to_root(std::span(&miss, 1));
+    mpi::reduce_min_to_root(std::span(&figures.evidence.inner_row_sum_min, 1));
+    if (!std::isnan(figures.evidence.hemicube_miss_weight)) figures.evidence.hemicube_miss_weight = miss;
+    return figures;
+}
+
 }  // namespace
 
 void mpi_start(int& argc, char**& argv, std::string_view command) {
@@ -118,10 +130,11 @@ Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) {
     return s;
 }
 
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& scene, const RowOptions& rows,
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
                                             const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress) {
-    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, rows);
+                                            Report& report, bool progress, RanksFigures* figures) {
+    RowProvider& provider = rows.provider();
+    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options);
     const int r = mpi::rank(), k = mpi::size();
     const std::uint32_t first = bounds[r], last = bounds[r + 1];
     info("{} ranks; rank 0 computes rows {}..{} of {}", k, bounds[0], bounds[1], scene.size());
@@ -142,6 +155,8 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& 
         compute_into(provider, *c, first, last, progress);
         c->read_rows(first, last, mine.nnz, mine.col, mine.val);  // bit-identical to the rows as computed
     }
+    const RanksFigures reduced = reduce_figures(rows);
+    if (figures) *figures = reduced;
     return mpi::gather_rows(static_cast<std::uint32_t>(scene.size()), bounds, mine);
 }
 
@@ -191,13 +206,7 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
             bar.add();
         });
     }
-    // The closure evidence of every rank's rows (a process's providers saw only its own).
-    RanksFigures figures;
-    figures.evidence = closure_evidence(rows);
-    double miss = std::isnan(figures.evidence.hemicube_miss_weight) ? 0.0 : figures.evidence.hemicube_miss_weight;
-    mpi::reduce_sum_to_root(std::span(&miss, 1));
-    mpi::reduce_min_to_root(std::span(&figures.evidence.inner_row_sum_min, 1));
-    if (!std::isnan(figures.evidence.hemicube_miss_weight)) figures.evidence.hemicube_miss_weight = miss;
+    const RanksFigures figures = reduce_figures(rows);
     if (r != 0) {
         mpi::serve_rows(first, last, [&](std::uint32_t i, mpi::RowBlock& chunk) {
             store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val);
@@ -239,8 +248,8 @@ RowOptions mpi_row_options(RowOptions rows) { return rows; }
 bool mpi_root() { return true; }
 int mpi_finish(int code) { return code; }
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) { return load_and_mesh(options, report); }
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider&, const Scene&, const RowOptions&, const CheckpointOptions&,
-                                            const FfmMetadata&, Report&, bool) {
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
+                                            const FfmMetadata&, Report&, bool, RanksFigures*) {
     throw InternalError("mpi_compute_matrix without MPI");
 }
 std::optional<RanksFigures> mpi_stream_rows(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,

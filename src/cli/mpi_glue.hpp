@@ -39,12 +39,6 @@ RowOptions mpi_row_options(RowOptions rows);
 // Distributed: rank 0 loads and meshes the scene and broadcasts it. Otherwise load_and_mesh.
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report);
 
-// Every rank computes its block of rows (pipeline/row_partition.hpp), through its own shard of
-// the checkpoint (DIR/rank-R-of-K) when one is given; rank 0 returns the whole matrix, the other
-// ranks nullopt.
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& scene, const RowOptions& rows,
-                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress);
 
 // What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
 // own block only: reduced over the ranks onto rank 0. (RowSource::obstructed() needs no such
@@ -52,6 +46,14 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& 
 struct RanksFigures {
     ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
 };
+
+// Every rank computes its block of rows (pipeline/row_partition.hpp), through its own shard of
+// the checkpoint (DIR/rank-R-of-K) when one is given; rank 0 returns the whole matrix (and the
+// ranks' figures in *figures), the other ranks nullopt. For the outputs that need the matrix in
+// memory (.mtx, --ffm-version 1, View3D, Elmer); a .ffm streams (mpi_stream_rows).
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
+                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                            Report& report, bool progress, RanksFigures* figures);
 
 // The streamed form of mpi_compute_matrix (docs/scaling.md, "Output"), in bounded memory on every
 // rank: each rank computes its block into its checkpoint shard (DIR/rank-R-of-K) or, without

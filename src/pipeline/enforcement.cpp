@@ -55,14 +55,15 @@ void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& s
                                  to_string(request), scene.source));
 }
 
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
+                            const ClosureEvidence* evidence) {
     const EnforceRequest request = rows.options().enforce;
     if (request == EnforceRequest::None) return F;
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
     if (mode == EnforceMode::Closure) {
         refuse_enforcement_with_obstructions(request, scene);
-        require_closed_scene(what, closure_evidence(rows), F);
+        require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), F);
     }
     const std::vector<double> areas = areas_of(scene);
     EnforceStats st;
