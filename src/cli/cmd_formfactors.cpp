@@ -41,11 +41,17 @@ struct Figures {
     std::vector<std::vector<double>> groups;
 };
 
+// Hands every row, in row order, to a sink (as the floats CsrMatrix holds): stream_rows, or under
+// mpirun the ranks' blocks (mpi_stream_rows), which returns the figures of every rank's rows
+// (nullopt: the RowSource's own are every row's).
+using RowSinkFn = std::function<void(std::uint32_t, RowView)>;
+using RowFeed = std::function<std::optional<RanksFigures>(const RowSinkFn&)>;
+
 // Rows straight to the .ffm as they come, statistics from the stream and from passes over the
 // written file: memory independent of the number of entries (docs/robustness.md). With --enforce
 // the rows as computed go to a scratch .ffm first, and the enforced rows to the output
 // (pipeline/enforcement.hpp).
-Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheckpoint* checkpoint,
+Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const RowFeed& feed,
                  const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
     const bool enforce = rows.options().enforce != EnforceRequest::None;
@@ -54,6 +60,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheck
     RowStreamChecks checks(scene);
     std::vector<double> sums(scene.size(), 0.0);  // for the sky view factors: 8 bytes a patch
     ScratchDir scratch(o.output);  // removed on return and on error
+    std::optional<RanksFigures> ranks;
     {
         // Without --enforce the computed rows are the output; with it, a scratch file (fast
         // compression: it is read twice and removed).
@@ -61,7 +68,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheck
         FfmWriter writer(first, scene, written, enforce ? FfmWriterOptions{1u << 20, 1} : FfmWriterOptions{});
         Stopwatch watch, piece;
         double writing = 0;  // coding, compressing and writing, between the rows
-        stream_rows(rows.provider(), checkpoint, progress, [&](std::uint32_t i, RowView row) {
+        ranks = feed([&](std::uint32_t i, RowView row) {
             piece.restart();
             writer.append_row(row);
             writing += piece.seconds();
@@ -89,7 +96,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheck
                 out_checks.add(i, row);
                 sums[i] = row.sum();
             },
-            report);
+            report, ranks ? &ranks->evidence : nullptr);
         writer.finish();
         f.nnz = writer.nnz();
         report.set("ffm.bytes", writer.bytes_written());
@@ -127,14 +134,14 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, RowCheck
 
 // The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, mpirun, or no output.
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
-// `seconds`.
+// `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
-                  const FfmMetadata& written, Report& report) {
+                  const FfmMetadata& written, Report& report, const std::optional<RanksFigures>& ranks) {
     const bool progress = !o.scene.quiet;
     Figures f;
     Stopwatch watch;
     f.seconds = seconds;
-    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report);
+    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report, ranks ? &ranks->evidence : nullptr);
     f.nnz = F.nnz();
     f.row_sums = row_sum_stats(F);
     {
@@ -186,25 +193,38 @@ int run(const Options& o) {
     if (row_options.enforce != EnforceRequest::None)
         written.settings += fmt::format(" enforce={}", to_string(row_options.enforce));
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
-    // Under mpirun rank 0 gathers the ranks' rows and writes from memory (the same bytes); View3D's
-    // and Elmer's files need the whole matrix too.
-    const bool stream = !distributed && ffm && o.ffm_version == 2 && !surface_outputs_need_matrix(o.outputs);
+    // View3D's and Elmer's files need the whole matrix (under mpirun: gathered to rank 0).
+    const bool stream = ffm && o.ffm_version == 2 && !surface_outputs_need_matrix(o.outputs);
     report.set("streamed", stream);
     Figures f;
     if (stream) {
-        f = streamed(o, scene, rows, cp, written, report);
+        const bool progress = !o.scene.quiet;
+        // Under mpirun rank 0 takes the ranks' blocks in row order, a chunk at a time (the same bytes).
+        const RowFeed feed = [&](const RowSinkFn& sink) -> std::optional<RanksFigures> {
+            if (distributed)
+                return mpi_stream_rows(rows, scene, row_options, o.checkpoint, meta, o.output, report, progress, sink);
+            stream_rows(rows.provider(), cp, progress, sink);
+            return std::nullopt;
+        };
+        if (!mpi_root()) {  // this rank's block computed and sent to rank 0: its part is done
+            feed({});
+            return 0;
+        }
+        f = streamed(o, scene, rows, feed, written, report);
     } else {
         Stopwatch watch;
         CsrMatrix computed;
+        std::optional<RanksFigures> ranks;
         if (distributed) {  // every rank its block; rank 0 gathers them and goes on alone
+            ranks.emplace();
             std::optional<CsrMatrix> all =
-                mpi_compute_matrix(rows.provider(), scene, row_options, o.checkpoint, meta, report, !o.scene.quiet);
+                mpi_compute_matrix(rows, scene, row_options, o.checkpoint, meta, report, !o.scene.quiet, &*ranks);
             if (!all) return 0;
             computed = std::move(*all);
         } else {
             computed = compute_matrix(rows.provider(), cp, !o.scene.quiet);
         }
-        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report);
+        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report, ranks);
     }
     const double seconds = f.seconds;
     report.set("seconds", seconds);

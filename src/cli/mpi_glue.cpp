@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -11,6 +12,8 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
+#include "ffcube/io/transpose_scratch.hpp"
+#include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #ifdef FFCUBE_HAVE_MPI
 #include "ffcube/mpi/world.hpp"
@@ -37,6 +40,68 @@ void refuse_other_commands(std::string_view command) {
 }  // namespace
 
 #ifdef FFCUBE_HAVE_MPI
+
+namespace {
+
+// This rank's checkpoint: DIR holds one shard per rank, each a checkpoint of its own
+// (io/checkpoint.hpp). Collective (a barrier after rank 0 made DIR).
+std::optional<RowCheckpoint> open_shard(const CheckpointOptions& checkpoint, const Scene& scene,
+                                        const FfmMetadata& meta, Report& report) {
+    namespace fs = std::filesystem;
+    const int r = mpi::rank(), k = mpi::size();
+    const fs::path dir = checkpoint.dir;
+    const fs::path shard = dir / fmt::format("rank-{}-of-{}", r, k);
+    if (!checkpoint.resume && r == 0) {
+        std::error_code ec;
+        fs::create_directory(dir, ec);
+        if (ec) throw IoError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
+    }
+    mpi::barrier();
+    if (checkpoint.resume && !fs::exists(shard / "manifest.txt")) {
+        std::string found;
+        std::error_code ec;
+        for (const auto& e : fs::directory_iterator(dir, ec))
+            if (e.path().filename().string().starts_with("rank-")) found += " " + e.path().filename().string();
+        throw InputError(fmt::format(
+            "--checkpoint {} --resume: no shard {} for rank {} of {} (found:{}); resume with the number of ranks "
+            "that made it",
+            dir.string(), shard.filename().string(), r, k, found.empty() ? " none" : found));
+    }
+    CheckpointOptions mine_opts = checkpoint;
+    mine_opts.dir = shard.string();
+    return open_checkpoint(mine_opts, scene, meta, report);
+}
+
+// The rows of [first, last) missing from the store, each appended to it as it comes.
+void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t first, std::uint32_t last,
+                  bool progress) {
+    std::vector<std::uint32_t> todo;
+    for (std::uint32_t i = first; i < last; ++i)
+        if (!store.has(i)) todo.push_back(i);
+    info("rank 0: {} of its {} rows to compute", todo.size(), last - first);
+    {
+        Progress bar("rows (rank 0's block)", todo.size(), progress && mpi::rank() == 0);
+        provider.compute_rows(todo, [&](std::uint32_t i, const SparseRow& row) {
+            store.append(i, row);
+            bar.add();
+        });
+    }
+    store.sync();
+}
+
+// The closure evidence of every rank's rows (a process's providers saw only its own), on rank 0.
+// Collective.
+RanksFigures reduce_figures(const RowSource& rows) {
+    RanksFigures figures;
+    figures.evidence = closure_evidence(rows);
+    double miss = std::isnan(figures.evidence.hemicube_miss_weight) ? 0.0 : figures.evidence.hemicube_miss_weight;
+    mpi::reduce_sum_to_root(std::span(&miss, 1));
+    mpi::reduce_min_to_root(std::span(&figures.evidence.inner_row_sum_min, 1));
+    if (!std::isnan(figures.evidence.hemicube_miss_weight)) figures.evidence.hemicube_miss_weight = miss;
+    return figures;
+}
+
+}  // namespace
 
 void mpi_start(int& argc, char**& argv, std::string_view command) {
     if (launched_size() == 0) return;
@@ -65,11 +130,11 @@ Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) {
     return s;
 }
 
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& scene, const RowOptions& rows,
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
                                             const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress) {
-    namespace fs = std::filesystem;
-    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, rows);
+                                            Report& report, bool progress, RanksFigures* figures) {
+    RowProvider& provider = rows.provider();
+    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options);
     const int r = mpi::rank(), k = mpi::size();
     const std::uint32_t first = bounds[r], last = bounds[r + 1];
     info("{} ranks; rank 0 computes rows {}..{} of {}", k, bounds[0], bounds[1], scene.size());
@@ -86,43 +151,82 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& 
             bar.add();
         });
     } else {
-        // DIR holds one shard per rank, each a checkpoint of its own (io/checkpoint.hpp).
-        const fs::path dir = checkpoint.dir;
-        const fs::path shard = dir / fmt::format("rank-{}-of-{}", r, k);
-        if (!checkpoint.resume && r == 0) {
-            std::error_code ec;
-            fs::create_directory(dir, ec);
-            if (ec) throw IoError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
-        }
-        mpi::barrier();
-        if (checkpoint.resume && !fs::exists(shard / "manifest.txt")) {
-            std::string found;
-            std::error_code ec;
-            for (const auto& e : fs::directory_iterator(dir, ec))
-                if (e.path().filename().string().starts_with("rank-")) found += " " + e.path().filename().string();
-            throw InputError(fmt::format(
-                "--checkpoint {} --resume: no shard {} for rank {} of {} (found:{}); resume with the number of ranks "
-                "that made it",
-                dir.string(), shard.filename().string(), r, k, found.empty() ? " none" : found));
-        }
-        CheckpointOptions mine_opts = checkpoint;
-        mine_opts.dir = shard.string();
-        std::optional<RowCheckpoint> c = open_checkpoint(mine_opts, scene, meta, report);
-        std::vector<std::uint32_t> todo;
-        for (std::uint32_t i = first; i < last; ++i)
-            if (!c->has(i)) todo.push_back(i);
-        info("rank 0: {} of its {} rows to compute", todo.size(), last - first);
-        {
-            Progress bar("rows (rank 0's block)", todo.size(), progress && r == 0);
-            provider.compute_rows(todo, [&](std::uint32_t i, const SparseRow& row) {
-                c->append(i, row);
-                bar.add();
-            });
-        }
-        c->sync();
+        std::optional<RowCheckpoint> c = open_shard(checkpoint, scene, meta, report);
+        compute_into(provider, *c, first, last, progress);
         c->read_rows(first, last, mine.nnz, mine.col, mine.val);  // bit-identical to the rows as computed
     }
+    const RanksFigures reduced = reduce_figures(rows);
+    if (figures) *figures = reduced;
     return mpi::gather_rows(static_cast<std::uint32_t>(scene.size()), bounds, mine);
+}
+
+std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene, const RowOptions& options,
+                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                            const std::string& output, Report& report, bool progress,
+                                            const std::function<void(std::uint32_t, RowView)>& sink) {
+    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options);
+    const int r = mpi::rank(), k = mpi::size();
+    const std::uint32_t first = bounds[r], last = bounds[r + 1];
+    info("{} ranks; rank 0 computes rows {}..{} of {}, then takes the other blocks in order", k, bounds[0], bounds[1],
+         scene.size());
+    report.set("mpi.rows_rank0", bounds[1] - bounds[0]);
+    report.set("mpi.streamed", true);
+    RowProvider& provider = rows.provider();
+    // Where this rank's rows wait: its checkpoint shard, or (rank r > 0 without --checkpoint) a
+    // spool, a checkpoint in a scratch directory next to the output, removed on return and on error.
+    std::optional<ScratchDir> spool_dir;
+    std::optional<RowCheckpoint> store;
+    if (!checkpoint.dir.empty()) {
+        store = open_shard(checkpoint, scene, meta, report);
+    } else if (r != 0) {
+        spool_dir.emplace(output);
+        store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta));
+    }
+    if (store) {
+        compute_into(provider, *store, first, last, progress);
+        if (r == 0) {  // rank 0's block read back from its shard, bit-identical to the rows as computed
+            mpi::RowBlock row;
+            for (std::uint32_t i = first; i < last; ++i) {
+                row.nnz.clear();
+                row.col.clear();
+                row.val.clear();
+                store->read_rows(i, i + 1, row.nnz, row.col, row.val);
+                sink(i, RowView{row.col, row.val});
+            }
+        }
+    } else {  // rank 0 without a checkpoint: its rows straight to the sink
+        std::vector<std::uint32_t> list;
+        for (std::uint32_t i = first; i < last; ++i) list.push_back(i);
+        Progress bar("rows (rank 0's block)", list.size(), progress);
+        std::vector<float> val;
+        provider.compute_rows(list, [&](std::uint32_t i, const SparseRow& row) {
+            val.resize(row.val.size());
+            for (std::size_t q = 0; q < val.size(); ++q) val[q] = static_cast<float>(row.val[q]);  // as CsrMatrix
+            sink(i, RowView{row.col, val});
+            bar.add();
+        });
+    }
+    const RanksFigures figures = reduce_figures(rows);
+    if (r != 0) {
+        mpi::serve_rows(first, last, [&](std::uint32_t i, mpi::RowBlock& chunk) {
+            store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val);
+        });
+        return std::nullopt;
+    }
+    std::uint64_t chunks = 0, largest = 0;
+    for (int from = 1; from < k; ++from) {
+        Progress bar(fmt::format("rows from rank {}", from), bounds[from + 1] - bounds[from], progress);
+        const mpi::ReceivedRows got =
+            mpi::receive_rows(from, bounds[from], bounds[from + 1], [&](std::uint32_t i, RowView row) {
+                sink(i, row);
+                bar.add();
+            });
+        chunks += got.chunks;
+        largest = std::max(largest, got.largest_chunk_bytes);
+    }
+    report.set("mpi.chunks_received", chunks);
+    report.set("mpi.largest_chunk_bytes", largest);
+    return figures;
 }
 
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& rows) {
@@ -144,9 +248,14 @@ RowOptions mpi_row_options(RowOptions rows) { return rows; }
 bool mpi_root() { return true; }
 int mpi_finish(int code) { return code; }
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) { return load_and_mesh(options, report); }
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider&, const Scene&, const RowOptions&, const CheckpointOptions&,
-                                            const FfmMetadata&, Report&, bool) {
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
+                                            const FfmMetadata&, Report&, bool, RanksFigures*) {
     throw InternalError("mpi_compute_matrix without MPI");
+}
+std::optional<RanksFigures> mpi_stream_rows(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
+                                            const FfmMetadata&, const std::string&, Report&, bool,
+                                            const std::function<void(std::uint32_t, RowView)>&) {
+    throw InternalError("mpi_stream_rows without MPI");
 }
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene&, const RowOptions&) { return nullptr; }
 

@@ -3,15 +3,20 @@
 // never initialised; the MPI layer (src/mpi) is only linked when CMake found MPI.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <optional>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "cli/row_store.hpp"
+#include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/options.hpp"
+#include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/scene/scene.hpp"
 #include "ffcube/solver/row_blocks.hpp"
 
@@ -34,12 +39,33 @@ RowOptions mpi_row_options(RowOptions rows);
 // Distributed: rank 0 loads and meshes the scene and broadcasts it. Otherwise load_and_mesh.
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report);
 
+
+// What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
+// own block only: reduced over the ranks onto rank 0. (RowSource::obstructed() needs no such
+// reduction: scenes with obstruction-only surfaces are refused under mpirun, io/scene_blob.hpp.)
+struct RanksFigures {
+    ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
+};
+
 // Every rank computes its block of rows (pipeline/row_partition.hpp), through its own shard of
-// the checkpoint (DIR/rank-R-of-K) when one is given; rank 0 returns the whole matrix, the other
-// ranks nullopt.
-std::optional<CsrMatrix> mpi_compute_matrix(RowProvider& provider, const Scene& scene, const RowOptions& rows,
+// the checkpoint (DIR/rank-R-of-K) when one is given; rank 0 returns the whole matrix (and the
+// ranks' figures in *figures), the other ranks nullopt. For the outputs that need the matrix in
+// memory (.mtx, --ffm-version 1, View3D, Elmer); a .ffm streams (mpi_stream_rows).
+std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
                                             const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress);
+                                            Report& report, bool progress, RanksFigures* figures);
+
+// The streamed form of mpi_compute_matrix (docs/scaling.md, "Output"), in bounded memory on every
+// rank: each rank computes its block into its checkpoint shard (DIR/rank-R-of-K) or, without
+// --checkpoint, a spool next to `output` (a checkpoint of its own, removed at the end); rank 0
+// hands every row to sink in row order, as CsrMatrix's floats: its own block as computed (or
+// read back from its shard), then each other rank's block in chunks it asks for one at a time
+// (mpi::serve_rows). Rank 0 returns the figures; the other ranks return nullopt once rank 0 has
+// every row of theirs (sink is never called there).
+std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene, const RowOptions& options,
+                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                            const std::string& output, Report& report, bool progress,
+                                            const std::function<void(std::uint32_t, RowView)>& sink);
 
 // The solver's row blocks over the ranks (solver/row_blocks.hpp).
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& rows);

@@ -18,6 +18,16 @@ void add_checkpoint_options(CLI::App& app, CheckpointOptions& o) {
         ->needs(dir);
 }
 
+CheckpointManifest checkpoint_manifest(const Scene& scene, const FfmMetadata& meta) {
+    CheckpointManifest m;
+    m.fingerprint = scene.fingerprint;
+    m.patches = static_cast<std::uint32_t>(scene.size());
+    m.meshing = scene.stats.how;
+    m.max_patch_edge = scene.stats.max_patch_edge;
+    m.meta = meta;
+    return m;
+}
+
 std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const Scene& scene, const FfmMetadata& meta,
                                              Report& report) {
     if (o.dir.empty()) return std::nullopt;
@@ -26,12 +36,7 @@ std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const S
         throw InputError(fmt::format("--checkpoint: {} has obstruction-only surfaces (O): checkpoints are not supported for "
                                      "them yet",
                                      scene.source));
-    CheckpointManifest m;
-    m.fingerprint = scene.fingerprint;
-    m.patches = static_cast<std::uint32_t>(scene.size());
-    m.meshing = scene.stats.how;
-    m.max_patch_edge = scene.stats.max_patch_edge;
-    m.meta = meta;
+    const CheckpointManifest m = checkpoint_manifest(scene, meta);
     RowCheckpoint c = o.resume ? RowCheckpoint::resume(o.dir, m) : RowCheckpoint::create(o.dir, m);
     for (const std::string& w : c.warnings()) log_warning(w);
     if (o.resume) info("checkpoint {}: {} of {} rows already done", o.dir, c.rows_stored(), c.size());

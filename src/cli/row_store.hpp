@@ -24,6 +24,9 @@ struct CheckpointOptions {
 // Adds --checkpoint DIR and --resume (which needs --checkpoint).
 void add_checkpoint_options(CLI::App& app, CheckpointOptions& o);
 
+// What a checkpoint of this scene's rows made with these settings records (and resuming compares).
+CheckpointManifest checkpoint_manifest(const Scene& scene, const FfmMetadata& meta);
+
 // Opens the checkpoint (create, or resume: validated against this scene and these settings)
 // before any expensive setup, so that a mismatch is refused at once. nullopt without --checkpoint.
 // Warnings about a damaged log are logged; rows reused are recorded in the report.

@@ -163,6 +163,79 @@ std::optional<CsrMatrix> gather_rows(std::uint32_t n, std::span<const std::uint3
     return m;
 }
 
+namespace {
+constexpr int kTagAsk = 21, kTagChunk = 22, kTagChunkNnz = 23, kTagChunkCol = 24, kTagChunkVal = 25;
+}  // namespace
+
+void serve_rows(std::uint32_t first, std::uint32_t last,
+                const std::function<void(std::uint32_t, RowBlock&)>& read_row) {
+    RowBlock chunk;
+    for (std::uint32_t i = first; i < last;) {
+        std::uint32_t ask = 0;
+        check(MPI_Recv(&ask, 1, MPI_UINT32_T, 0, kTagAsk, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
+        FFCUBE_CHECK(ask == i);  // rank 0 asks for the rows in order
+        chunk.nnz.clear();
+        chunk.col.clear();
+        chunk.val.clear();
+        // 8 bytes an entry (u32 column, float value).
+        while (i < last && (chunk.nnz.empty() || chunk.col.size() * 8 < kRowChunkBytes)) read_row(i++, chunk);
+        FFCUBE_CHECK(chunk.col.size() == chunk.val.size());
+        const std::uint64_t header[2] = {chunk.nnz.size(), chunk.col.size()};
+        check(MPI_Send(header, 2, MPI_UINT64_T, 0, kTagChunk, MPI_COMM_WORLD), "MPI_Send");
+        send_all<std::uint32_t>(chunk.nnz, 0, kTagChunkNnz);
+        send_all<std::uint32_t>(chunk.col, 0, kTagChunkCol);
+        send_all<float>(chunk.val, 0, kTagChunkVal);
+    }
+}
+
+ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
+                          const std::function<void(std::uint32_t, RowView)>& sink) {
+    ReceivedRows figures;
+    RowBlock chunk;
+    std::uint32_t i = first;
+    if (i < last) check(MPI_Send(&i, 1, MPI_UINT32_T, from, kTagAsk, MPI_COMM_WORLD), "MPI_Send");
+    while (i < last) {
+        std::uint64_t header[2] = {0, 0};
+        check(MPI_Recv(header, 2, MPI_UINT64_T, from, kTagChunk, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
+        FFCUBE_CHECK(header[0] > 0 && header[0] <= last - i);
+        chunk.nnz.resize(header[0]);
+        chunk.col.resize(header[1]);
+        chunk.val.resize(header[1]);
+        recv_all<std::uint32_t>(chunk.nnz, from, kTagChunkNnz);
+        recv_all<std::uint32_t>(chunk.col, from, kTagChunkCol);
+        recv_all<float>(chunk.val, from, kTagChunkVal);
+        ++figures.chunks;
+        figures.largest_chunk_bytes = std::max<std::uint64_t>(figures.largest_chunk_bytes, 4 * header[0] + 8 * header[1]);
+        const std::uint32_t end = i + static_cast<std::uint32_t>(header[0]);
+        // Ask for the next chunk before using this one: the rank reads and sends it meanwhile.
+        if (end < last) check(MPI_Send(&end, 1, MPI_UINT32_T, from, kTagAsk, MPI_COMM_WORLD), "MPI_Send");
+        std::size_t at = 0;
+        for (std::uint32_t k = 0; k < header[0]; ++k) {
+            FFCUBE_CHECK(at + chunk.nnz[k] <= chunk.col.size());
+            sink(i + k, RowView{std::span<const std::uint32_t>(chunk.col).subspan(at, chunk.nnz[k]),
+                                std::span<const float>(chunk.val).subspan(at, chunk.nnz[k])});
+            at += chunk.nnz[k];
+        }
+        FFCUBE_CHECK(at == chunk.col.size());
+        i = end;
+    }
+    return figures;
+}
+
+namespace {
+void reduce_to_root(std::span<double> v, MPI_Op op) {
+    for (std::size_t at = 0; at < v.size(); at += kChunk) {
+        const int n = static_cast<int>(std::min(kChunk, v.size() - at));
+        check(g_rank == 0 ? MPI_Reduce(MPI_IN_PLACE, v.data() + at, n, MPI_DOUBLE, op, 0, MPI_COMM_WORLD)
+                          : MPI_Reduce(v.data() + at, nullptr, n, MPI_DOUBLE, op, 0, MPI_COMM_WORLD),
+              "MPI_Reduce");
+    }
+}
+}  // namespace
+
+void reduce_sum_to_root(std::span<double> v) { reduce_to_root(v, MPI_SUM); }
+void reduce_min_to_root(std::span<double> v) { reduce_to_root(v, MPI_MIN); }
+
 WorldRowBlocks::WorldRowBlocks(std::vector<std::uint32_t> bounds) : bounds_(std::move(bounds)) {
     FFCUBE_CHECK(bounds_.size() == std::size_t(g_size) + 1);
     for (int r = 0; r < g_size; ++r) {

@@ -16,14 +16,14 @@
 #include "ffcube/io/transpose_scratch.hpp"
 
 namespace ffcube {
-namespace {
-
 ClosureEvidence closure_evidence(const RowSource& rows) {
     ClosureEvidence evidence;
     if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight;
     if (rows.corrected()) evidence.inner_row_sum_min = rows.corrected()->stats().inner_row_sum_min;
     return evidence;
 }
+
+namespace {
 
 std::vector<double> areas_of(const Scene& scene) {
     std::vector<double> areas;
@@ -55,14 +55,15 @@ void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& s
                                  to_string(request), scene.source));
 }
 
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report) {
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
+                            const ClosureEvidence* evidence) {
     const EnforceRequest request = rows.options().enforce;
     if (request == EnforceRequest::None) return F;
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
     if (mode == EnforceMode::Closure) {
         refuse_enforcement_with_obstructions(request, scene);
-        require_closed_scene(what, closure_evidence(rows), F);
+        require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), F);
     }
     const std::vector<double> areas = areas_of(scene);
     EnforceStats st;
@@ -77,14 +78,14 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
                                                std::span<const double> raw_row_sums, const Scene& scene,
                                                const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
                                                bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
-                                               Report& report) {
+                                               Report& report, const ClosureEvidence* evidence) {
     const EnforceRequest request = rows.options().enforce;
     FFCUBE_CHECK(request != EnforceRequest::None);
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
     if (mode == EnforceMode::Closure) {
         refuse_enforcement_with_obstructions(request, scene);
-        require_closed_scene(what, closure_evidence(rows), raw_row_sums);
+        require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), raw_row_sums);
     }
     const std::vector<double> areas = areas_of(scene);
     const auto n = static_cast<std::uint32_t>(scene.size());

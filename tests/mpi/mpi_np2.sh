@@ -24,11 +24,42 @@ rows="$scene --patches 600 --resolution 64 --threads 1 -q"
 # 1. Byte-identical outputs.
 "$ffcube" formfactors $rows -o one.ffm || fail "one-process formfactors"
 "$ffcube" formfactors $rows -o one.mtx || fail "one-process formfactors .mtx"
-mpi formfactors $rows -o two.ffm || fail "mpirun formfactors"
+mpi formfactors $rows -o two.ffm --report two.json || fail "mpirun formfactors"
 mpi formfactors $rows -o two.mtx || fail "mpirun formfactors .mtx"
 cmp one.ffm two.ffm || fail ".ffm differs"
 cmp one.mtx two.mtx || fail ".mtx differs"
 echo "ok: .ffm and .mtx byte-identical at -np 2"
+# The .ffm goes through the streamed writer under mpirun too: rank 0 takes rank 1's rows in chunks,
+# and no scratch or spool directory is left beside the output.
+python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['streamed'] and r['mpi']['streamed'], r" \
+    two.json || fail "the .ffm run under mpirun was not streamed"
+[ -z "$(ls -A | grep scratch)" ] || fail "scratch left behind: $(ls -A)"
+
+# 1b. --enforce on the streamed path (out of core: 1 MiB of --stats-memory cuts the transpose of
+# these 600 rows, about 3 MB of entries, into bands spilled to scratch files), against one process.
+for e in reciprocity closure; do
+    "$ffcube" formfactors $rows -o one-$e.ffm --enforce $e --stats-memory 1 || fail "one-process --enforce $e"
+    mpi formfactors $rows -o two-$e.ffm --enforce $e --stats-memory 1 || fail "mpirun --enforce $e"
+    cmp one-$e.ffm two-$e.ffm || fail "--enforce $e: .ffm differs"
+done
+echo "ok: --enforce reciprocity and closure byte-identical at -np 2 (streamed, out of core)"
+# Closure is judged on every rank's rows: the cube with a plate outside it, whose rows (the last
+# ones: rank 1's block) see nothing, is refused with the one-process error (rank 0's rows alone are
+# closed: judged on them, the run went on to fail later with another message).
+cp "$scene" open.obj
+printf 'o outside\nv 3 0 0\nv 4 0 0\nv 4 1 0\nv 3 1 0\nf 25 26 27 28\n' >> open.obj
+"$ffcube" formfactors open.obj --patches 600 --resolution 64 --threads 1 -q -o open-one.ffm --enforce closure 2> open-one.txt
+rc=$?
+one_err=$(grep "error:" open-one.txt) && grep -q "saw nothing" open-one.txt && [ "$rc" -eq 2 ] && [ ! -e open-one.ffm ] ||
+    fail "open scene with --enforce closure, one process: rc $rc, $(cat open-one.txt)"
+# Both forms under mpirun: the streamed .ffm and the matrix gathered to rank 0 (.mtx).
+for out in open-two.ffm open-two.mtx; do
+    mpi formfactors open.obj --patches 600 --resolution 64 --threads 1 -q -o $out --enforce closure 2> open-two.txt
+    rc=$?
+    [ "$rc" -eq 2 ] && [ ! -e $out ] && grep -qF "$one_err" open-two.txt ||
+        fail "open scene, -o $out at -np 2: rc $rc, $(cat open-two.txt), not: $one_err"
+done
+echo "ok: an open scene's closure refused at -np 2 as in one process"
 
 # Bad input under mpirun: rank 0's error, exit 2 from mpirun (MPI_Abort(2) ends every rank).
 mpi formfactors missing.obj -o bad.ffm 2> bad.txt
@@ -71,8 +102,17 @@ rc=$?
 [ "$rc" -ne 0 ] || fail "mpirun exited 0 although rank 1 was killed"
 [ ! -e big.ffm ] || fail "a final .ffm exists after the failed run"
 echo "ok: killed rank 1 -> mpirun exit $rc, no big.ffm"
-mpi formfactors $big -o big.ffm --checkpoint kill --resume || fail "resume"
+mpi formfactors $big -o big.ffm --checkpoint kill --resume --report big.json || fail "resume"
 cmp big-one.ffm big.ffm || fail "resumed .ffm differs"
+# Rank 1's 2,000 rows came in several chunks (about 48 MB in all), none above rank 0's bound: the
+# entries of kRowChunkBytes (8 MiB) plus one row (at most 3N² entries of 8 bytes: 393,216 at
+# N = 128), and 4 bytes of count per row (at most the block's 2,000).
+python3 -c "
+import json, sys
+m = json.load(open(sys.argv[1]))['mpi']
+assert m['chunks_received'] > 1 and m['largest_chunk_bytes'] <= (8 << 20) + 3 * 128 * 128 * 8 + 4 * 2000, m
+print('rank 1 sent', m['chunks_received'], 'chunks, the largest', m['largest_chunk_bytes'], 'bytes')" big.json ||
+    fail "rank 1's rows not received in bounded chunks"
 echo "ok: resumed run byte-identical"
 # Resuming with another number of ranks is refused, naming the shards found.
 "$mpirun" --oversubscribe -np 1 "$ffcube" formfactors $big -o big3.ffm --checkpoint kill --resume 2> refused.txt &&

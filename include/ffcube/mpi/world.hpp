@@ -3,7 +3,9 @@
 // Everything here is called from the main thread only (MPI_THREAD_FUNNELED).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -43,6 +45,29 @@ struct RowBlock {
 };
 // Every rank's block, in rank order, into one n × n matrix on rank 0 (nullopt on the others).
 std::optional<CsrMatrix> gather_rows(std::uint32_t n, std::span<const std::uint32_t> bounds, const RowBlock& mine);
+
+// The streamed gather (docs/scaling.md, "Output"): rank 0 takes the blocks in rank order, one
+// chunk of rows at a time, and asks for each chunk before the rank sends it, so rank 0 holds at
+// most two chunks (the one it is using and the one arriving), whatever the matrix's size; a rank
+// that is ahead keeps its rows where it computed them (its checkpoint shard or a spool file) until
+// asked. A chunk is whole rows, about kRowChunkBytes of columns and values (at least one row).
+inline constexpr std::size_t kRowChunkBytes = std::size_t{8} << 20;
+// On rank r > 0: sends rows [first, last) of its block, read_row(i, chunk) appending row i to a
+// chunk (nnz, columns, values), as rank 0 asks for them; returns when every row was sent.
+void serve_rows(std::uint32_t first, std::uint32_t last,
+                const std::function<void(std::uint32_t, RowBlock&)>& read_row);
+// On rank 0: the rows [first, last) that rank `from` serves, each handed to sink in order (the
+// float values as sent: what the rank's checkpoint or CsrMatrix holds).
+struct ReceivedRows {
+    std::uint64_t chunks = 0;
+    std::uint64_t largest_chunk_bytes = 0;  // u32 nnz per row, u32 column and float value per entry
+};
+ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
+                          const std::function<void(std::uint32_t, RowView)>& sink);
+// v summed (or its minimum taken) over the ranks, element by element, onto rank 0 (MPI_Reduce;
+// the other ranks' v is left as it was). Collective.
+void reduce_sum_to_root(std::span<double> v);
+void reduce_min_to_root(std::span<double> v);
 
 // RowBlocks (solver/row_blocks.hpp) over MPI_COMM_WORLD: share is an in-place MPI_Allgatherv,
 // sum gathers every rank's partial values and adds them in rank order (the same bits on every

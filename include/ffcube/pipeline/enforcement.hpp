@@ -9,6 +9,7 @@
 #include <functional>
 #include <span>
 
+#include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/row_source.hpp"
@@ -20,6 +21,11 @@ namespace ffcube {
 // (docs/scene-format.md): InputError naming the scene. Called before any row is computed, and by
 // both apply_enforcement forms.
 void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene);
+
+// What the providers saw of whether the scene is closed (hemicube pixels that saw nothing, the
+// smallest row sum before correction), judged by --enforce closure. Under mpirun a rank's
+// providers saw only its rows: the ranks' evidence is reduced onto rank 0 (src/cli/mpi_glue.cpp).
+ClosureEvidence closure_evidence(const RowSource& rows);
 
 struct StreamedEnforcement {
     std::size_t passes = 0;         // over the unenforced rows' file
@@ -39,11 +45,12 @@ struct StreamedEnforcement {
 // Scratch files go to scratch_dir; memory: budget_bytes for a band of the transpose and for G
 // (closure; beyond it G goes to a scratch file, read once per iteration), plus O(n). Report keys
 // as apply_enforcement ("enforce.*"), and "enforce.passes", "enforce.scratch_bytes".
+// evidence: the closure evidence of every row (the MPI ranks'); null: closure_evidence(rows).
 StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std::filesystem::path& raw,
                                                const RowStreamChecks& raw_checks,
                                                std::span<const double> raw_row_sums, const Scene& scene,
                                                const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
                                                bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
-                                               Report& report);
+                                               Report& report, const ClosureEvidence* evidence = nullptr);
 
 }  // namespace ffcube

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
@@ -86,8 +87,10 @@ void report_row_source(Report& report, const RowSource& rows);
 // --enforce on the finished matrix, with before/after figures in the report ("enforce.*").
 // Closure is refused (InputError) for open scenes, judged on the measuring provider's evidence:
 // a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
-// when options.enforce is None.
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report);
+// when options.enforce is None. evidence: that of every row, when rows' providers did not make
+// them all (under mpirun, the ranks' reduced: src/cli/mpi_glue.cpp); null: rows'.
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
+                            const ClosureEvidence* evidence = nullptr);
 
 // The checks every front end reports on a finished matrix: "nnz", "row_sums.{min,max,mean}" and
 // "reciprocity.{patch_max_abs,object_max_rel}" (reciprocity with a progress bar when `progress`).
