@@ -11,6 +11,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/scene/refine.hpp"
 #include "ffcube/solver/refinement.hpp"
+#include "row_reuse.hpp"
 
 namespace ffcube {
 namespace {
@@ -87,14 +88,22 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
     a.scene = start;
     a.origin.resize(start.size());
     for (std::uint32_t i = 0; i < start.size(); ++i) a.origin[i] = i;
+    // Rows of the previous level, its split factors and each element's patch in it: the rows of the
+    // patches not split are carried over (row_reuse.hpp) unless options.reuse_rows is off.
+    LevelRows carried;
+    std::vector<std::uint32_t> parent = a.origin, split(start.size(), 1);
     for (std::uint32_t level = 0;; ++level) {
         Stopwatch watch;
         a.rows = RowSource{};  // the previous level's workers end before the next start
         a.rows = make_row_source(a.scene, rows);
-        a.result = solve_radiosity(a.scene, a.rows.provider(), solver);
+        ReusedRowProvider provider(a.scene, a.rows.provider(), parent, split,
+                                   options.reuse_rows ? std::move(carried) : LevelRows{});
+        a.result = solve_radiosity(a.scene, provider, solver);
+        carried = provider.take_rows();
         AdaptiveLevel rec;
         rec.elements = a.scene.size();
-        rec.rows_computed = a.result.cache.rows_computed;
+        rec.rows_computed = provider.rows_measured();
+        rec.rows_reused = provider.rows_reused();
         rec.objects = object_means(a.scene, a.result.radiosity);
         rec.seconds = watch.seconds();
         a.levels.push_back(rec);
@@ -112,8 +121,8 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         a.max_relative_error = 0.0;
         for (const ObjectError& e : a.objects) a.max_relative_error = std::max(a.max_relative_error, e.relative);
         if (progress)
-            progress(fmt::format("adaptive level {}: {} elements, {} rows, {:.2f} s, largest estimated object error {:.3g} ({})",
-                                 level, rec.elements, rec.rows_computed, rec.seconds, a.max_relative_error, a.error_basis));
+            progress(fmt::format("adaptive level {}: {} elements, {} rows measured, {} reused, {:.2f} s, largest estimated object error {:.3g} ({})",
+                                 level, rec.elements, rec.rows_computed, rec.rows_reused, rec.seconds, a.max_relative_error, a.error_basis));
         if (level > 0 && a.max_relative_error <= options.target_error) {
             a.stop = "target";
             a.reached_target = true;
@@ -135,6 +144,8 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         }
         a.levels.back().refined = choice.marked;
         RefinedScene refined = refine_patches(a.scene, choice.split);
+        parent = refined.parent;
+        split = choice.split;
         std::vector<std::uint32_t> origin(refined.parent.size());
         for (std::size_t e = 0; e < origin.size(); ++e) origin[e] = a.origin[refined.parent[e]];
         a.origin = std::move(origin);
@@ -153,19 +164,22 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.reached_target", a.reached_target);
     r.set("adaptive.elements", a.scene.size());
     r.set("adaptive.start_patches", a.levels.empty() ? 0 : a.levels.front().elements);
-    std::vector<std::uint64_t> elements, refined, candidates, rows;
+    std::vector<std::uint64_t> elements, refined, candidates, rows, reused;
     std::vector<double> seconds;
     for (const AdaptiveLevel& l : a.levels) {
         elements.push_back(l.elements);
         refined.push_back(l.refined);
         candidates.push_back(l.candidates);
         rows.push_back(l.rows_computed);
+        reused.push_back(l.rows_reused);
         seconds.push_back(l.seconds);
     }
     r.set_array("adaptive.levels.elements", elements);
     r.set_array("adaptive.levels.refined", refined);
     r.set_array("adaptive.levels.candidates", candidates);
     r.set_array("adaptive.levels.rows_computed", rows);
+    r.set_array("adaptive.levels.rows_reused", reused);
+    r.set("adaptive.reuse_rows", o.reuse_rows);
     r.set_array("adaptive.levels.seconds", seconds);
     // Where the refinement went: elements per object.
     std::vector<std::uint64_t> per_object(a.scene.objects.size(), 0);

@@ -35,6 +35,9 @@ struct AdaptiveOptions {
     // Each level splits the patches that hold this fraction of the estimated misplaced power
     // (choose_refinement), in (0, 1].
     double fraction = 0.5;
+    // Carry the rows of patches not split over to the next level (docs/adaptive.md, "Rows reused
+    // between levels"); off: every level measures every row (--no-reuse-rows).
+    bool reuse_rows = true;
 };
 
 // The starting mesh of an adaptive solve when the command line names none: coarse enough that the
@@ -47,7 +50,8 @@ struct AdaptiveLevel {
     std::size_t elements = 0;       // patches of this level's scene
     std::size_t refined = 0;        // patches split to make the next level (0 for the last)
     std::size_t candidates = 0;     // patches whose variation exceeded the target
-    std::uint64_t rows_computed = 0;
+    std::uint64_t rows_computed = 0;  // rows measured (hemicubes or ray sets)
+    std::uint64_t rows_reused = 0;    // rows carried over from the previous level
     double seconds = 0.0;           // rows and solve of this level
     std::vector<Vec3> objects;      // area-weighted mean B per object
 };

@@ -21,6 +21,23 @@ double radiosity_luminance(const Vec3& b);
 // B inside the patch. 0 for a patch without neighbours.
 std::vector<double> radiosity_variation(const Scene& scene, std::span<const Vec3> radiosity);
 
+// Per patch i: the mean over the patch of the smooth reconstruction of B minus B_i, per channel. The
+// reconstruction interpolates vertex values linearly, a vertex taking the area-weighted mean of the
+// patches of one surface (scene/surface_vertices.hpp, normals within 25°) with a corner at it, so the
+// patch mean is the mean of its corners' values. Zero where B is constant; for a smooth B sampled
+// at the centroids of a uniform square grid it is h²/4 ∇²B inside a surface (docs/adaptive.md,
+// "The estimator"); where B jumps across a patch it is of the size of the jump, which a centroid value
+// counts on one side only.
+std::vector<Vec3> reconstruction_defect(const Scene& scene, std::span<const Vec3> radiosity);
+
+// Per patch i, per channel: the estimated B_i − (mean of B over patch i), from a quadratic fitted by
+// least squares to the values of i's neighbours on its surface (those of radiosity_variation; at
+// least 5, not on a line) about B_i: −½ tr(H M_i), H the fit's Hessian, M_i the patch's second
+// moments about its centroid over its area. A centroid value (a hemicube at the centre) misses the
+// patch mean by that much where B is smooth: h²/24 ∇²B for a square of side h. 0 for patches with
+// too few neighbours; `fitted` (may be null) counts the others.
+std::vector<Vec3> centroid_defect(const Scene& scene, std::span<const Vec3> radiosity, std::size_t* fitted = nullptr);
+
 struct RefinementChoice {
     std::vector<std::uint32_t> split;  // per patch: 1 (kept) or the split factor
     std::size_t marked = 0;            // patches split
