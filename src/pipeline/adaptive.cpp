@@ -58,19 +58,24 @@ void validate(const AdaptiveOptions& o) {
 }
 
 std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
-                                                      std::span<const Vec3> coarse_objects) {
+                                                      std::span<const Vec3> coarse_objects, std::span<const double> refined,
+                                                      std::span<const ObjectError> previous) {
     FFCUBE_CHECK(fine_objects.size() == scene.objects.size() && coarse_objects.size() == fine_objects.size());
+    FFCUBE_CHECK(refined.size() == fine_objects.size() && previous.size() == fine_objects.size());
     std::vector<ObjectError> out;
     for (std::size_t o = 0; o < fine_objects.size(); ++o) {
         ObjectError e;
         e.name = scene.objects[o];
         e.radiosity = fine_objects[o];
-        // First order in the spacing where it matters (a patch straddling a contact line counts lit
-        // or dark whole: docs/adaptive.md): halving it leaves half the error, so the fine level's
-        // error is about the difference between the levels (the coarse one's twice that).
-        e.error = glm::abs(fine_objects[o] - coarse_objects[o]);
-        const double m = max_channel(e.radiosity);
-        e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        const double phi = std::clamp(refined[o], 0.0, 1.0);
+        if (phi > 0.0) {
+            e.error = glm::abs(fine_objects[o] - coarse_objects[o]) * (2.0 / phi - 1.0);
+            const double m = max_channel(e.radiosity);
+            e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        } else {  // not refined: what was estimated before
+            e.error = previous[o].error;
+            e.relative = previous[o].relative;
+        }
         out.push_back(e);
     }
     return out;
@@ -92,6 +97,7 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
     // patches not split are carried over (row_reuse.hpp) unless options.reuse_rows is off.
     LevelRows carried;
     std::vector<std::uint32_t> parent = a.origin, split(start.size(), 1);
+    std::vector<double> refined_share;  // per object: the share of its area the last refinement split
     for (std::uint32_t level = 0;; ++level) {
         Stopwatch watch;
         a.rows = RowSource{};  // the previous level's workers end before the next start
@@ -116,7 +122,7 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             a.objects = object_errors_from_variation(a.scene, a.result.radiosity);
         } else {
             a.error_basis = "levels";
-            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects);
+            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects, refined_share, a.objects);
         }
         a.max_relative_error = 0.0;
         for (const ObjectError& e : a.objects) a.max_relative_error = std::max(a.max_relative_error, e.relative);
@@ -132,9 +138,12 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             a.stop = "level_limit";
             break;
         }
+        // Refine the objects whose estimated error is over the target, each by its own bulk criterion.
+        std::vector<bool> over(a.scene.objects.size(), false);
+        for (std::size_t o = 0; o < a.objects.size(); ++o) over[o] = a.objects[o].relative > options.target_error;
         const RefinementChoice choice =
             choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
-                              options.fraction);
+                              options.fraction, over);
         a.levels.back().candidates = choice.candidates;
         if (choice.marked == 0) {
             // Nothing varies by more than the target: at level 0 the variation is the estimate.
@@ -146,6 +155,14 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         RefinedScene refined = refine_patches(a.scene, choice.split);
         parent = refined.parent;
         split = choice.split;
+        refined_share.assign(a.scene.objects.size(), 0.0);
+        std::vector<double> object_area(a.scene.objects.size(), 0.0);
+        for (std::size_t i = 0; i < a.scene.size(); ++i) {
+            const Patch& p = a.scene.patches[i];
+            object_area[p.object] += p.area;
+            if (choice.split[i] > 1) refined_share[p.object] += p.area;
+        }
+        for (std::size_t o = 0; o < object_area.size(); ++o) refined_share[o] = object_area[o] > 0.0 ? refined_share[o] / object_area[o] : 0.0;
         std::vector<std::uint32_t> origin(refined.parent.size());
         for (std::size_t e = 0; e < origin.size(); ++e) origin[e] = a.origin[refined.parent[e]];
         a.origin = std::move(origin);

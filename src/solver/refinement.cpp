@@ -198,36 +198,42 @@ std::vector<Vec3> reconstruction_defect(const Scene& scene, std::span<const Vec3
 }
 
 RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> radiosity, double target,
-                                   std::size_t max_elements, std::uint32_t factor, double fraction) {
+                                   std::size_t max_elements, std::uint32_t factor, double fraction,
+                                   const std::vector<bool>& objects) {
     FFCUBE_CHECK_MSG(fraction > 0.0 && fraction <= 1.0, "the marked fraction is in (0, 1]");
     FFCUBE_CHECK_MSG(factor >= 2, "a split factor is at least 2");
     FFCUBE_CHECK_MSG(target >= 0.0, "the target error is not negative");
+    FFCUBE_CHECK_MSG(objects.empty() || objects.size() == scene.objects.size(), "one flag per object");
     const std::size_t n = scene.size();
     const std::vector<double> variation = radiosity_variation(scene, radiosity);
-    const std::vector<ObjectRadiosity> objects = object_radiosity(scene, radiosity);
+    const std::vector<ObjectRadiosity> object_b = object_radiosity(scene, radiosity);
     RefinementChoice choice;
     choice.split.assign(n, 1);
     choice.elements_after = n;
     std::vector<std::uint32_t> candidates;
     for (std::uint32_t i = 0; i < n; ++i) {
-        const double mean = radiosity_luminance(objects[scene.patches[i].object].radiosity);
+        const std::uint32_t o = scene.patches[i].object;
+        if (!objects.empty() && !objects[o]) continue;
+        const double mean = radiosity_luminance(object_b[o].radiosity);
         if (variation[i] > target * mean && variation[i] > 0.0) candidates.push_back(i);
     }
     choice.candidates = candidates.size();
-    std::stable_sort(candidates.begin(), candidates.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return variation[a] * scene.patches[a].area > variation[b] * scene.patches[b].area;
-    });
+    const auto eta = [&](std::uint32_t i) { return variation[i] * scene.patches[i].area; };
+    std::stable_sort(candidates.begin(), candidates.end(), [&](std::uint32_t a, std::uint32_t b) { return eta(a) > eta(b); });
     const std::size_t extra = static_cast<std::size_t>(factor) * factor - 1;
-    double total = 0.0, marked = 0.0;
-    for (const std::uint32_t i : candidates) total += variation[i] * scene.patches[i].area;
+    // Dörfler's sums, per object when objects are flagged, else over the whole scene (one group).
+    const auto group = [&](std::uint32_t i) -> std::size_t { return objects.empty() ? 0 : scene.patches[i].object; };
+    std::vector<double> total(std::max<std::size_t>(scene.objects.size(), 1), 0.0), marked(total.size(), 0.0);
+    for (const std::uint32_t i : candidates) total[group(i)] += eta(i);
     for (const std::uint32_t i : candidates) {
-        if (marked >= fraction * total) break;
+        const std::size_t g = group(i);
+        if (marked[g] >= fraction * total[g]) continue;
         if (choice.elements_after + extra > max_elements) {
             choice.budget_limited = true;
             break;
         }
         choice.split[i] = factor;
-        marked += variation[i] * scene.patches[i].area;
+        marked[g] += eta(i);
         choice.elements_after += extra;
         ++choice.marked;
     }

@@ -70,7 +70,8 @@ struct AdaptiveResult {
     RowSource rows;                     // the last level's rows (for report_row_source), still running
     std::vector<AdaptiveLevel> levels;
     std::vector<ObjectError> objects;
-    // "levels": error = |B_last − B_previous| (first order, spacing halved: docs/adaptive.md);
+    // "levels": error = |B_last − B_previous| (2/φ − 1), φ the share of the object's area split
+    // (object_errors_between_levels; docs/adaptive.md);
     // "variation": one level only, error = area-weighted mean of the patches' variation.
     std::string error_basis;
     // "target", "nothing_to_refine", "element_budget", "level_limit", or "unconverged_solve".
@@ -85,9 +86,14 @@ struct AdaptiveResult {
 AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
                               const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress = {});
 
-// Per-object errors (from two solves' object radiosity, or from one solve's variation).
+// Per-object errors from two levels' object radiosity. refined[o] is the share of object o's area
+// that the last refinement split. Under first-order convergence (docs/adaptive.md, "The estimated
+// error") splitting a share φ of an object, with its error spread evenly over its area, halves the
+// error there: the levels differ by φ e/2 of the coarse error e, which leaves e − φ e/2, i.e.
+// |ΔB| (2/φ − 1). An object with φ = 0 keeps its previous estimate (its mesh did not change).
 std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
-                                                      std::span<const Vec3> coarse_objects);
+                                                      std::span<const Vec3> coarse_objects, std::span<const double> refined,
+                                                      std::span<const ObjectError> previous);
 
 // One solve's per-object error estimate from its variation (error_basis "variation"): what a
 // uniform solve reports.

@@ -52,7 +52,12 @@ struct RefinementChoice {
 // first; ties by index, so the choice is deterministic) until the marked ones hold `fraction` of
 // the candidates' Σ η (Dörfler's bulk criterion: refinement goes where the error is, not
 // everywhere it exceeds the target), and while the refined scene stays within max_elements.
+// With `objects` (one flag per object of the scene; empty: every object), only the flagged objects'
+// patches are candidates, and the bulk criterion holds per object (each flagged object's marked
+// patches hold `fraction` of its own candidates' Σ η), so refinement goes to every object whose
+// estimated error is over the target, not only to the one with the largest jumps.
 RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> radiosity, double target,
-                                   std::size_t max_elements, std::uint32_t factor = 2, double fraction = 1.0);
+                                   std::size_t max_elements, std::uint32_t factor = 2, double fraction = 1.0,
+                                   const std::vector<bool>& objects = {});
 
 }  // namespace ffcube
