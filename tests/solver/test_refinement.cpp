@@ -97,6 +97,34 @@ TEST(RefinementIndicator, ALinearRampVariesByHalfItsStepAndAConstantNotAtAll) {
 namespace ffcube {
 namespace {
 
+TEST(RefinementMarking, PerObjectBulkReachesAnObjectWithSmallerJumps) {
+    // The floor has a step (jump 0.8 at x = 0.5), the wall a small step (jump 0.08 at z = 0.5): 20
+    // boundary patches on each, η = 0.4 a on the floor's and 0.04 a on the wall's (a = patch area),
+    // Σ η = 8.8 a. A global bulk of 42% (3.7 a) takes 10 floor patches (4.0 a) and nothing on the wall.
+    const Scene s = floor_and_wall();
+    std::vector<Vec3> b;
+    for (const Patch& p : s.patches)
+        b.push_back(Vec3(p.object == 0 ? (p.centroid.x < 0.5 ? 1.0 : 0.2) : (p.centroid.z < 0.5 ? 1.0 : 0.92)));
+    const auto on_wall = [&](const RefinementChoice& c) {
+        std::size_t n = 0;
+        for (std::uint32_t i = 0; i < s.size(); ++i) n += c.split[i] > 1 && s.patches[i].object == 1;
+        return n;
+    };
+    const RefinementChoice global = choose_refinement(s, b, 1e-3, 10'000, 2, 0.42);
+    EXPECT_EQ(global.candidates, 4u * kN);
+    EXPECT_EQ(global.marked, 10u);
+    EXPECT_EQ(on_wall(global), 0u);
+    // Per object: 42% of each object's own Σ η (3.36 a of 8 a, 0.336 a of 0.8 a): 9 patches on each.
+    const RefinementChoice both = choose_refinement(s, b, 1e-3, 10'000, 2, 0.42, {true, true});
+    EXPECT_EQ(both.marked, 18u);
+    EXPECT_EQ(on_wall(both), 9u);
+    // Only a flagged object's patches are candidates.
+    const RefinementChoice wall = choose_refinement(s, b, 1e-3, 10'000, 2, 0.42, {false, true});
+    EXPECT_EQ(wall.candidates, 2u * kN);
+    EXPECT_EQ(wall.marked, 9u);
+    EXPECT_EQ(on_wall(wall), 9u);
+}
+
 // A plate lit by a point-like source: the unit square at z = 0, the source at (0.5, 0.5, d) facing
 // down. The irradiance density is f(x) = d² / (π r⁴) (cos θ cos θ' / (π r²) with both cosines d / r),
 // whose exact mean over a patch is the point-to-polygon form factor divided by the area
