@@ -7,14 +7,16 @@
 #      REFERENCE_FINE / REFERENCE_COARSE (objects CSVs of an earlier pair of runs, the finer at half
 #      the coarser's edge) when given; with three or more uniform runs it also prints the order
 #      each object's last two steps show (log2 of the ratio of successive differences);
-#   3. adaptive solves at each --target-error in TARGETS (budget MAX_ELEMENTS);
+#   3. adaptive solves at each --target-error in TARGETS (budget MAX_ELEMENTS), with rows carried
+#      between levels and, when REUSE="on off", also with --no-reuse-rows;
 # and prints one markdown row per run: patches or elements, the command's wall time (report's
 # time.total), and the largest and per-object relative error of the luminance of B against the
-# reference.
+# reference; OUT_DIR/error_vs_time.svg plots the largest error against time.total, uniform and
+# adaptive runs as two series.
 #   tools/bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]
 # Environment: UNIFORM="60 30 15", TARGETS="1e-2 1e-3", MAX_ELEMENTS=4000, REFERENCE_FINE, REFERENCE_COARSE,
 # CONTACT_CUTS=auto|on|off (--contact-cuts of every run; auto: off for the default and uniform runs,
-# on for the adaptive ones), ORDER=1.
+# on for the adaptive ones), ORDER=1, REUSE=on (on, off or "on off").
 set -euo pipefail
 build=${1:?usage: bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]}
 out=${2:?usage: bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]}
@@ -24,6 +26,7 @@ targets=${TARGETS:-"1e-2 1e-3"}
 max_elements=${MAX_ELEMENTS:-4000}
 cuts=${CONTACT_CUTS:-auto}
 order=${ORDER:-1}
+reuse=${REUSE:-on}
 mkdir -p "$out"
 ffcube="$build/ffcube"
 runs=()
@@ -34,9 +37,13 @@ for L in $uniform; do
     runs+=("uniform_$L")
 done
 for t in $targets; do
-    "$ffcube" solve $scene -q --contact-cuts "$cuts" --target-error "$t" --max-elements "$max_elements" --objects "$out/adaptive_$t.csv" \
-        --report "$out/adaptive_$t.json"
-    runs+=("adaptive_$t")
+    for r in $reuse; do
+        name="adaptive_$t"; flag=""
+        if [ "$r" = off ]; then name="adaptive_${t}_no_reuse"; flag="--no-reuse-rows"; fi
+        "$ffcube" solve $scene -q --contact-cuts "$cuts" --target-error "$t" --max-elements "$max_elements" $flag \
+            --objects "$out/$name.csv" --report "$out/$name.json"
+        runs+=("$name")
+    done
 done
 set -- $uniform
 n=$#
@@ -63,6 +70,7 @@ if len(levels) >= 3:  # observed order of the last two halvings, per object
         for o in names))
 print("| run | patches/elements | time.total s | largest error | " + " | ".join(names) + " |")
 print("|---|---|---|---|" + "---|" * len(names))
+points = []
 for run in runs:
     rep = json.load(open(f"{out}/{run}.json"))
     n = rep.get("adaptive", {}).get("elements", rep["patches"])
@@ -71,4 +79,27 @@ for run in runs:
     worst = max(abs(e) for e in err.values())
     print(f"| {run} | {n} | {rep['time']['total']:.1f} | {worst*100:.2f}% | " +
           " | ".join(f"{err[o]*100:+.2f}%" for o in names) + " |")
+    points.append((run, rep["time"]["total"], max(worst, 1e-6)))
+# error_vs_time.svg: log-log, uniform (and default) runs in blue, adaptive runs in red.
+W, H, M = 640, 420, 60
+ts = [p[1] for p in points]; es = [p[2] for p in points]
+t0, t1 = math.log10(min(ts)) - 0.1, math.log10(max(ts)) + 0.1
+e0, e1 = math.log10(min(es)) - 0.1, math.log10(max(es)) + 0.1
+X = lambda t: M + (math.log10(t) - t0) / (t1 - t0) * (W - 2 * M)
+Y = lambda e: H - M - (math.log10(e) - e0) / (e1 - e0) * (H - 2 * M)
+svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="11">',
+       f'<rect width="{W}" height="{H}" fill="white"/>',
+       f'<line x1="{M}" y1="{H-M}" x2="{W-M}" y2="{H-M}" stroke="black"/><line x1="{M}" y1="{M}" x2="{M}" y2="{H-M}" stroke="black"/>',
+       f'<text x="{W/2}" y="{H-15}" text-anchor="middle">time.total (s, log)</text>',
+       f'<text x="15" y="{H/2}" transform="rotate(-90 15 {H/2})" text-anchor="middle">largest object error (log)</text>']
+for series, colour in (("uniform", "#1f77b4"), ("adaptive", "#d62728")):
+    pts = sorted((p for p in points if p[0].startswith("adaptive") == (series == "adaptive")), key=lambda p: p[1])
+    if pts:
+        svg.append(f'<polyline fill="none" stroke="{colour}" points="' + " ".join(f"{X(t):.1f},{Y(e):.1f}" for _, t, e in pts) + '"/>')
+    for name, t, e in pts:
+        svg.append(f'<circle cx="{X(t):.1f}" cy="{Y(e):.1f}" r="3" fill="{colour}"/>'
+                   f'<text x="{X(t)+5:.1f}" y="{Y(e)-5:.1f}">{name} {e*100:.2f}%</text>')
+svg.append('</svg>')
+open(f"{out}/error_vs_time.svg", "w").write("\n".join(svg))
+print(f"wrote {out}/error_vs_time.svg")
 PY

@@ -62,6 +62,8 @@ void add_adaptive_options(CLI::App& app, AdaptiveFlags& o) {
                          ->default_val(o.options.target_error);
     o.max_elements = app.add_option("--max-elements", o.options.max_elements, "adaptive meshing: most elements (patches after refinement)")
                          ->default_val(o.options.max_elements);
+    app.add_flag("!--no-reuse-rows", o.options.reuse_rows,
+                 "adaptive meshing: measure every row at every level (default: rows of patches not split are carried over)");
 }
 
 void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {

@@ -11,6 +11,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/scene/refine.hpp"
 #include "ffcube/solver/refinement.hpp"
+#include "row_reuse.hpp"
 
 namespace ffcube {
 namespace {
@@ -57,19 +58,24 @@ void validate(const AdaptiveOptions& o) {
 }
 
 std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
-                                                      std::span<const Vec3> coarse_objects) {
+                                                      std::span<const Vec3> coarse_objects, std::span<const double> refined,
+                                                      std::span<const ObjectError> previous) {
     FFCUBE_CHECK(fine_objects.size() == scene.objects.size() && coarse_objects.size() == fine_objects.size());
+    FFCUBE_CHECK(refined.size() == fine_objects.size() && previous.size() == fine_objects.size());
     std::vector<ObjectError> out;
     for (std::size_t o = 0; o < fine_objects.size(); ++o) {
         ObjectError e;
         e.name = scene.objects[o];
         e.radiosity = fine_objects[o];
-        // First order in the spacing where it matters (a patch straddling a contact line counts lit
-        // or dark whole: docs/adaptive.md): halving it leaves half the error, so the fine level's
-        // error is about the difference between the levels (the coarse one's twice that).
-        e.error = glm::abs(fine_objects[o] - coarse_objects[o]);
-        const double m = max_channel(e.radiosity);
-        e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        const double phi = std::clamp(refined[o], 0.0, 1.0);
+        if (phi > 0.0) {
+            e.error = glm::abs(fine_objects[o] - coarse_objects[o]) * (2.0 / phi - 1.0);
+            const double m = max_channel(e.radiosity);
+            e.relative = m > 0.0 ? max_channel(e.error) / m : 0.0;
+        } else {  // not refined: what was estimated before
+            e.error = previous[o].error;
+            e.relative = previous[o].relative;
+        }
         out.push_back(e);
     }
     return out;
@@ -87,14 +93,23 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
     a.scene = start;
     a.origin.resize(start.size());
     for (std::uint32_t i = 0; i < start.size(); ++i) a.origin[i] = i;
+    // Rows of the previous level, its split factors and each element's patch in it: the rows of the
+    // patches not split are carried over (row_reuse.hpp) unless options.reuse_rows is off.
+    LevelRows carried;
+    std::vector<std::uint32_t> parent = a.origin, split(start.size(), 1);
+    std::vector<double> refined_share;  // per object: the share of its area the last refinement split
     for (std::uint32_t level = 0;; ++level) {
         Stopwatch watch;
         a.rows = RowSource{};  // the previous level's workers end before the next start
         a.rows = make_row_source(a.scene, rows);
-        a.result = solve_radiosity(a.scene, a.rows.provider(), solver);
+        ReusedRowProvider provider(a.scene, a.rows.provider(), parent, split,
+                                   options.reuse_rows ? std::move(carried) : LevelRows{});
+        a.result = solve_radiosity(a.scene, provider, solver);
+        carried = provider.take_rows();
         AdaptiveLevel rec;
         rec.elements = a.scene.size();
-        rec.rows_computed = a.result.cache.rows_computed;
+        rec.rows_computed = provider.rows_measured();
+        rec.rows_reused = provider.rows_reused();
         rec.objects = object_means(a.scene, a.result.radiosity);
         rec.seconds = watch.seconds();
         a.levels.push_back(rec);
@@ -107,13 +122,13 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             a.objects = object_errors_from_variation(a.scene, a.result.radiosity);
         } else {
             a.error_basis = "levels";
-            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects);
+            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects, refined_share, a.objects);
         }
         a.max_relative_error = 0.0;
         for (const ObjectError& e : a.objects) a.max_relative_error = std::max(a.max_relative_error, e.relative);
         if (progress)
-            progress(fmt::format("adaptive level {}: {} elements, {} rows, {:.2f} s, largest estimated object error {:.3g} ({})",
-                                 level, rec.elements, rec.rows_computed, rec.seconds, a.max_relative_error, a.error_basis));
+            progress(fmt::format("adaptive level {}: {} elements, {} rows measured, {} reused, {:.2f} s, largest estimated object error {:.3g} ({})",
+                                 level, rec.elements, rec.rows_computed, rec.rows_reused, rec.seconds, a.max_relative_error, a.error_basis));
         if (level > 0 && a.max_relative_error <= options.target_error) {
             a.stop = "target";
             a.reached_target = true;
@@ -123,9 +138,12 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             a.stop = "level_limit";
             break;
         }
+        // Refine the objects whose estimated error is over the target, each by its own bulk criterion.
+        std::vector<bool> over(a.scene.objects.size(), false);
+        for (std::size_t o = 0; o < a.objects.size(); ++o) over[o] = a.objects[o].relative > options.target_error;
         const RefinementChoice choice =
             choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
-                              options.fraction);
+                              options.fraction, over);
         a.levels.back().candidates = choice.candidates;
         if (choice.marked == 0) {
             // Nothing varies by more than the target: at level 0 the variation is the estimate.
@@ -135,6 +153,16 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         }
         a.levels.back().refined = choice.marked;
         RefinedScene refined = refine_patches(a.scene, choice.split);
+        parent = refined.parent;
+        split = choice.split;
+        refined_share.assign(a.scene.objects.size(), 0.0);
+        std::vector<double> object_area(a.scene.objects.size(), 0.0);
+        for (std::size_t i = 0; i < a.scene.size(); ++i) {
+            const Patch& p = a.scene.patches[i];
+            object_area[p.object] += p.area;
+            if (choice.split[i] > 1) refined_share[p.object] += p.area;
+        }
+        for (std::size_t o = 0; o < object_area.size(); ++o) refined_share[o] = object_area[o] > 0.0 ? refined_share[o] / object_area[o] : 0.0;
         std::vector<std::uint32_t> origin(refined.parent.size());
         for (std::size_t e = 0; e < origin.size(); ++e) origin[e] = a.origin[refined.parent[e]];
         a.origin = std::move(origin);
@@ -153,19 +181,22 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.reached_target", a.reached_target);
     r.set("adaptive.elements", a.scene.size());
     r.set("adaptive.start_patches", a.levels.empty() ? 0 : a.levels.front().elements);
-    std::vector<std::uint64_t> elements, refined, candidates, rows;
+    std::vector<std::uint64_t> elements, refined, candidates, rows, reused;
     std::vector<double> seconds;
     for (const AdaptiveLevel& l : a.levels) {
         elements.push_back(l.elements);
         refined.push_back(l.refined);
         candidates.push_back(l.candidates);
         rows.push_back(l.rows_computed);
+        reused.push_back(l.rows_reused);
         seconds.push_back(l.seconds);
     }
     r.set_array("adaptive.levels.elements", elements);
     r.set_array("adaptive.levels.refined", refined);
     r.set_array("adaptive.levels.candidates", candidates);
     r.set_array("adaptive.levels.rows_computed", rows);
+    r.set_array("adaptive.levels.rows_reused", reused);
+    r.set("adaptive.reuse_rows", o.reuse_rows);
     r.set_array("adaptive.levels.seconds", seconds);
     // Where the refinement went: elements per object.
     std::vector<std::uint64_t> per_object(a.scene.objects.size(), 0);

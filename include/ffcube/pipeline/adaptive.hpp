@@ -35,6 +35,9 @@ struct AdaptiveOptions {
     // Each level splits the patches that hold this fraction of the estimated misplaced power
     // (choose_refinement), in (0, 1].
     double fraction = 0.5;
+    // Carry the rows of patches not split over to the next level (docs/adaptive.md, "Rows reused
+    // between levels"); off: every level measures every row (--no-reuse-rows).
+    bool reuse_rows = true;
 };
 
 // The starting mesh of an adaptive solve when the command line names none: coarse enough that the
@@ -47,7 +50,8 @@ struct AdaptiveLevel {
     std::size_t elements = 0;       // patches of this level's scene
     std::size_t refined = 0;        // patches split to make the next level (0 for the last)
     std::size_t candidates = 0;     // patches whose variation exceeded the target
-    std::uint64_t rows_computed = 0;
+    std::uint64_t rows_computed = 0;  // rows measured (hemicubes or ray sets)
+    std::uint64_t rows_reused = 0;    // rows carried over from the previous level
     double seconds = 0.0;           // rows and solve of this level
     std::vector<Vec3> objects;      // area-weighted mean B per object
 };
@@ -66,7 +70,8 @@ struct AdaptiveResult {
     RowSource rows;                     // the last level's rows (for report_row_source), still running
     std::vector<AdaptiveLevel> levels;
     std::vector<ObjectError> objects;
-    // "levels": error = |B_last − B_previous| (first order, spacing halved: docs/adaptive.md);
+    // "levels": error = |B_last − B_previous| (2/φ − 1), φ the share of the object's area split
+    // (object_errors_between_levels; docs/adaptive.md);
     // "variation": one level only, error = area-weighted mean of the patches' variation.
     std::string error_basis;
     // "target", "nothing_to_refine", "element_budget", "level_limit", or "unconverged_solve".
@@ -81,9 +86,14 @@ struct AdaptiveResult {
 AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
                               const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress = {});
 
-// Per-object errors (from two solves' object radiosity, or from one solve's variation).
+// Per-object errors from two levels' object radiosity. refined[o] is the share of object o's area
+// that the last refinement split. Under first-order convergence (docs/adaptive.md, "The estimated
+// error") splitting a share φ of an object, with its error spread evenly over its area, halves the
+// error there: the levels differ by φ e/2 of the coarse error e, which leaves e − φ e/2, i.e.
+// |ΔB| (2/φ − 1). An object with φ = 0 keeps its previous estimate (its mesh did not change).
 std::vector<ObjectError> object_errors_between_levels(const Scene& scene, std::span<const Vec3> fine_objects,
-                                                      std::span<const Vec3> coarse_objects);
+                                                      std::span<const Vec3> coarse_objects, std::span<const double> refined,
+                                                      std::span<const ObjectError> previous);
 
 // One solve's per-object error estimate from its variation (error_basis "variation"): what a
 // uniform solve reports.

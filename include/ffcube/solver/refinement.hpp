@@ -21,6 +21,23 @@ double radiosity_luminance(const Vec3& b);
 // B inside the patch. 0 for a patch without neighbours.
 std::vector<double> radiosity_variation(const Scene& scene, std::span<const Vec3> radiosity);
 
+// Per patch i: the mean over the patch of the smooth reconstruction of B minus B_i, per channel. The
+// reconstruction interpolates vertex values linearly, a vertex taking the area-weighted mean of the
+// patches of one surface (scene/surface_vertices.hpp, normals within 25°) with a corner at it, so the
+// patch mean is the mean of its corners' values. Zero where B is constant; for a smooth B sampled
+// at the centroids of a uniform square grid it is h²/4 ∇²B inside a surface (docs/adaptive.md,
+// "The estimator"); where B jumps across a patch it is of the size of the jump, which a centroid value
+// counts on one side only.
+std::vector<Vec3> reconstruction_defect(const Scene& scene, std::span<const Vec3> radiosity);
+
+// Per patch i, per channel: the estimated B_i − (mean of B over patch i), from a quadratic fitted by
+// least squares to the values of i's neighbours on its surface (those of radiosity_variation; at
+// least 5, not on a line) about B_i: −½ tr(H M_i), H the fit's Hessian, M_i the patch's second
+// moments about its centroid over its area. A centroid value (a hemicube at the centre) misses the
+// patch mean by that much where B is smooth: h²/24 ∇²B for a square of side h. 0 for patches with
+// too few neighbours; `fitted` (may be null) counts the others.
+std::vector<Vec3> centroid_defect(const Scene& scene, std::span<const Vec3> radiosity, std::size_t* fitted = nullptr);
+
 struct RefinementChoice {
     std::vector<std::uint32_t> split;  // per patch: 1 (kept) or the split factor
     std::size_t marked = 0;            // patches split
@@ -35,7 +52,12 @@ struct RefinementChoice {
 // first; ties by index, so the choice is deterministic) until the marked ones hold `fraction` of
 // the candidates' Σ η (Dörfler's bulk criterion: refinement goes where the error is, not
 // everywhere it exceeds the target), and while the refined scene stays within max_elements.
+// With `objects` (one flag per object of the scene; empty: every object), only the flagged objects'
+// patches are candidates, and the bulk criterion holds per object (each flagged object's marked
+// patches hold `fraction` of its own candidates' Σ η), so refinement goes to every object whose
+// estimated error is over the target, not only to the one with the largest jumps.
 RefinementChoice choose_refinement(const Scene& scene, std::span<const Vec3> radiosity, double target,
-                                   std::size_t max_elements, std::uint32_t factor = 2, double fraction = 1.0);
+                                   std::size_t max_elements, std::uint32_t factor = 2, double fraction = 1.0,
+                                   const std::vector<bool>& objects = {});
 
 }  // namespace ffcube
