@@ -132,7 +132,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     return f;
 }
 
-// The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, mpirun, or no output.
+// The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, or no output.
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
 // `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,

@@ -173,13 +173,14 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
     report.set("mpi.streamed", true);
     RowProvider& provider = rows.provider();
     // Where this rank's rows wait: its checkpoint shard, or (rank r > 0 without --checkpoint) a
-    // spool, a checkpoint in a scratch directory next to the output, removed on return and on error.
+    // spool, a checkpoint in a scratch directory in this node's temporary directory ($TMPDIR, else
+    // /tmp: the output's directory may not exist on another node), removed on return and on error.
     std::optional<ScratchDir> spool_dir;
     std::optional<RowCheckpoint> store;
     if (!checkpoint.dir.empty()) {
         store = open_shard(checkpoint, scene, meta, report);
     } else if (r != 0) {
-        spool_dir.emplace(output);
+        spool_dir.emplace(std::filesystem::temp_directory_path() / std::filesystem::path(output).filename());
         store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta));
     }
     if (store) {

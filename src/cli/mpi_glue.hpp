@@ -57,10 +57,10 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene,
 
 // The streamed form of mpi_compute_matrix (docs/scaling.md, "Output"), in bounded memory on every
 // rank: each rank computes its block into its checkpoint shard (DIR/rank-R-of-K) or, without
-// --checkpoint, a spool next to `output` (a checkpoint of its own, removed at the end); rank 0
-// hands every row to sink in row order, as CsrMatrix's floats: its own block as computed (or
-// read back from its shard), then each other rank's block in chunks it asks for one at a time
-// (mpi::serve_rows). Rank 0 returns the figures; the other ranks return nullopt once rank 0 has
+// --checkpoint, a spool in $TMPDIR named after `output` (a checkpoint of its own, removed at the
+// end); rank 0 hands every row to sink in row order, as CsrMatrix's floats: its own block as
+// computed (or read back from its shard), then each other rank's block in chunks it asks for one
+// at a time (mpi::serve_rows). Rank 0 returns the figures; the other ranks return nullopt once rank 0 has
 // every row of theirs (sink is never called there).
 std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene, const RowOptions& options,
                                             const CheckpointOptions& checkpoint, const FfmMetadata& meta,

@@ -18,7 +18,9 @@ mpi() { "$mpirun" --oversubscribe -np 2 "$ffcube" "$@"; }
 fail() { echo "FAIL: $*"; exit 1; }
 descendants() { for c in $(ps -o pid= --ppid "$1"); do echo "$c"; descendants "$c"; done; }
 scene="$(cd "$(dirname "$0")/../../examples" && pwd)/cube.obj"
-rm -rf "$work" && mkdir -p "$work" && cd "$work" || exit 1
+rm -rf "$work" && mkdir -p "$work/tmp" && cd "$work" || exit 1
+# Where the ranks spool their rows without --checkpoint (docs/scaling.md): checked empty after runs.
+export TMPDIR="$work/tmp"
 rows="$scene --patches 600 --resolution 64 --threads 1 -q"
 
 # 1. Byte-identical outputs.
@@ -33,7 +35,7 @@ echo "ok: .ffm and .mtx byte-identical at -np 2"
 # and no scratch or spool directory is left beside the output.
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['streamed'] and r['mpi']['streamed'], r" \
     two.json || fail "the .ffm run under mpirun was not streamed"
-[ -z "$(ls -A | grep scratch)" ] || fail "scratch left behind: $(ls -A)"
+[ -z "$(ls -A | grep scratch)" ] && [ -z "$(ls -A tmp)" ] || fail "scratch left behind: $(ls -A . tmp)"
 
 # 1b. --enforce on the streamed path (out of core: 1 MiB of --stats-memory cuts the transpose of
 # these 600 rows, about 3 MB of entries, into bands spilled to scratch files), against one process.
@@ -81,24 +83,34 @@ cmp one.ffm ck.ffm || fail "checkpointed .ffm differs"
 # a few seconds on llvmpipe), small enough for a test.
 big="$scene --patches 4000 --resolution 128 --threads 1 -q"
 "$ffcube" formfactors $big -o big-one.ffm || fail "one-process formfactors (big)"
-mpi formfactors $big -o big.ffm --checkpoint kill &
-launcher=$!
-# Rank 1: the descendant of mpirun whose environment says so, found first, then killed as soon as
-# its shard has rows.
-victim=""
-for _ in $(seq 1 3000); do
-    if [ -z "$victim" ]; then
-        for p in $(descendants "$launcher"); do
-            { tr '\0' '\n' < "/proc/$p/environ" | grep -qx OMPI_COMM_WORLD_RANK=1; } 2>/dev/null && victim=$p
-        done
-    fi
-    [ -n "$victim" ] && [ -s kill/rank-1-of-2/rows.log ] && break
-    sleep 0.02
-done
-[ -n "$victim" ] || fail "rank 1 never started writing its shard"
-kill -9 "$victim"
-wait "$launcher"
-rc=$?
+# Starts `mpi formfactors $big ARGS...` and kills rank 1 with SIGKILL as soon as the file its rows go
+# to (a glob) has some: rank 1 is the descendant of mpirun whose environment says so. Sets rc to
+# mpirun's exit status.
+kill_rank1() {
+    local rows_file=$1; shift
+    mpi formfactors $big "$@" &
+    local launcher=$! victim=""
+    for _ in $(seq 1 3000); do
+        if [ -z "$victim" ]; then
+            for p in $(descendants "$launcher"); do
+                { tr '\0' '\n' < "/proc/$p/environ" | grep -qx OMPI_COMM_WORLD_RANK=1; } 2>/dev/null && victim=$p
+            done
+        fi
+        # shellcheck disable=SC2086 # the glob is meant to expand
+        [ -n "$victim" ] && [ -s "$(ls $rows_file 2>/dev/null | head -n 1)" ] && break
+        sleep 0.02
+    done
+    [ -n "$victim" ] || fail "rank 1 never started writing $rows_file"
+    kill -9 "$victim"
+    wait "$launcher"
+    rc=$?
+}
+# Without --checkpoint rank 1 spools its rows in $TMPDIR: killed there, the run fails all the same.
+kill_rank1 "tmp/.spool.ffm.scratch.*/rows/rows.log" -o spool.ffm
+[ "$rc" -ne 0 ] || fail "mpirun exited 0 although rank 1 was killed (spooling)"
+[ ! -e spool.ffm ] || fail "a final .ffm exists after the failed run (spooling)"
+echo "ok: killed rank 1 while spooling -> mpirun exit $rc, no spool.ffm"
+kill_rank1 "kill/rank-1-of-2/rows.log" -o big.ffm --checkpoint kill
 [ "$rc" -ne 0 ] || fail "mpirun exited 0 although rank 1 was killed"
 [ ! -e big.ffm ] || fail "a final .ffm exists after the failed run"
 echo "ok: killed rank 1 -> mpirun exit $rc, no big.ffm"
