@@ -163,6 +163,12 @@ int run(const Options& o) {
             sky_sums.resize(scene.size());
             for (std::uint32_t i = 0; i < scene.size(); ++i) sky_sums[i] = ffm->matrix.row(i).sum();
         } else {
+            // After adaptive levels: rows for this copy of the last level's scene (the level's own
+            // source refers to the scene inside solve_adaptive's result, moved since).
+            if (refined) {
+                computed_rows = RowSource{};
+                computed_rows = make_row_source(scene, row_options);
+            }
             sky_sums = sky_row_sums(computed_rows.provider(), scene.size(), !o.scene.quiet);
             const std::span<const double> cut = computed_rows.obstructed();
             obstructed.assign(cut.begin(), cut.end());

@@ -92,6 +92,22 @@ TEST(SolveSky, SameFileAsFormfactorsForTheSameOptions) {
     EXPECT_EQ(read_text(dir / "rs.csv"), read_text(dir / "rf.csv"));
 }
 
+TEST(SolveSky, AfterAdaptiveMeshingTheRowsAreThoseOfTheLastLevel) {
+    TempDir dir;
+    // --max-elements at the starting count: one adaptive level and no refinement, so the solve's
+    // last scene is the starting mesh (32 patches) and its sky file must be formfactors' bytes.
+    const std::string common = emitting_squares(dir) + " --max-patch-edge 0.25 --resolution 64 -q --sky ";
+    auto r = run_ffcube("solve " + common + (dir / "solve.csv") + " --max-elements 32 --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto report = nlohmann::json::parse(read_text(dir / "r.json"));
+    ASSERT_TRUE(report.contains("adaptive")) << r.output;
+    r = run_ffcube("formfactors " + common + (dir / "ff.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::string ff = read_text(dir / "ff.csv");
+    EXPECT_EQ(last_column_by_first(ff).size(), 32u);
+    EXPECT_EQ(read_text(dir / "solve.csv"), ff);
+}
+
 TEST(SolveSky, ObstructionOnlySurfacesAreTakenOffTheSky) {
     TempDir dir;
     // examples/lidded_box.vs3: the open box's opening is covered by an O lid, so nothing escapes

@@ -179,34 +179,30 @@ TEST(ViewCli, ScriptedPickShowsTheRowAsAHeatMap) {
 // nothing emits, so every radiating patch is black (B = 0) and the pictures differ only by the
 // lid, which the default view (from the open side, above) looks through. The lid is glass:
 // kObstruction blended with kObstructionAlpha over the black floor, never a radiosity colour;
-// with the wireframe its patches' outlines are kObstruction itself.
+// with the wireframe (on here) its patches' outlines are kObstruction itself.
 TEST(ViewCli, ObstructionOnlySurfacesAreDrawnAsGlassWithoutRadiosity) {
     REQUIRE_XVFB();
     TempDir dir;
     const RunResult open = view(test::example("open_box.vs3") + " --frames 3 --screenshot " + dir / "open.png");
-    const RunResult lidded = view(test::example("lidded_box.vs3") + " --frames 3 --screenshot " + dir / "lidded.png");
-    const RunResult wired = view(test::example("lidded_box.vs3") + " --frames 3 --wireframe --screenshot " + dir / "wired.png");
+    const RunResult lidded = view(test::example("lidded_box.vs3") + " --frames 3 --wireframe --screenshot " + dir / "lidded.png");
     ASSERT_EQ(open.code, 0) << open.output;
     ASSERT_EQ(lidded.code, 0) << lidded.output;
-    ASSERT_EQ(wired.code, 0) << wired.output;
-    const Image a = load_png(dir / "open.png"), b = load_png(dir / "lidded.png"), w = load_png(dir / "wired.png");
+    const Image a = load_png(dir / "open.png"), b = load_png(dir / "lidded.png");
     ASSERT_EQ(a.width, 320);
     ASSERT_EQ(b.width, 320);
     // 8-bit rounding of the blend and of the sRGB write: within 1.5 of 255 × colour.
     const Vec3 glass = 255.0 * double(kObstructionAlpha) * kObstruction, outline = 255.0 * kObstruction;
     auto near = [](const Vec3& pixel, const Vec3& want) { return glm::length(pixel - want) < 1.5; };
     EXPECT_TRUE(near(a.at(160, 120), Vec3(0.0))) << "the open box's floor, unlit";
-    EXPECT_TRUE(near(b.at(160, 120), glass)) << "the lid over that floor";
-    int glass_px = 0, outline_px = 0, wired_outline_px = 0, open_glass = 0, open_outline = 0;
+    EXPECT_TRUE(near(b.at(160, 120), glass)) << "the lid over that floor (mid-cell: the 7 x 7 outlines miss it)";
+    int glass_px = 0, outline_px = 0, open_glass = 0, open_outline = 0;
     for (int y = 0; y < b.height; ++y)
         for (int x = 0; x < b.width; ++x) {
             glass_px += near(b.at(x, y), glass), outline_px += near(b.at(x, y), outline);
-            wired_outline_px += near(w.at(x, y), outline);
             open_glass += near(a.at(x, y), glass), open_outline += near(a.at(x, y), outline);
         }
-    EXPECT_GT(glass_px, 5000);  // the box's opening fills much of the 320 × 240 view
-    EXPECT_EQ(outline_px, 0);   // outlines only with the wireframe
-    EXPECT_GT(wired_outline_px, 300);  // the lid's patch outlines (a grid of about 7 × 7 patches)
+    EXPECT_GT(glass_px, 5000);   // the box's opening fills much of the 320 × 240 view, less the lines
+    EXPECT_GT(outline_px, 300);  // the lid's patch outlines (a grid of 7 × 7 patches)
     EXPECT_EQ(open_glass, 0);
     EXPECT_EQ(open_outline, 0);
 }
