@@ -48,10 +48,8 @@ public:
             case 'V': vertex(line); break;
             case 'S':
             case 'O':
-            case 'N': surface(line, kind); break;
             case 'M':
-                fail_at(source_, number_, "masking surfaces (M) are not supported yet (a null surface, N, removes the covered part "
-                                          "of its base without a row of its own)");
+            case 'N': surface(line, kind); break;
             default:
                 fail_at(source_, number_, fmt::format("unknown element {} (View3D lines begin with T, C, F, V, S, O, M, N or E)",
                                                       shown(element)));
@@ -197,10 +195,26 @@ private:
             const std::string problem = detail::subsurface_problem(polygon_of(b.face), polygon_of(s.face), s.kind == 'S');
             if (!problem.empty())
                 fail_at(source_, s.face.line,
-                        fmt::format("{} {} cannot lie on its base surface {} (line {}): {}", s.kind == 'N' ? "null surface" : "subsurface",
-                                    n + 1, s.base, b.face.line, problem));
+                        fmt::format("{} {} cannot lie on its base surface {} (line {}): {}",
+                                    s.kind == 'S' ? "subsurface" : std::string(kind_name(s.kind)) + " surface", n + 1, s.base,
+                                    b.face.line, problem));
             children[static_cast<std::size_t>(s.base - 1)].push_back(n);
+            if (s.kind == 'M')
+                model_.view3d.masks.push_back(View3dControls::Mask{obstruction_objects_[s.face.object], b.face.object,
+                                                                   s.s_objects_before, polygon_area(polygon_of(s.face)), s.emissivity});
         }
+        for (std::size_t n = 0; n < surfaces_.size(); ++n)
+            for (std::size_t i = 0; i < children[n].size(); ++i)
+                for (std::size_t j = 0; j < i; ++j) {
+                    const Surface& a = surfaces_[children[n][j]];
+                    const Surface& b = surfaces_[children[n][i]];
+                    const double overlap = detail::convex_overlap_area(polygon_of(a.face), polygon_of(b.face));
+                    if (overlap > 1e-9 * polygon_area(polygon_of(surfaces_[n].face)))
+                        fail_at(source_, b.face.line,
+                                fmt::format("surface {} overlaps surface {} (line {}) on their base surface {} by {:.3g} (surfaces "
+                                            "on one base must not overlap)",
+                                            children[n][i] + 1, children[n][j] + 1, a.face.line, n + 1, overlap));
+                }
         for (std::size_t n = 0; n < surfaces_.size(); ++n) {
             Surface& s = surfaces_[n];
             std::vector<ObjFace>& out = s.kind == 'S' ? model_.faces : obstruction_faces_;
@@ -219,8 +233,12 @@ private:
         }
     }
 
-    // S (radiating), O (obstruction-only) or N (null) surface: the same fields, numbered in one
-    // sequence.
+    static const char* kind_name(char kind) {
+        return kind == 'O' ? "obstruction" : kind == 'N' ? "null" : kind == 'M' ? "masking" : "radiating";
+    }
+
+    // S (radiating), O (obstruction-only), M (masking) or N (null) surface: the same fields,
+    // numbered in one sequence.
     void surface(std::string_view line, char kind) {
         const bool obstruction = kind != 'S';
         const long long n = integer(line, "surface number");
@@ -253,21 +271,22 @@ private:
         if (obstruction && cmb != 0)
             fail_at(source_, number_, fmt::format("{} surface {} has cmb {}: an {} surface cannot be combined (it has no row or "
                                                   "column; cmb must be 0)",
-                                                  kind == 'O' ? "obstruction" : "null", n, cmb, kind));
-        if (kind == 'N' && base == 0)
-            fail_at(source_, number_, fmt::format("null surface {} has base 0: a null surface removes the part of its base that it "
-                                                  "covers, so it needs one (an earlier S surface)",
-                                                  n));
+                                                  kind_name(kind), n, cmb, kind));
+        if (kind != 'S' && kind != 'O' && base == 0)
+            fail_at(source_, number_, fmt::format("{} surface {} has base 0: it covers part of its base, so it needs one (an "
+                                                  "earlier S surface)",
+                                                  kind_name(kind), n));
         if (base != 0) {
             if (base >= n)
                 fail_at(source_, number_, fmt::format("base {} must name an earlier surface (this is surface {})", base, n));
             const char base_kind = surfaces_[static_cast<std::size_t>(base - 1)].kind;
-            if (base_kind == 'N')
-                fail_at(source_, number_, fmt::format("base {} is a null surface (N), which is not a surface any more", base));
-            if (kind == 'N' && base_kind != 'S')
-                fail_at(source_, number_, fmt::format("base {} of a null surface must be a radiating surface (S), not an "
+            if (base_kind == 'N' || base_kind == 'M')
+                fail_at(source_, number_, fmt::format("base {} is a {} surface ({}), which cannot have subsurfaces", base,
+                                                      kind_name(base_kind), base_kind));
+            if ((kind == 'N' || kind == 'M') && base_kind != 'S')
+                fail_at(source_, number_, fmt::format("base {} of a {} surface must be a radiating surface (S), not an "
                                                       "obstruction (O)",
-                                                      base));
+                                                      base, kind_name(kind)));
         }
         if (!(emit >= 0.0 && emit <= 1.0))
             fail_at(source_, number_, fmt::format("emissivity {} must be within [0,1]", emit));
@@ -277,8 +296,9 @@ private:
                 fail_at(source_, number_, fmt::format("cmb {} must name an earlier surface (this is surface {})", cmb, n));
             const Surface& target = surfaces_[static_cast<std::size_t>(cmb - 1)];
             if (target.kind != 'S')
-                fail_at(source_, number_, fmt::format("cmb {} names an {} surface ({}), which has no row or column to combine with",
-                                                      cmb, target.kind == 'O' ? "obstruction" : "null", target.kind));
+                fail_at(source_, number_, fmt::format("cmb {} names {} {} surface ({}), which has no row or column of its own to "
+                                                      "combine with",
+                                                      cmb, target.kind == 'O' ? "an" : "a", kind_name(target.kind), target.kind));
             if (target.cmb != 0)
                 fail_at(source_, number_, fmt::format("cmb {} names a surface that is itself combined with surface {} (name the "
                                                       "lowest-numbered surface of the group: no chains)",
@@ -296,7 +316,7 @@ private:
         }
         face.object = object;
         face.material = material(emit);
-        surfaces_.push_back(Surface{kind, base, cmb, std::move(face)});
+        surfaces_.push_back(Surface{kind, base, cmb, std::move(face), static_cast<std::uint32_t>(model_.objects.size()), emit});
     }
 
     // An opaque grey surface of emissivity ε reflects ρ = 1 − ε (Kirchhoff), emits nothing itself.
@@ -315,6 +335,8 @@ private:
         char kind = 'S';  // S, O or N
         long long base = 0, cmb = 0;
         ObjFace face;  // as written (object, material, line)
+        std::uint32_t s_objects_before = 0;  // S objects made before this line (a mask's View3D position)
+        double emissivity = 0.0;
     };
     std::vector<Surface> surfaces_;  // every S, O and N line, in order
     std::map<std::array<double, 3>, std::uint32_t> position_of_;  // for the vertices subsurfaces add

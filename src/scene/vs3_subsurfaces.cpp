@@ -87,6 +87,20 @@ std::string subsurface_problem(std::span<const Vec3> base, std::span<const Vec3>
     return {};
 }
 
+double convex_overlap_area(std::span<const Vec3> a, std::span<const Vec3> b) {
+    const Vec3 n = polygon_normal(a);
+    std::vector<Vec3> hole(b.begin(), b.end());
+    if (glm::dot(polygon_normal(hole), n) < 0.0) std::reverse(hole.begin(), hole.end());
+    std::vector<Vec3> rest(a.begin(), a.end()), inside, outside;
+    for (std::size_t k = 0; k < hole.size() && rest.size() >= 3; ++k) {
+        const Vec3 e = glm::cross(n, hole[(k + 1) % hole.size()] - hole[k]);
+        if (glm::length(e) == 0.0) continue;
+        split(rest, hole[k], glm::normalize(e), 0.0, inside, outside);
+        rest = inside;
+    }
+    return rest.size() >= 3 ? polygon_area(rest) : 0.0;
+}
+
 std::vector<std::vector<Vec3>> cut_holes(std::span<const Vec3> base, const std::vector<std::vector<Vec3>>& holes) {
     const std::vector<Vec3> base_poly(base.begin(), base.end());
     if (holes.empty()) return {base_poly};
@@ -107,8 +121,9 @@ std::vector<std::vector<Vec3>> cut_holes(std::span<const Vec3> base, const std::
             for (std::size_t k = 0; k < hole.size() && !rest.empty(); ++k) {
                 const Vec3& a = hole[k];
                 const Vec3& b = hole[(k + 1) % hole.size()];
-                const Vec3 m = glm::normalize(glm::cross(n, b - a));
-                split(rest, a, m, tol, inside, outside);
+                const Vec3 e = glm::cross(n, b - a);
+                if (glm::length(e) == 0.0) continue;  // a repeated corner: no edge
+                split(rest, a, glm::normalize(e), tol, inside, outside);
                 std::vector<Vec3> out = cleaned(outside, tol);
                 if (!out.empty() && polygon_area(out) > min_area) peeled.push_back(std::move(out));
                 rest = cleaned(inside, tol);

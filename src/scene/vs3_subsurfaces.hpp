@@ -19,6 +19,10 @@ namespace ffcube::detail {
 // subsurface) or the opposite way (a mask or null surface): normals within 0.999 (View3D's test).
 std::string subsurface_problem(std::span<const Vec3> base, std::span<const Vec3> sub, bool same_facing);
 
+// Area of the intersection of two convex polygons in one plane (either orientation): subsurfaces
+// of one base must not overlap (View3D would subtract the overlap twice).
+double convex_overlap_area(std::span<const Vec3> a, std::span<const Vec3> b);
+
 // `base` (a convex polygon, counter-clockwise from its front) minus the convex `holes` (each
 // inside it, in its plane, in either orientation; they may touch the base's edges or each other
 // but not overlap), as convex polygons of 3 or 4 vertices that tile the rest, counter-clockwise

@@ -115,6 +115,34 @@ End
     EXPECT_NEAR(sky["opposite"], 1.0 - kWholeToWall, kTol);
 }
 
+// A masking surface over the same square, facing the wall: View3D keeps it as a surface that sees
+// only its base (F(mask → wall) = 1, F(wall → mask) = A_mask / A_wall) and keeps the wall's area
+// whole; the masked part of the wall sees nothing else, so F(wall → opposite) = A_rest F_rest / A_wall.
+TEST(View3dSubsurfaceCli, MaskingSurfaceHidesTheCoveredPartFromAllButItself) {
+    TempDir dir;
+    std::ofstream(dir / "m.vs3") << "T mask\n" << kVertices << R"(S 1 1 2 3 4 0 0 0.9 wall
+M 2 8 7 6 5 1 0 0.5 mask
+S 3 9 12 11 10 0 0 0.9 opposite
+End
+)";
+    const auto r = run_ffcube("formfactors " + (dir / "m.vs3") + " --no-subdivide -q --view3d " + (dir / "vf.txt") + " -o " +
+                              (dir / "F.mtx"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const View3dFile f = read_view3d(read_text(dir / "vf.txt"));
+    ASSERT_EQ(f.n, 3u);  // wall, mask, opposite: the mask in its place among the surfaces
+    EXPECT_NEAR(f.area[0], 4.0, 1e-6);
+    EXPECT_NEAR(f.area[1], 1.0, 1e-6);
+    EXPECT_NEAR(f.area[2], 4.0, 1e-6);
+    EXPECT_NEAR(f.F[0][1], 0.25, kTol);
+    EXPECT_NEAR(f.F[0][2], 3.0 * kRestToWall / 4.0, kTol);
+    EXPECT_EQ(f.F[1][0], 1.0);
+    EXPECT_EQ(f.F[1][2], 0.0);
+    EXPECT_EQ(f.F[2][1], 0.0);  // the opposite wall sees the mask's back: blocked, counted nowhere
+    EXPECT_NEAR(f.F[2][0], 3.0 * kRestToWall / 4.0, kTol);
+    // The matrix (.mtx) has the radiating surfaces only: the wall's pieces and the opposite wall.
+    EXPECT_EQ(read_text(dir / "F.mtx").find("\n6 "), std::string::npos);
+}
+
 TEST(View3dSubsurfaceCli, SubsurfaceOffItsBaseIsRefusedNamingTheLine) {
     TempDir dir;
     std::ofstream(dir / "bad.vs3") << "T bad\n" << kVertices << R"(S 1 1 2 3 4 0 0 0.9 wall

@@ -403,11 +403,17 @@ TEST(View3d, RefusalsNameTheLine) {
                     "r.vs3:7: subsurface 2 cannot lie on its base surface 1 (line 6): it does not face the way its base faces");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 1 2 3 0 1 0 0.9 b\n"),
                     "r.vs3:7: null surface 2 cannot lie on its base surface 1 (line 6): it does not face its base");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nS 2 1 2 3 0 1 0 0.9 b\nN 3 3 2 1 0 1 0 0.9 c\n"),
+                    "r.vs3:8: surface 3 overlaps surface 2 (line 7) on their base surface 1 by 0.5");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 0 0 0.9 b\n"), "r.vs3:7: null surface 2 has base 0");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 1 1 0.9 b\n"), "r.vs3:7: null surface 2 has cmb 1");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 1 0 0.9 b\nS 3 1 2 3 0 2 0 0.9 c\n"),
                     "r.vs3:8: base 2 is a null surface (N)");
-    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 3 2 1 0 1 0 0.9 b\n"), "r.vs3:7: masking surfaces (M) are not supported yet");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 3 2 1 0 0 0 0.9 b\n"), "r.vs3:7: masking surface 2 has base 0");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 1 2 3 0 1 0 0.9 b\n"),
+                    "r.vs3:7: masking surface 2 cannot lie on its base surface 1 (line 6): it does not face its base");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 3 2 1 0 1 0 0.9 b\nS 3 1 2 3 0 0 2 0.9 c\n"),
+                    "r.vs3:8: cmb 2 names a masking surface (M)");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 2 0.9 a\n"), "r.vs3:6: cmb 2 must name an earlier surface");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9\n"), "r.vs3:6: missing the surface name");
     EXPECT_CONTAINS(err("S 2 1 2 3 4 0 0 0.9 a\n"), "r.vs3:6: surface number 2 is out of order (expected 1");
