@@ -42,6 +42,36 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report)
     }
 }
 
+namespace {
+
+// View3D's masking surfaces (M) in its table, as View3D computes them: the base's faces are what
+// the masks leave of it (the loader cut them out), so its row is scaled to the whole base area,
+// A_rest F(rest → j) / A_base, its area made whole again, and each mask gets a row and a column at
+// its place among the surfaces: F(mask → base) = 1, F(base → mask) = A_mask / A_base, 0 elsewhere
+// (its front faces the base; what sees its back is blocked, as by an obstruction).
+void add_view3d_masks(View3dTable& t, const std::vector<View3dControls::Mask>& masks) {
+    std::vector<std::size_t> index(t.area.size());  // object -> its row now
+    for (std::size_t i = 0; i < index.size(); ++i) index[i] = i;
+    for (const View3dControls::Mask& m : masks) {
+        const std::size_t b = index[m.base_object];
+        const double rest = t.area[b], whole = rest + m.area;
+        for (double& f : t.F[b]) f *= rest / whole;
+        t.area[b] = whole;
+        const std::size_t at = m.position + static_cast<std::size_t>(&m - masks.data());  // earlier masks came before it
+        for (std::size_t& i : index)
+            if (i >= at) ++i;
+        for (std::vector<double>& row : t.F) row.insert(row.begin() + static_cast<std::ptrdiff_t>(at), 0.0);
+        t.F.insert(t.F.begin() + static_cast<std::ptrdiff_t>(at), std::vector<double>(t.area.size() + 1, 0.0));
+        t.area.insert(t.area.begin() + static_cast<std::ptrdiff_t>(at), m.area);
+        t.emissivity.insert(t.emissivity.begin() + static_cast<std::ptrdiff_t>(at), m.emissivity);
+        const std::size_t base_row = index[m.base_object];
+        t.F[at][base_row] = 1.0;
+        t.F[base_row][at] = m.area / whole;
+    }
+}
+
+}  // namespace
+
 View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) {
     View3dTable t;
     t.area = object_areas(scene);
@@ -52,6 +82,7 @@ View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) {
         eps[i] = 1.0 - (kd.x + kd.y + kd.z) / 3.0;
     }
     t.emissivity = object_means(eps, scene);
+    add_view3d_masks(t, scene.view3d.masks);
     t.encl = scene.view3d.encl;
     t.emit = scene.view3d.emit;
     if (t.emit == 1) t.F = hottel_exchange_factors(t.F, t.area, t.emissivity);
@@ -94,7 +125,7 @@ void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, co
         write_view3d(o.view3d, view3d_table(F, scene), binary);
         report.set("view3d.written", o.view3d);
         report.set("view3d.format", binary ? "binary" : "text");
-        report.set("view3d.surfaces", scene.objects.size());
+        report.set("view3d.surfaces", scene.objects.size() + scene.view3d.masks.size());
     }
     if (!o.elmer.empty()) {
         Progress bar(fmt::format("writing {} (rows)", o.elmer), F.size(), progress);

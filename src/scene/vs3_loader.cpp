@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <map>
@@ -13,6 +14,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/load_model.hpp"
 #include "text_lines.hpp"
+#include "vs3_subsurfaces.hpp"
 
 namespace ffcube {
 namespace {
@@ -44,26 +46,25 @@ public:
             case 'C': control(line); break;
             case 'F': geometry_format(line); break;
             case 'V': vertex(line); break;
-            case 'S': surface(line); break;
-            case 'O': surface(line, true); break;
+            case 'S':
+            case 'O':
             case 'M':
-            case 'N':
-                fail_at(source_, number_, fmt::format("{} surfaces ({}) are not supported yet", kind == 'M' ? "masking" : "null",
-                                                      kind));
+            case 'N': surface(line, kind); break;
             default:
                 fail_at(source_, number_, fmt::format("unknown element {} (View3D lines begin with T, C, F, V, S, O, M, N or E)",
                                                       shown(element)));
             }
         }
+        for (const Surface& f : surfaces_)
+            for (const std::uint32_t v : f.face.v)
+                if (v >= model_.positions.size())
+                    fail_at(source_, f.face.line,
+                            fmt::format("vertex {} is not defined (the file defines {} vertices)", v + 1, model_.positions.size()));
+        make_faces();
         if (model_.faces.empty()) throw InputError(fmt::format("{}: no S surfaces: the scene has no geometry", source_));
         append_obstructions();
         if (!saw_format_)
             model_.warnings.push_back(fmt::format("{}: no F line: read as geometry format F 3 (vertices, then surfaces)", source_));
-        for (const ObjFace& f : model_.faces)
-            for (const std::uint32_t v : f.v)
-                if (v >= model_.positions.size())
-                    fail_at(source_, f.line,
-                            fmt::format("vertex {} is not defined (the file defines {} vertices)", v + 1, model_.positions.size()));
         return std::move(model_);
     }
 
@@ -164,13 +165,87 @@ private:
         model_.obstruction_objects = static_cast<std::uint32_t>(obstruction_objects_.size());
     }
 
-    // S (radiating) or O (obstruction-only) surface: the same fields, numbered in one sequence.
-    void surface(std::string_view line, bool obstruction = false) {
+    std::vector<Vec3> polygon_of(const ObjFace& f) const {
+        std::vector<Vec3> p;
+        for (const std::uint32_t v : f.v) p.push_back(model_.positions[v]);
+        return p;
+    }
+
+    std::uint32_t position_index(const Vec3& p) {
+        const auto [it, inserted] = position_of_.try_emplace(std::array{p.x, p.y, p.z}, static_cast<std::uint32_t>(model_.positions.size()));
+        if (inserted) model_.positions.push_back(p);
+        return it->second;
+    }
+
+    // Every surface's faces, in surface order: a surface with subsurfaces (S, or null surfaces N,
+    // whose base it is) keeps what they leave of it, as convex pieces (vs3_subsurfaces.hpp), each
+    // a face of its object on its line; View3D subtracts the subsurfaces' factors from the base's
+    // and their areas from its area, which is the view factor of that rest. An N surface's polygon
+    // is an obstruction-only face (blocks, from both sides, what would have seen the covered part).
+    void make_faces() {
+        for (std::size_t i = 0; i < model_.positions.size(); ++i) {
+            const Vec3& p = model_.positions[i];
+            position_of_.try_emplace(std::array{p.x, p.y, p.z}, static_cast<std::uint32_t>(i));
+        }
+        std::vector<std::vector<std::size_t>> children(surfaces_.size());
+        for (std::size_t n = 0; n < surfaces_.size(); ++n) {
+            const Surface& s = surfaces_[n];
+            if (s.base == 0) continue;
+            const Surface& b = surfaces_[static_cast<std::size_t>(s.base - 1)];
+            const std::string problem = detail::subsurface_problem(polygon_of(b.face), polygon_of(s.face), s.kind == 'S');
+            if (!problem.empty())
+                fail_at(source_, s.face.line,
+                        fmt::format("{} {} cannot lie on its base surface {} (line {}): {}",
+                                    s.kind == 'S' ? "subsurface" : std::string(kind_name(s.kind)) + " surface", n + 1, s.base,
+                                    b.face.line, problem));
+            children[static_cast<std::size_t>(s.base - 1)].push_back(n);
+            if (s.kind == 'M')
+                model_.view3d.masks.push_back(View3dControls::Mask{obstruction_objects_[s.face.object], b.face.object,
+                                                                   s.s_objects_before, polygon_area(polygon_of(s.face)), s.emissivity});
+        }
+        for (std::size_t n = 0; n < surfaces_.size(); ++n)
+            for (std::size_t i = 0; i < children[n].size(); ++i)
+                for (std::size_t j = 0; j < i; ++j) {
+                    const Surface& a = surfaces_[children[n][j]];
+                    const Surface& b = surfaces_[children[n][i]];
+                    const double overlap = detail::convex_overlap_area(polygon_of(a.face), polygon_of(b.face));
+                    if (overlap > 1e-9 * polygon_area(polygon_of(surfaces_[n].face)))
+                        fail_at(source_, b.face.line,
+                                fmt::format("surface {} overlaps surface {} (line {}) on their base surface {} by {:.3g} (surfaces "
+                                            "on one base must not overlap)",
+                                            children[n][i] + 1, children[n][j] + 1, a.face.line, n + 1, overlap));
+                }
+        for (std::size_t n = 0; n < surfaces_.size(); ++n) {
+            Surface& s = surfaces_[n];
+            std::vector<ObjFace>& out = s.kind == 'S' ? model_.faces : obstruction_faces_;
+            if (children[n].empty()) {
+                out.push_back(s.face);
+                continue;
+            }
+            std::vector<std::vector<Vec3>> holes;
+            for (const std::size_t c : children[n]) holes.push_back(polygon_of(surfaces_[c].face));
+            for (const std::vector<Vec3>& piece : detail::cut_holes(polygon_of(s.face), holes)) {
+                ObjFace f = s.face;
+                f.v.clear();
+                for (const Vec3& p : piece) f.v.push_back(position_index(p));
+                out.push_back(std::move(f));
+            }
+        }
+    }
+
+    static const char* kind_name(char kind) {
+        return kind == 'O' ? "obstruction" : kind == 'N' ? "null" : kind == 'M' ? "masking" : "radiating";
+    }
+
+    // S (radiating), O (obstruction-only), M (masking) or N (null) surface: the same fields,
+    // numbered in one sequence.
+    void surface(std::string_view line, char kind) {
+        const bool obstruction = kind != 'S';
         const long long n = integer(line, "surface number");
-        if (n != static_cast<long long>(surface_object_.size()) + 1)
+        if (n != static_cast<long long>(surfaces_.size()) + 1)
             fail_at(source_, number_, fmt::format("surface number {} is out of order (expected {}: surfaces are numbered 1, 2, "
                                                   "... in order)",
-                                                  n, surface_object_.size() + 1));
+                                                  n, surfaces_.size() + 1));
         ObjFace face;
         face.line = number_;
         for (int i = 0; i < 4; ++i) {
@@ -189,36 +264,46 @@ private:
         const std::string_view name = required(line, "the surface name (S n v1 v2 v3 v4 base cmb emit name)");
         std::string_view extra;
         if (token(line, extra)) fail_at(source_, number_, fmt::format("unexpected {} after the surface name", shown(extra)));
-        if (obstruction && base != 0)
+        if (kind == 'O' && base != 0)
             fail_at(source_, number_, fmt::format("obstruction surface {} has base {}: an O surface cannot be a subsurface (it "
                                                   "has no row or column to subtract from its base; base must be 0)",
                                                   n, base));
         if (obstruction && cmb != 0)
-            fail_at(source_, number_, fmt::format("obstruction surface {} has cmb {}: an O surface cannot be combined (it has "
-                                                  "no row or column; cmb must be 0)",
-                                                  n, cmb));
-        if (base != 0 && base < n && surface_obstruction_[static_cast<std::size_t>(base - 1)])
-            fail_at(source_, number_, fmt::format("base {} is an obstruction surface (O): radiating subsurfaces of O surfaces are "
-                                                  "not supported yet",
-                                                  base));
-        if (base != 0)
-            fail_at(source_, number_, "subsurfaces (base != 0) are not supported yet: give the surface and its base as separate "
-                                      "surfaces that do not overlap");
+            fail_at(source_, number_, fmt::format("{} surface {} has cmb {}: an {} surface cannot be combined (it has no row or "
+                                                  "column; cmb must be 0)",
+                                                  kind_name(kind), n, cmb, kind));
+        if (kind != 'S' && kind != 'O' && base == 0)
+            fail_at(source_, number_, fmt::format("{} surface {} has base 0: it covers part of its base, so it needs one (an "
+                                                  "earlier S surface)",
+                                                  kind_name(kind), n));
+        if (base != 0) {
+            if (base >= n)
+                fail_at(source_, number_, fmt::format("base {} must name an earlier surface (this is surface {})", base, n));
+            const char base_kind = surfaces_[static_cast<std::size_t>(base - 1)].kind;
+            if (base_kind == 'N' || base_kind == 'M')
+                fail_at(source_, number_, fmt::format("base {} is a {} surface ({}), which cannot have subsurfaces", base,
+                                                      kind_name(base_kind), base_kind));
+            if ((kind == 'N' || kind == 'M') && base_kind != 'S')
+                fail_at(source_, number_, fmt::format("base {} of a {} surface must be a radiating surface (S), not an "
+                                                      "obstruction (O)",
+                                                      base, kind_name(kind)));
+        }
         if (!(emit >= 0.0 && emit <= 1.0))
             fail_at(source_, number_, fmt::format("emissivity {} must be within [0,1]", emit));
         std::uint32_t object = 0;
         if (cmb != 0) {
             if (cmb >= n)
                 fail_at(source_, number_, fmt::format("cmb {} must name an earlier surface (this is surface {})", cmb, n));
-            if (surface_obstruction_[static_cast<std::size_t>(cmb - 1)])
-                fail_at(source_, number_, fmt::format("cmb {} names an obstruction surface (O), which has no row or column to "
+            const Surface& target = surfaces_[static_cast<std::size_t>(cmb - 1)];
+            if (target.kind != 'S')
+                fail_at(source_, number_, fmt::format("cmb {} names {} {} surface ({}), which has no row or column of its own to "
                                                       "combine with",
-                                                      cmb));
-            if (surface_cmb_[static_cast<std::size_t>(cmb - 1)] != 0)
+                                                      cmb, target.kind == 'O' ? "an" : "a", kind_name(target.kind), target.kind));
+            if (target.cmb != 0)
                 fail_at(source_, number_, fmt::format("cmb {} names a surface that is itself combined with surface {} (name the "
                                                       "lowest-numbered surface of the group: no chains)",
-                                                      cmb, surface_cmb_[static_cast<std::size_t>(cmb - 1)]));
-            object = surface_object_[static_cast<std::size_t>(cmb - 1)];
+                                                      cmb, target.cmb));
+            object = target.face.object;
         } else {
             const auto [it, inserted] = line_of_name_.try_emplace(std::string(name), number_);
             if (!inserted)
@@ -231,10 +316,7 @@ private:
         }
         face.object = object;
         face.material = material(emit);
-        surface_object_.push_back(object);
-        surface_cmb_.push_back(cmb);
-        surface_obstruction_.push_back(obstruction);
-        (obstruction ? obstruction_faces_ : model_.faces).push_back(std::move(face));
+        surfaces_.push_back(Surface{kind, base, cmb, std::move(face), static_cast<std::uint32_t>(model_.objects.size()), emit});
     }
 
     // An opaque grey surface of emissivity ε reflects ρ = 1 − ε (Kirchhoff), emits nothing itself.
@@ -249,9 +331,15 @@ private:
     ObjModel model_;
     std::uint32_t number_ = 0;
     bool saw_format_ = false;
-    std::vector<std::uint32_t> surface_object_;
-    std::vector<long long> surface_cmb_;
-    std::vector<bool> surface_obstruction_;  // per surface: an O line
+    struct Surface {
+        char kind = 'S';  // S, O or N
+        long long base = 0, cmb = 0;
+        ObjFace face;  // as written (object, material, line)
+        std::uint32_t s_objects_before = 0;  // S objects made before this line (a mask's View3D position)
+        double emissivity = 0.0;
+    };
+    std::vector<Surface> surfaces_;  // every S, O and N line, in order
+    std::map<std::array<double, 3>, std::uint32_t> position_of_;  // for the vertices subsurfaces add
     std::unordered_map<std::string, std::uint32_t> line_of_name_;  // surface name -> its line
     std::vector<ObjFace> obstruction_faces_;         // O surfaces, objects counted from 0
     std::vector<std::string> obstruction_objects_;

@@ -384,15 +384,37 @@ TEST(View3d, RefusalsNameTheLine) {
                     "r.vs3:7: obstruction surface 2 has cmb 1: an O surface cannot be combined");
     EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 4 0 1 0.9 a\n"),
                     "r.vs3:7: cmb 1 names an obstruction surface (O)");
-    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 4 1 0 0.9 a\n"),
-                    "r.vs3:7: base 1 is an obstruction surface (O)");
+    EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nN 2 4 3 2 1 1 0 0.9 a\n"),
+                    "r.vs3:7: base 1 of a null surface must be a radiating surface (S)");
     EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\nS 2 1 2 3 0 0 0 0.9 block\n"),
                     "r.vs3:7: surface name 'block' is already used on line 6");
     EXPECT_CONTAINS(err("O 1 1 2 3 4 0 0 0.9 block\n"), "r.vs3: no S surfaces");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nO 2 1 2 3 9 0 0 0.9 b\n"), "r.vs3:7: vertex 9 is not defined");
     EXPECT_CONTAINS(err("S 1 1 2 3 9 0 0 0.9 a\n"), "r.vs3:6: vertex 9 is not defined (the file defines 4 vertices)");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 1.5 a\n"), "r.vs3:6: emissivity 1.5 must be within [0,1]");
-    EXPECT_CONTAINS(err("S 1 1 2 3 4 1 0 0.9 a\n"), "r.vs3:6: subsurfaces (base != 0) are not supported yet");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 1 0 0.9 a\n"), "r.vs3:6: base 1 must name an earlier surface (this is surface 1)");
+    // Subsurfaces and null surfaces lie on their base, inside it, facing as View3D requires.
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nV 5 0.5 0.5 0.1\nS 2 1 2 5 0 1 0 0.9 b\n"),
+                    "r.vs3:8: subsurface 2 cannot lie on its base surface 1 (line 6): a vertex (0.5, 0.5, 0.1) is 0.1 off the "
+                    "base's plane");
+    EXPECT_CONTAINS(err("S 1 1 2 3 0 0 0 0.9 a\nS 2 1 3 4 0 1 0 0.9 b\n"),
+                    "r.vs3:7: subsurface 2 cannot lie on its base surface 1 (line 6): a vertex (0, 1, 0) lies 0.707 outside the "
+                    "base");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nS 2 3 2 1 0 1 0 0.9 b\n"),
+                    "r.vs3:7: subsurface 2 cannot lie on its base surface 1 (line 6): it does not face the way its base faces");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 1 2 3 0 1 0 0.9 b\n"),
+                    "r.vs3:7: null surface 2 cannot lie on its base surface 1 (line 6): it does not face its base");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nS 2 1 2 3 0 1 0 0.9 b\nN 3 3 2 1 0 1 0 0.9 c\n"),
+                    "r.vs3:8: surface 3 overlaps surface 2 (line 7) on their base surface 1 by 0.5");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 0 0 0.9 b\n"), "r.vs3:7: null surface 2 has base 0");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 1 1 0.9 b\n"), "r.vs3:7: null surface 2 has cmb 1");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nN 2 3 2 1 0 1 0 0.9 b\nS 3 1 2 3 0 2 0 0.9 c\n"),
+                    "r.vs3:8: base 2 is a null surface (N)");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 3 2 1 0 0 0 0.9 b\n"), "r.vs3:7: masking surface 2 has base 0");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 1 2 3 0 1 0 0.9 b\n"),
+                    "r.vs3:7: masking surface 2 cannot lie on its base surface 1 (line 6): it does not face its base");
+    EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9 a\nM 2 3 2 1 0 1 0 0.9 b\nS 3 1 2 3 0 0 2 0.9 c\n"),
+                    "r.vs3:8: cmb 2 names a masking surface (M)");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 2 0.9 a\n"), "r.vs3:6: cmb 2 must name an earlier surface");
     EXPECT_CONTAINS(err("S 1 1 2 3 4 0 0 0.9\n"), "r.vs3:6: missing the surface name");
     EXPECT_CONTAINS(err("S 2 1 2 3 4 0 0 0.9 a\n"), "r.vs3:6: surface number 2 is out of order (expected 1");

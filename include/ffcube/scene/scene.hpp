@@ -39,6 +39,19 @@ struct View3dControls {
     std::string title;     // the last T line
     // One entry per control key that ffcube does not honour: "KEY=VALUE: why" (also a warning).
     std::vector<std::string> ignored;
+    // Masking surfaces (M): each lies on its base facing it; the covered part of the base is cut
+    // out of the base's faces and the mask is an obstruction-only object (it blocks what would
+    // see that part), so the matrix has no row or column for it. The View3D file gets one
+    // (View3D's rules): F(mask → base) = 1, F(base → mask) = area / base area, F(base → j) the
+    // rest of the base's factors over the whole base area, and the base's area whole.
+    struct Mask {
+        std::string name;
+        std::uint32_t base_object = 0;  // the base's object (its cmb group)
+        std::uint32_t position = 0;     // the View3D surface index it takes: S objects before it
+        double area = 0.0;
+        double emissivity = 0.0;
+    };
+    std::vector<Mask> masks;
 };
 
 // A parsed OBJ/MTL file before meshing. Validated: every index in range, every number finite.
