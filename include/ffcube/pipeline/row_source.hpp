@@ -87,7 +87,8 @@ void report_row_source(Report& report, const RowSource& rows);
 // Closure is refused (InputError) for open scenes, judged on the measuring provider's evidence:
 // a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
 // when options.enforce is None.
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report);
+CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
+                            bool progress = false);  // progress: closure's iteration lines
 
 // The checks every front end reports on a finished matrix: "nnz", "row_sums.{min,max,mean}" and
 // "reciprocity.{patch_max_abs,object_max_rel}" (reciprocity with a progress bar when `progress`).
