@@ -200,6 +200,7 @@ void enforce_passes(std::uint32_t n, std::span<const double> areas, EnforceMode 
                 gd[i] = s;
                 worst = std::max(worst, std::abs(d[i] * s / areas[i] - 1.0));
             });
+            if (passes.iteration) passes.iteration(it, worst, kTarget);
             if (worst <= kTarget) break;
             if (it == kMaxIterations)
                 throw InputError(fmt::format(
@@ -214,7 +215,8 @@ void enforce_passes(std::uint32_t n, std::span<const double> areas, EnforceMode 
     stats.after = after.figures();
 }
 
-EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats) {
+EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats,
+                       const std::function<void(unsigned, double, double)>& iteration) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK(F.rows_filled() == n);
     // Fᵀ: rows are read with i increasing, so each column lists its rows in increasing order.
@@ -242,6 +244,7 @@ EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, Enforc
         m.row_ptr.push_back(m.col.size());
     };
     EnforcePasses passes;
+    passes.iteration = iteration;
     passes.rows_and_columns = [&](const RowColumnFn& f) {
         for (std::uint32_t i = 0; i < n; ++i) {
             const std::size_t b = tptr[i], e = tptr[i + 1];

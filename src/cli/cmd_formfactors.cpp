@@ -1,6 +1,11 @@
 // ffcube formfactors: headless precomputation of the form-factor matrix.
 #include <fmt/format.h>
 
+#include <cstdlib>
+#include <memory>
+#include <optional>
+#include <vector>
+
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
 #include "cli/mpi_glue.hpp"
@@ -14,6 +19,7 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/mtx.hpp"
+#include "ffcube/io/solver_files.hpp"
 #include "ffcube/io/transpose_scratch.hpp"
 #include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/row_source.hpp"
@@ -47,76 +53,97 @@ struct Figures {
 using RowSinkFn = std::function<void(std::uint32_t, RowView)>;
 using RowFeed = std::function<std::optional<RanksFigures>(const RowSinkFn&)>;
 
-// Rows straight to the .ffm as they come, statistics from the stream and from passes over the
-// written file: memory independent of the number of entries (docs/robustness.md). With --enforce
-// the rows as computed go to a scratch .ffm first, and the enforced rows to the output
+// Rows straight to the outputs as they come (.ffm, .mtx, Elmer's file: MatrixSink), statistics
+// from the stream and from passes over a written .ffm: memory independent of the number of entries
+// (docs/robustness.md). The computed rows go to an .ffm: the output itself, or a scratch file when
+// the output is a .mtx or with --enforce, whose enforced rows then go to the outputs
 // (pipeline/enforcement.hpp).
 Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const RowFeed& feed,
                  const FfmMetadata& written, Report& report) {
     const bool progress = !o.scene.quiet;
     const bool enforce = rows.options().enforce != EnforceRequest::None;
+    const bool ffm = o.output.ends_with(".ffm");
     const std::uint64_t budget_bytes = o.stats_memory_mib << 20;
+    const auto n = static_cast<std::uint32_t>(scene.size());
     Figures f;
     RowStreamChecks checks(scene);
     std::vector<double> sums(scene.size(), 0.0);  // for the sky view factors: 8 bytes a patch
     ScratchDir scratch(o.output);  // removed on return and on error
     std::optional<RanksFigures> ranks;
+    // The finished rows' files besides the .ffm, each created now so that a bad path fails before
+    // any row is computed.
+    std::vector<std::unique_ptr<MatrixSink>> sinks;
+    if (o.output.ends_with(".mtx")) sinks.push_back(std::make_unique<MtxWriter>(o.output, n, progress));
+    if (auto elmer = open_elmer_sink(o.outputs, n)) sinks.push_back(std::move(elmer));
+    const auto report_ffm = [&](const FfmWriter& w) {
+        report.set("ffm.bytes", w.bytes_written());
+        report.set("ffm.bytes_per_nnz", static_cast<double>(w.bytes_written()) / std::max(1.0, static_cast<double>(w.nnz())));
+    };
+    // Without --enforce the computed rows are the output .ffm when there is one; else a scratch
+    // file (fast compression: it is read twice and removed).
+    const bool first_is_output = ffm && !enforce;
+    const std::filesystem::path first = first_is_output ? std::filesystem::path(o.output) : scratch.path() / "computed.ffm";
     {
-        // Without --enforce the computed rows are the output; with it, a scratch file (fast
-        // compression: it is read twice and removed).
-        const std::filesystem::path first = enforce ? scratch.path() / "computed.ffm" : std::filesystem::path(o.output);
-        FfmWriter writer(first, scene, written, enforce ? FfmWriterOptions{1u << 20, 1} : FfmWriterOptions{});
+        FfmWriter writer(first, scene, written, first_is_output ? FfmWriterOptions{} : FfmWriterOptions{1u << 20, 1});
         Stopwatch watch, piece;
         double writing = 0;  // coding, compressing and writing, between the rows
         ranks = feed([&](std::uint32_t i, RowView row) {
             piece.restart();
             writer.append_row(row);
+            if (!enforce)
+                for (const auto& sink : sinks) sink->append_row(row);
             writing += piece.seconds();
             checks.add(i, row);
             sums[i] = row.sum();
         });
         f.seconds = watch.seconds();
         piece.restart();
+        // fsync of a large file can take many seconds (14 s for 5.3 GB at 100k patches, and no line).
+        if (progress) info("closing {}: its last block, fsync and rename", first.filename().string());
         writer.finish();
+        if (!enforce)
+            for (const auto& sink : sinks) sink->finish();
         report.set("time.writing", writing + piece.seconds());
         f.nnz = writer.nnz();
-        report.set("ffm.bytes", writer.bytes_written());
-        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
+        if (first_is_output) report_ffm(writer);
     }
     Stopwatch watch;
     std::vector<double> areas;
     for (const Patch& p : scene.patches) areas.push_back(p.area);
+    const RowStreamChecks* final_checks = &checks;
+    std::optional<RowStreamChecks> out_checks;
     if (enforce) {
-        RowStreamChecks out_checks(scene);
-        FfmWriter writer(o.output, scene, written);
+        out_checks.emplace(scene);
+        std::optional<FfmWriter> writer;
+        if (ffm) writer.emplace(o.output, scene, written);
+        std::uint64_t nnz = 0;
         const StreamedEnforcement e = apply_enforcement_streamed(
-            rows, scratch.path() / "computed.ffm", checks, sums, scene, scratch.path(), budget_bytes, progress,
+            rows, first, checks, sums, scene, scratch.path(), budget_bytes, progress,
             [&](std::uint32_t i, RowView row) {
-                writer.append_row(row);
-                out_checks.add(i, row);
+                if (writer) writer->append_row(row);
+                for (const auto& sink : sinks) sink->append_row(row);
+                out_checks->add(i, row);
                 sums[i] = row.sum();
+                nnz += row.col.size();
             },
             report, ranks ? &ranks->evidence : nullptr);
-        writer.finish();
-        f.nnz = writer.nnz();
-        report.set("ffm.bytes", writer.bytes_written());
-        report.set("ffm.bytes_per_nnz", static_cast<double>(writer.bytes_written()) / std::max(1.0, static_cast<double>(f.nnz)));
-        f.row_sums = out_checks.row_sums();
-        f.reciprocity.object_max_rel = out_checks.object_max_rel();
+        if (writer) {
+            writer->finish();
+            report_ffm(*writer);
+        }
+        for (const auto& sink : sinks) sink->finish();
+        f.nnz = nnz;
+        final_checks = &*out_checks;
         f.reciprocity.patch_max_abs = e.patch_max_abs;  // computed with the enforced rows
-        if (!o.groups.empty()) f.groups = out_checks.object_factors();
     } else {
-        f.row_sums = checks.row_sums();
-        f.reciprocity.object_max_rel = checks.object_max_rel();
-        if (!o.groups.empty()) f.groups = checks.object_factors();
         // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
         // per entry held): a pass over the file spills the bands to scratch files, a second reads
         // the rows again with the bands one at a time (io/transpose_scratch.hpp).
         const TransposePlan plan = plan_transpose(checks.col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
-        FfmReader reader(o.output);
+        FfmReader reader(first);
         PatchReciprocity patch(areas);
         Progress bar(fmt::format("reciprocity ({} pass{} over {}, {} band{})", plan.passes, plan.passes == 1 ? "" : "es",
-                                 o.output, plan.band_count(), plan.band_count() == 1 ? "" : "s"),
+                                 first.filename().string(), plan.band_count(), plan.band_count() == 1 ? "" : "s"),
                      std::uint64_t(scene.size()) * plan.passes, progress);
         const TransposeFigures t = for_each_row_and_column(
             [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); }, checks.col_counts(),
@@ -127,12 +154,15 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         report.set("reciprocity.bands", plan.band_count());
         report.set("reciprocity.scratch_bytes", t.scratch_bytes);
     }
+    f.row_sums = final_checks->row_sums();
+    f.reciprocity.object_max_rel = final_checks->object_max_rel();
+    if (!o.groups.empty()) f.groups = final_checks->object_factors();
     report.set("time.statistics", watch.seconds());
-    write_surface_outputs(o.outputs, sums, scene, report, rows.obstructed());
+    write_surface_outputs(o.outputs, sums, *final_checks, scene, report, rows.obstructed());
     return f;
 }
 
-// The matrix in memory: .mtx, --ffm-version 1, View3D/Elmer outputs, or no output.
+// The matrix in memory: --ffm-version 1, or no output.
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
 // `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
@@ -141,7 +171,7 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
     Figures f;
     Stopwatch watch;
     f.seconds = seconds;
-    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report, ranks ? &ranks->evidence : nullptr);
+    const CsrMatrix F = apply_enforcement(rows, std::move(computed), scene, report, ranks ? &ranks->evidence : nullptr, progress);
     f.nnz = F.nnz();
     f.row_sums = row_sum_stats(F);
     {
@@ -193,8 +223,11 @@ int run(const Options& o) {
     if (row_options.enforce != EnforceRequest::None)
         written.settings += fmt::format(" enforce={}", to_string(row_options.enforce));
     RowCheckpoint* cp = checkpoint ? &*checkpoint : nullptr;
-    // View3D's and Elmer's files need the whole matrix (under mpirun: gathered to rank 0).
-    const bool stream = ffm && o.ffm_version == 2 && !surface_outputs_need_matrix(o.outputs);
+    // Under mpirun rank 0 takes the ranks' rows in row order, a chunk at a time (mpi_stream_rows).
+    // FFCUBE_TEST_IN_MEMORY (set, non-empty): a test hook that takes the in-memory path, so that
+    // tests compare it with the streamed one byte for byte.
+    const char* test_in_memory = std::getenv("FFCUBE_TEST_IN_MEMORY");
+    const bool stream = ((ffm && o.ffm_version == 2) || mtx) && !(test_in_memory && *test_in_memory);
     report.set("streamed", stream);
     Figures f;
     if (stream) {

@@ -123,6 +123,7 @@ int run(const Options& o) {
     RowProvider* provider = nullptr;
     Stopwatch watch;
     if (!o.matrix.empty()) {
+        info("reading {} (the whole matrix, then checked against the scene)", o.matrix);  // silent otherwise
         ffm = read_ffm(o.matrix);
         check_ffm_matches(*ffm, scene);
         matrix_rows = std::make_unique<MatrixRowProvider>(ffm->matrix);

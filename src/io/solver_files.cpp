@@ -72,36 +72,71 @@ void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool 
     });
 }
 
+// put() into a memory buffer: the binary file is written in 1 MiB pieces like the text.
+template <typename T>
+void put(fmt::memory_buffer& buf, T value) {
+    char bytes[sizeof(T)];
+    std::memcpy(bytes, &value, sizeof(T));
+    buf.append(bytes, bytes + sizeof(T));
+}
+
+struct ElmerViewFactorsWriter::Impl {
+    AtomicFile file;
+    std::uint32_t n = 0, rows = 0;
+    bool binary = false, finished = false;
+    fmt::memory_buffer buf;
+    Impl(const std::filesystem::path& path, std::uint32_t n_, bool binary_) : file(path), n(n_), binary(binary_) {}
+};
+
+ElmerViewFactorsWriter::ElmerViewFactorsWriter(const std::filesystem::path& path, std::uint32_t n, bool binary)
+    : impl_(std::make_unique<Impl>(path, n, binary)) {
+    if (binary) put(impl_->buf, static_cast<std::int32_t>(n));
+}
+
+ElmerViewFactorsWriter::~ElmerViewFactorsWriter() = default;
+
+void ElmerViewFactorsWriter::append_row(RowView r) {
+    Impl& m = *impl_;
+    FFCUBE_CHECK_MSG(!m.finished && m.rows < m.n, fmt::format("ElmerViewFactorsWriter: row {} of {}", m.rows, m.n));
+    const std::uint32_t i = m.rows++;
+    std::int32_t k = 0;
+    for (const float v : r.val) k += v > 0.0f ? 1 : 0;
+    if (m.binary) {
+        put(m.buf, k);
+        for (std::size_t e = 0; e < r.col.size(); ++e)
+            if (r.val[e] > 0.0f) {
+                put(m.buf, static_cast<std::int32_t>(r.col[e] + 1));
+                put(m.buf, static_cast<double>(r.val[e]));
+            }
+    } else {
+        fmt::format_to(std::back_inserter(m.buf), "{}\n", k);
+        // 9 significant digits: every float reads back exactly.
+        for (std::size_t e = 0; e < r.col.size(); ++e)
+            if (r.val[e] > 0.0f)
+                fmt::format_to(std::back_inserter(m.buf), "{} {} {:.9g}\n", i + 1, r.col[e] + 1,
+                               static_cast<double>(r.val[e]));
+    }
+    flush_if_full(m.file.stream(), m.buf);
+}
+
+void ElmerViewFactorsWriter::finish() {
+    Impl& m = *impl_;
+    FFCUBE_CHECK_MSG(!m.finished && m.rows == m.n,
+                     fmt::format("ElmerViewFactorsWriter::finish after {} of {} rows", m.rows, m.n));
+    m.finished = true;
+    flush_if_full(m.file.stream(), m.buf, true);
+    m.file.commit();
+}
+
 void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix& F, bool binary, Progress* progress) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK_MSG(F.rows_filled() == n, "write_elmer_view_factors needs every row of the matrix");
-    write_file_atomically(path, [&](std::ostream& out) {
-        fmt::memory_buffer buf;
-        if (binary) put(out, static_cast<std::int32_t>(n));
-        for (std::uint32_t i = 0; i < n; ++i) {
-            const RowView r = F.row(i);
-            std::int32_t k = 0;
-            for (const float v : r.val) k += v > 0.0f ? 1 : 0;
-            if (binary) {
-                put(out, k);
-                for (std::size_t e = 0; e < r.col.size(); ++e)
-                    if (r.val[e] > 0.0f) {
-                        put(out, static_cast<std::int32_t>(r.col[e] + 1));
-                        put(out, static_cast<double>(r.val[e]));
-                    }
-            } else {
-                fmt::format_to(std::back_inserter(buf), "{}\n", k);
-                // 9 significant digits: every float reads back exactly.
-                for (std::size_t e = 0; e < r.col.size(); ++e)
-                    if (r.val[e] > 0.0f)
-                        fmt::format_to(std::back_inserter(buf), "{} {} {:.9g}\n", i + 1, r.col[e] + 1,
-                                       static_cast<double>(r.val[e]));
-                flush_if_full(out, buf);
-            }
-            if (progress) progress->add();
-        }
-        flush_if_full(out, buf, true);
-    });
+    ElmerViewFactorsWriter writer(path, n, binary);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        writer.append_row(F.row(i));
+        if (progress) progress->add();
+    }
+    writer.finish();
 }
 
 void write_patch_table(const std::filesystem::path& path, const Scene& scene) {

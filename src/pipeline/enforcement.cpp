@@ -4,6 +4,9 @@
 #include <fmt/format.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <memory>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -46,6 +49,45 @@ void report_enforcement(Report& report, const std::string& what, const EnforceSt
          st.before.reciprocity_max, st.after.reciprocity_max);
 }
 
+// Closure's scaling iterations, each a pass over G: a line per iteration (at most one every 2 s,
+// every one under FFCUBE_PROGRESS=always) with the largest |row sum - 1|, and, from the last
+// ratio of that error (the iteration converges linearly), the iterations left and their time.
+ClosureIterationFn closure_progress(bool progress, const std::string& what) {
+    if (!progress) return {};
+    struct State {
+        Stopwatch since_first, since_line;  // since_first: restarted at the first iteration
+        unsigned first = 0;
+        double previous = 0;
+        bool printed = false;
+    };
+    auto st = std::make_shared<State>();
+    const char* env = std::getenv("FFCUBE_PROGRESS");
+    const bool always = env && std::string_view(env) == "always";
+    return [st, what, always](unsigned it, double worst, double target) {
+        if (st->previous == 0) {
+            st->since_first.restart();
+            st->first = it;
+        }
+        const double ratio = st->previous > 0 ? worst / st->previous : 0.0;
+        st->previous = worst;
+        const bool done = worst <= target;
+        if (!always && !done && st->since_line.seconds() < 2.0) return;
+        if (!always && done && !st->printed) return;  // short: the summary line says it
+        st->since_line.restart();
+        st->printed = true;
+        const double per = it > st->first ? st->since_first.seconds() / (it - st->first) : 0.0;  // s an iteration
+        std::string eta = "ETA soon known";
+        if (done) {
+            eta = "converged";
+        } else if (ratio > 0 && ratio < 1 && per > 0) {
+            const double left = std::ceil(std::log(target / worst) / std::log(ratio));
+            eta = fmt::format("about {:.0f} more, ETA {:.0f} s", left, left * per);
+        }
+        info("--enforce {}: scaling iteration {} (a pass over G): max |row sum - 1| {:.2e}, target {:.0e}; {}", what,
+             it + 1, worst, target, eta);
+    };
+}
+
 }  // namespace
 
 void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene) {
@@ -56,7 +98,7 @@ void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& s
 }
 
 CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
-                            const ClosureEvidence* evidence) {
+                            const ClosureEvidence* evidence, bool progress) {
     const EnforceRequest request = rows.options().enforce;
     if (request == EnforceRequest::None) return F;
     const std::string what(to_string(request));
@@ -68,7 +110,7 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
     const std::vector<double> areas = areas_of(scene);
     EnforceStats st;
     Stopwatch watch;
-    const EnforcedMatrix E = enforce(F, areas, mode, st);
+    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what));
     report_enforcement(report, what, st, watch.seconds());
     return E.to_csr();
 }
@@ -111,9 +153,23 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
     passes.store_g = [&](std::uint32_t, std::span<const std::uint32_t> col, std::span<const double> val) {
         g.append(col, val);
     };
+    passes.iteration = closure_progress(progress, what);
+    bool converged = false;
+    const ClosureIterationFn lines = passes.iteration;
+    passes.iteration = [&](unsigned it, double worst, double target) {
+        converged = worst <= target;
+        if (lines) lines(it, worst, target);
+    };
     passes.stored_g = [&](const GRowFn& f) {
         ++s.g_passes;
-        g.for_each(f);
+        // The pass after convergence writes the enforced rows; the others are iterations (above).
+        Progress bar(converged ? fmt::format("--enforce {}: writing the enforced rows (a pass over G)", what)
+                               : fmt::format("--enforce {}: scaling iteration {} (a pass over G)", what, s.g_passes),
+                     n, progress);
+        g.for_each([&](std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val) {
+            f(i, col, val);
+            bar.add();
+        });
     };
     std::vector<float> fval;
     const EnforcedRowFn out = [&](std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val,

@@ -72,10 +72,12 @@ void add_view3d_masks(View3dTable& t, const std::vector<View3dControls::Mask>& m
 
 }  // namespace
 
-View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) {
+View3dTable view3d_table(const CsrMatrix& F, const Scene& scene) { return view3d_table(object_form_factors(F, scene), scene); }
+
+View3dTable view3d_table(std::vector<std::vector<double>> object_factors, const Scene& scene) {
     View3dTable t;
     t.area = object_areas(scene);
-    t.F = object_form_factors(F, scene);
+    t.F = std::move(object_factors);
     std::vector<double> eps(scene.size());
     for (std::size_t i = 0; i < scene.size(); ++i) {
         const Vec3 kd = scene.materials[scene.patches[i].material].kd;
@@ -112,31 +114,39 @@ void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf,
     if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene);
 }
 
-}  // namespace
+// View3D's file from the object form factors (its surfaces are the objects).
+void write_view3d_file(const SurfaceOutputOptions& o, std::vector<std::vector<double>> object_factors,
+                       const Scene& scene, Report& report) {
+    const bool binary = o.view3d_format == FileFormat::Binary ||
+                        (o.view3d_format == FileFormat::Auto && scene.view3d.present && scene.view3d.out == 1);
+    write_view3d(o.view3d, view3d_table(std::move(object_factors), scene), binary);
+    report.set("view3d.written", o.view3d);
+    report.set("view3d.format", binary ? "binary" : "text");
+    report.set("view3d.surfaces", scene.objects.size() + scene.view3d.masks.size());
+}
 
-bool surface_outputs_need_matrix(const SurfaceOutputOptions& o) { return !o.view3d.empty() || !o.elmer.empty(); }
+}  // namespace
 
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
                            bool progress, std::span<const double> obstructed) {
     write_sky_and_table(o, sky_view_factors(F), scene, report, obstructed);
-    if (!o.view3d.empty()) {
-        const bool binary = o.view3d_format == FileFormat::Binary ||
-                            (o.view3d_format == FileFormat::Auto && scene.view3d.present && scene.view3d.out == 1);
-        write_view3d(o.view3d, view3d_table(F, scene), binary);
-        report.set("view3d.written", o.view3d);
-        report.set("view3d.format", binary ? "binary" : "text");
-        report.set("view3d.surfaces", scene.objects.size() + scene.view3d.masks.size());
-    }
+    if (!o.view3d.empty()) write_view3d_file(o, object_form_factors(F, scene), scene, report);
     if (!o.elmer.empty()) {
         Progress bar(fmt::format("writing {} (rows)", o.elmer), F.size(), progress);
         write_elmer_view_factors(o.elmer, F, o.elmer_format == FileFormat::Binary, &bar);
     }
 }
 
-void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
-                           Report& report, std::span<const double> obstructed) {
-    FFCUBE_CHECK_MSG(!surface_outputs_need_matrix(o), "View3D and Elmer files need the whole matrix");
+std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::uint32_t n) {
+    if (o.elmer.empty()) return nullptr;
+    return std::make_unique<ElmerViewFactorsWriter>(o.elmer, n, o.elmer_format == FileFormat::Binary);
+}
+
+void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
+                           const RowStreamChecks& checks, const Scene& scene, Report& report,
+                           std::span<const double> obstructed) {
     write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed);
+    if (!o.view3d.empty()) write_view3d_file(o, checks.object_factors(), scene, report);
 }
 
 }  // namespace ffcube

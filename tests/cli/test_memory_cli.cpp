@@ -166,7 +166,7 @@ TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
 
 // --enforce with a streamed .ffm (each mode, the transpose in several bands and closure's G in a
 // scratch file, forced by --stats-memory 1) writes the very bytes of the in-memory run (forced by
-// a View3D output, which needs the whole matrix), with the same report figures; a resumed
+// the test hook FFCUBE_TEST_IN_MEMORY), with the same report figures; a resumed
 // checkpointed run too. The scratch directory is gone afterwards, also when closure is refused.
 TEST(MemoryCli, StreamedEnforceEqualsTheInMemoryRunByteForByte) {
     test::TempDir dir;
@@ -178,8 +178,9 @@ TEST(MemoryCli, StreamedEnforceEqualsTheInMemoryRunByteForByte) {
         const std::string e = " --enforce " + mode;
         const bool resume = mode == "closure";
         const std::string ck = resume ? " --checkpoint " + (dir / "ck") : "";
-        const auto m = test::run_ffcube(fmt::format("formfactors {}{} -o {} --view3d {} --report {}", scene, e,
-                                                    dir / "m.ffm", dir / "m.vf", dir / "m.json"));
+        const auto m = test::run_ffcube_env("FFCUBE_TEST_IN_MEMORY=1 ",
+                                            fmt::format("formfactors {}{} -o {} --report {}", scene, e, dir / "m.ffm",
+                                                        dir / "m.json"));
         const auto s = test::run_ffcube(fmt::format("formfactors {}{} --stats-memory 1 -o {} --report {}{}", scene, e,
                                                     dir / "s.ffm", dir / "s.json", ck));
         const auto r = resume ? test::run_ffcube(fmt::format("formfactors {}{} --stats-memory 1 -o {}{} --resume", scene,

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "ffcube/core/error.hpp"
 #include "ffcube/io/mtx.hpp"
 #include "io/io_test_util.hpp"
 
@@ -71,6 +72,29 @@ TEST_F(Mtx, NineDigitsAreNeededAndWritten) {
     write_mtx(path("F.mtx"), F);
     const std::string text = read_all(path("F.mtx"));
     EXPECT_NE(text.find("\n2 2 1\n1 2 0.333333343\n"), std::string::npos) << text;
+}
+
+// Rows fed one at a time: the header's count is only known at finish(), when the file appears
+// (with the bytes write_mtx gives for the same matrix); the spooled entry lines have no name, so a
+// writer given up before finish() leaves nothing at all in the directory.
+TEST_F(Mtx, StreamedWriterAppearsOnlyAtFinishAndLeavesNothingWhenAbandoned) {
+    const CsrMatrix F = small_matrix();
+    write_mtx(path("whole.mtx"), F);
+    {
+        MtxWriter w(path("F.mtx"), F.size());
+        for (std::uint32_t i = 0; i < F.size(); ++i) w.append_row(F.row(i));
+        EXPECT_FALSE(std::filesystem::exists(path("F.mtx")));
+        EXPECT_EQ(w.nnz(), F.nnz());
+        w.finish();
+    }
+    EXPECT_EQ(read_all(path("F.mtx")), read_all(path("whole.mtx")));
+    {
+        MtxWriter w(path("G.mtx"), F.size());
+        w.append_row(F.row(0));
+    }
+    EXPECT_EQ(entries().size(), 2u);  // whole.mtx and F.mtx only
+    // A directory that does not exist fails when the writer is made, before any row.
+    EXPECT_THROW(MtxWriter(path("missing") / "F.mtx", 5), IoError);
 }
 
 std::string python_with_scipy() {

@@ -76,7 +76,9 @@ void require_closed_scene(std::string_view what, const ClosureEvidence& evidence
 // areas.size() == F.size(), every area > 0 (InputError otherwise). Closure also throws
 // InputError for a row with no entries (nothing to scale) and when 100000 iterations do not
 // reach 1e-12 (the pattern has no symmetric scaling, e.g. a patch seen by no one).
-EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats);
+// iteration, when given: as EnforcePasses::iteration.
+EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats,
+                       const std::function<void(unsigned, double, double)>& iteration = {});
 
 MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> areas);
 
@@ -94,10 +96,14 @@ MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> ar
 // expression). Memory: O(n) besides what the passes hold.
 using RowColumnFn = RowAndColumnFn;
 using GRowFn = std::function<void(std::uint32_t i, std::span<const std::uint32_t> col, std::span<const double> val)>;
+using ClosureIterationFn = std::function<void(unsigned iteration, double worst, double target)>;
 struct EnforcePasses {
     std::function<void(const RowColumnFn&)> rows_and_columns;
     GRowFn store_g;                               // closure only
     std::function<void(const GRowFn&)> stored_g;  // closure only
+    // Closure, optional: after each scaling iteration's pass over G, the iteration (from 0), the
+    // largest |row sum - 1| it measured and the target (1e-12): the caller's progress line.
+    ClosureIterationFn iteration;
 };
 using EnforcedRowFn = std::function<void(std::uint32_t i, std::span<const std::uint32_t> col,
                                          std::span<const double> val, std::span<const double> mirror)>;

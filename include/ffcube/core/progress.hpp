@@ -1,5 +1,8 @@
-// Progress for long runs on stderr: done/total, rate, ETA. Thread-safe; prints at most about
-// once per second, with '\r' updates on a terminal and plain lines otherwise. Silent when quiet.
+// Progress for long runs on stderr: done/total, rate, ETA. Thread-safe; prints at most every
+// 0.25 s on a terminal ('\r' updates) and every 2 s otherwise (plain lines). Silent when quiet.
+// The rate and the ETA are measured from the first add(), and no ETA is given before a second
+// of work ("ETA soon known"). A bar that never reached its first line prints nothing, unless the
+// environment says FFCUBE_PROGRESS=always: then every bar prints its first step and its end.
 #pragma once
 
 #include <atomic>
@@ -32,6 +35,9 @@ private:
     std::mutex mutex_;
     Stopwatch watch_;
     double last_print_ = 0.0;
+    std::atomic<bool> started_{false};  // add() was called: first_time_, first_done_ set
+    double first_time_ = 0.0;
+    std::uint64_t first_done_ = 0;
     bool finished_ = false;
 };
 

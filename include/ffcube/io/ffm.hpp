@@ -17,6 +17,7 @@
 
 #include "ffcube/core/progress.hpp"
 #include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/io/matrix_sink.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
@@ -75,7 +76,7 @@ struct FfmWriterOptions {
     std::uint32_t block_bytes = 1u << 20;  // coded bytes per block (before compression)
     int zstd_level = 3;
 };
-class FfmWriter {
+class FfmWriter final : public MatrixSink {
 public:
     FfmWriter(const std::filesystem::path& path, const Scene& scene, const FfmMetadata& meta,
               FfmWriterOptions options = {});
@@ -86,13 +87,13 @@ public:
     // Row rows_written(): columns strictly increasing and < n, values finite in [0, 1.001]
     // (InternalError otherwise: a file the reader would refuse is never written).
     void append_row(const SparseRow& row);
-    void append_row(RowView row);
+    void append_row(RowView row) override;
     std::uint32_t rows_written() const;
     std::uint64_t nnz() const;
     std::uint64_t bytes_written() const;
     // Needs every row; writes the last block and the trailer, then renames the file into place.
     // Throws IoError when a write fails (disk full).
-    void finish();
+    void finish() override;
 
 private:
     struct Impl;

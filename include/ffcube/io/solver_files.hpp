@@ -3,12 +3,15 @@
 // atomic (atomic_file.hpp) and throws IoError when the file cannot be written.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "ffcube/core/progress.hpp"
 #include "ffcube/formfactor/sparse.hpp"
+#include "ffcube/io/matrix_sink.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
@@ -36,6 +39,21 @@ void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool 
 // radiation boundary elements: text: for every row i, a line with the count k of its non-zero
 // factors, then k lines "i j F_ij" (1-based). Binary ("Viewfactor Binary Output", unformatted
 // stream): int32 N, then per row int32 k and k pairs (int32 j, float64 F_ij). Little-endian.
+// ElmerViewFactorsWriter writes it from the rows as they come (a MatrixSink: each row's lines depend
+// on that row only, memory a 1 MiB buffer); write_elmer_view_factors is the same for a matrix.
+class ElmerViewFactorsWriter final : public MatrixSink {
+public:
+    ElmerViewFactorsWriter(const std::filesystem::path& path, std::uint32_t n, bool binary);
+    ~ElmerViewFactorsWriter() override;
+    ElmerViewFactorsWriter(const ElmerViewFactorsWriter&) = delete;
+    ElmerViewFactorsWriter& operator=(const ElmerViewFactorsWriter&) = delete;
+    void append_row(RowView row) override;
+    void finish() override;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
 void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix& F, bool binary,
                               Progress* progress = nullptr);
 

@@ -4,10 +4,12 @@
 // come from formfactor/sky.hpp and solver/exchange.hpp, the bytes from io/solver_files.hpp.
 #pragma once
 
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
 
+#include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/io/solver_files.hpp"
@@ -42,17 +44,22 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report)
 // sum over its parts, F from it the area-weighted mean), emissivities ε = 1 − Kd (area-weighted,
 // mean of RGB; a .vs3 gives Kd = 1 − ε). With the scene's emit=1, Hottel's exchange factors.
 View3dTable view3d_table(const CsrMatrix& F, const Scene& scene);
+// The same from the object form factors (object_form_factors, or RowStreamChecks::object_factors
+// of the streamed rows: the same numbers).
+View3dTable view3d_table(std::vector<std::vector<double>> object_factors, const Scene& scene);
 
 // Sky statistics into the report (always), then every file asked for. F is the finished matrix;
 // `obstructed` (RowSource::obstructed(): empty, or per row the share obstruction-only surfaces
 // intercepted) is taken off the sky view factors.
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
                            bool progress, std::span<const double> obstructed = {});
-// Whether the outputs asked for need the whole matrix (View3D's and Elmer's files do; the sky view
-// factors and the patch table need only each row's sum).
-bool surface_outputs_need_matrix(const SurfaceOutputOptions& o);
-// The same from each row's sum, for a streamed matrix; the options must not need the matrix.
-void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene,
-                           Report& report, std::span<const double> obstructed = {});
+// For a streamed matrix: Elmer's file is written from the rows as they come, by the sink this
+// gives (null when --elmer is not asked) and the caller feeds and finishes; the rest comes from
+// each row's sum and from `checks` (the streamed rows' RowStreamChecks: View3D's object factors),
+// with the same bytes and report keys as the overload above.
+std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::uint32_t n);
+void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
+                           const RowStreamChecks& checks, const Scene& scene, Report& report,
+                           std::span<const double> obstructed = {});
 
 }  // namespace ffcube

@@ -1,0 +1,70 @@
+// Every phase of `ffcube formfactors` and `ffcube solve` that can run for long at large n shows a
+// progress line (docs/robustness.md, "Progress"): on small runs with FFCUBE_PROGRESS=always,
+// which makes each bar print its first step and its end however short the run, each phase's line
+// is there, and a bar line carries an ETA, or says the ETA is not known yet, or how long it took.
+#include <gtest/gtest.h>
+
+#include <regex>
+#include <sstream>
+
+#include "cli/cli_util.hpp"
+
+namespace ffcube {
+namespace {
+
+// Lines of a bar: "WHAT: done/total (p%), r/s, ETA s s" | "ETA soon known" | "took s s".
+void expect_bar(const std::string& output, const std::string& what) {
+    std::istringstream in(output);
+    std::string line;
+    bool started = false, finished = false;
+    const std::regex bar(R"(: \d+/\d+ \(\d+\.\d%\), \d+\.\d/s, (ETA \d+ s|ETA soon known|took \d+ s)$)");
+    while (std::getline(in, line)) {
+        if (line.rfind(what, 0) != 0) continue;
+        EXPECT_TRUE(std::regex_search(line, bar)) << line;
+        (line.find("took") != std::string::npos ? finished : started) = true;
+    }
+    EXPECT_TRUE(started) << "no first line of \"" << what << "\" in:\n" << output;
+    EXPECT_TRUE(finished) << "no last line of \"" << what << "\" in:\n" << output;
+}
+
+TEST(ProgressCli, EveryPhaseShowsItsLine) {
+    test::TempDir dir;
+    const std::string env = "FFCUBE_PROGRESS=always ";
+    // A closed cube (closure applies), --stats-memory 1: several bands of the transpose.
+    const std::string cube = test::example("closed_cube.stl") + " --max-patch-edge 0.25 --resolution 16";
+    auto r = test::run_ffcube_env(env, "formfactors " + cube + " --enforce closure --stats-memory 1 -o " +
+                                           (dir / "F.mtx") + " --elmer " + (dir / "F.dat"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    expect_bar(r.output, "rows: ");
+    expect_bar(r.output, "--enforce closure: rows with columns (2 passes, ");
+    expect_bar(r.output, "--enforce closure: scaling iteration 1 (a pass over G): ");
+    expect_bar(r.output, "--enforce closure: writing the enforced rows (a pass over G): ");
+    expect_bar(r.output, "writing " + (dir / "F.mtx") + " (MiB of entries after the header): ");
+    // Closure's iterations: one line each here, with the error and, from the second on, an ETA.
+    EXPECT_NE(r.output.find("ffcube: --enforce closure: scaling iteration 2 (a pass over G): max |row sum - 1| "),
+              std::string::npos)
+        << r.output;
+    EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(scaling iteration \d+ .*converged)"))) << r.output;
+
+    // Without --enforce: the reciprocity check's passes over the written file.
+    r = test::run_ffcube_env(env, "formfactors " + cube + " --stats-memory 1 -o " + (dir / "F.ffm"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    expect_bar(r.output, "rows: ");
+    expect_bar(r.output, "reciprocity (2 passes over F.ffm, ");
+
+    // The matrix in memory (--ffm-version 1): its reciprocity and its writing.
+    r = test::run_ffcube_env(env, "formfactors " + cube + " --ffm-version 1 -o " + (dir / "G.ffm"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    expect_bar(r.output, "rows: ");
+    expect_bar(r.output, "reciprocity: ");
+    expect_bar(r.output, "writing " + (dir / "G.ffm") + ": ");
+
+    // solve from a matrix file: reading it is announced before it starts.
+    ASSERT_EQ(test::run_ffcube("formfactors --patches 200 --resolution 16 -q -o " + (dir / "H.ffm")).code, 0);
+    r = test::run_ffcube_env(env, "solve --patches 200 --resolution 16 --matrix " + (dir / "H.ffm"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_NE(r.output.find("ffcube: reading " + (dir / "H.ffm") + " (the whole matrix"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace ffcube
