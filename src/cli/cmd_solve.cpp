@@ -145,11 +145,11 @@ int run(const Options& o) {
         refined = solve_adaptive(scene, o.rows, level_options, o.adaptive.options,
                                  [](const std::string& line) { info("{}", line); });
         info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined->stop,
-             refined->scene.size(), scene.size(), refined->max_relative_error);
+             refined->scene->size(), scene.size(), refined->max_relative_error);
         for (const std::string& line : describe(refined->rows)) info("{}", line);
         report.set("rows", refined->rows.provider().name());
         report_adaptive(report, *refined, o.adaptive.options);
-        scene = refined->scene;
+        scene = *refined->scene;  // a copy: the last level's rows refer to *refined->scene, which stays
         computed_rows = std::move(refined->rows);
         report_solve(scene, refined->result, level_options, report);
     }
@@ -164,12 +164,6 @@ int run(const Options& o) {
             sky_sums.resize(scene.size());
             for (std::uint32_t i = 0; i < scene.size(); ++i) sky_sums[i] = ffm->matrix.row(i).sum();
         } else {
-            // After adaptive levels: rows for this copy of the last level's scene (the level's own
-            // source refers to the scene inside solve_adaptive's result, moved since).
-            if (refined) {
-                computed_rows = RowSource{};
-                computed_rows = make_row_source(scene, row_options);
-            }
             sky_sums = sky_row_sums(computed_rows.provider(), scene.size(), !o.scene.quiet);
             const std::span<const double> cut = computed_rows.obstructed();
             obstructed.assign(cut.begin(), cut.end());

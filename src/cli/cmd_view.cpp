@@ -69,9 +69,9 @@ int run(Options& o) {
         AdaptiveResult refined = solve_adaptive(scene, o.rows, front_end_solver_options(o.solver), o.adaptive.options,
                                                 [](const std::string& line) { info("{}", line); });
         info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
-             refined.scene.size(), scene.size(), refined.max_relative_error);
+             refined.scene->size(), scene.size(), refined.max_relative_error);
         for (const std::string& line : describe(refined.rows)) info("{}", line);
-        run_viewer(refined.scene, refined.rows.provider(), refined.rows.hemicube(), o.solver, o.viewer, refined.origin);
+        run_viewer(*refined.scene, refined.rows.provider(), refined.rows.hemicube(), o.solver, o.viewer, refined.origin);
         return 0;
     }
     // Before the window: with no GL context in this process yet, the provider can fork its

@@ -90,7 +90,7 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         throw InputError(fmt::format("--max-elements {}: fewer than the {} patches of the starting mesh", options.max_elements,
                                      start.size()));
     AdaptiveResult a;
-    a.scene = start;
+    a.scene = std::make_unique<Scene>(start);
     a.origin.resize(start.size());
     for (std::uint32_t i = 0; i < start.size(); ++i) a.origin[i] = i;
     // Rows of the previous level, its split factors and each element's patch in it: the rows of the
@@ -101,16 +101,16 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
     for (std::uint32_t level = 0;; ++level) {
         Stopwatch watch;
         a.rows = RowSource{};  // the previous level's workers end before the next start
-        a.rows = make_row_source(a.scene, rows);
-        ReusedRowProvider provider(a.scene, a.rows.provider(), parent, split,
+        a.rows = make_row_source(*a.scene, rows);
+        ReusedRowProvider provider(*a.scene, a.rows.provider(), parent, split,
                                    options.reuse_rows ? std::move(carried) : LevelRows{});
-        a.result = solve_radiosity(a.scene, provider, solver);
+        a.result = solve_radiosity(*a.scene, provider, solver);
         carried = provider.take_rows();
         AdaptiveLevel rec;
-        rec.elements = a.scene.size();
+        rec.elements = a.scene->size();
         rec.rows_computed = provider.rows_measured();
         rec.rows_reused = provider.rows_reused();
-        rec.objects = object_means(a.scene, a.result.radiosity);
+        rec.objects = object_means(*a.scene, a.result.radiosity);
         rec.seconds = watch.seconds();
         a.levels.push_back(rec);
         if (!a.result.converged()) {
@@ -119,10 +119,10 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         }
         if (level == 0) {
             a.error_basis = "variation";
-            a.objects = object_errors_from_variation(a.scene, a.result.radiosity);
+            a.objects = object_errors_from_variation(*a.scene, a.result.radiosity);
         } else {
             a.error_basis = "levels";
-            a.objects = object_errors_between_levels(a.scene, rec.objects, a.levels[level - 1].objects, refined_share, a.objects);
+            a.objects = object_errors_between_levels(*a.scene, rec.objects, a.levels[level - 1].objects, refined_share, a.objects);
         }
         a.max_relative_error = 0.0;
         for (const ObjectError& e : a.objects) a.max_relative_error = std::max(a.max_relative_error, e.relative);
@@ -139,10 +139,10 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             break;
         }
         // Refine the objects whose estimated error is over the target, each by its own bulk criterion.
-        std::vector<bool> over(a.scene.objects.size(), false);
+        std::vector<bool> over(a.scene->objects.size(), false);
         for (std::size_t o = 0; o < a.objects.size(); ++o) over[o] = a.objects[o].relative > options.target_error;
         const RefinementChoice choice =
-            choose_refinement(a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
+            choose_refinement(*a.scene, a.result.radiosity, options.target_error, options.max_elements, options.factor,
                               options.fraction, over);
         a.levels.back().candidates = choice.candidates;
         if (choice.marked == 0) {
@@ -152,13 +152,13 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
             break;
         }
         a.levels.back().refined = choice.marked;
-        RefinedScene refined = refine_patches(a.scene, choice.split);
+        RefinedScene refined = refine_patches(*a.scene, choice.split);
         parent = refined.parent;
         split = choice.split;
-        refined_share.assign(a.scene.objects.size(), 0.0);
-        std::vector<double> object_area(a.scene.objects.size(), 0.0);
-        for (std::size_t i = 0; i < a.scene.size(); ++i) {
-            const Patch& p = a.scene.patches[i];
+        refined_share.assign(a.scene->objects.size(), 0.0);
+        std::vector<double> object_area(a.scene->objects.size(), 0.0);
+        for (std::size_t i = 0; i < a.scene->size(); ++i) {
+            const Patch& p = a.scene->patches[i];
             object_area[p.object] += p.area;
             if (choice.split[i] > 1) refined_share[p.object] += p.area;
         }
@@ -166,7 +166,7 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         std::vector<std::uint32_t> origin(refined.parent.size());
         for (std::size_t e = 0; e < origin.size(); ++e) origin[e] = a.origin[refined.parent[e]];
         a.origin = std::move(origin);
-        a.scene = std::move(refined.scene);
+        *a.scene = std::move(refined.scene);
     }
     return a;
 }
@@ -179,7 +179,7 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.fraction", o.fraction);
     r.set("adaptive.stop", a.stop);
     r.set("adaptive.reached_target", a.reached_target);
-    r.set("adaptive.elements", a.scene.size());
+    r.set("adaptive.elements", a.scene->size());
     r.set("adaptive.start_patches", a.levels.empty() ? 0 : a.levels.front().elements);
     std::vector<std::uint64_t> elements, refined, candidates, rows, reused;
     std::vector<double> seconds;
@@ -199,8 +199,8 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.reuse_rows", o.reuse_rows);
     r.set_array("adaptive.levels.seconds", seconds);
     // Where the refinement went: elements per object.
-    std::vector<std::uint64_t> per_object(a.scene.objects.size(), 0);
-    for (const Patch& p : a.scene.patches) ++per_object[p.object];
+    std::vector<std::uint64_t> per_object(a.scene->objects.size(), 0);
+    for (const Patch& p : a.scene->patches) ++per_object[p.object];
     r.set_array("adaptive.elements_per_object", per_object);
     report_object_errors(r, a.objects, a.error_basis, a.max_relative_error);
 }

@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include <optional>
+
 #include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/scene/refine.hpp"
 #include "support/scenes.hpp"
@@ -33,7 +35,7 @@ TEST(Adaptive, TheFurnaceNeedsNoRefinementAndRefiningItChangesNothing) {
     ASSERT_EQ(a.levels.size(), 1u);
     EXPECT_EQ(a.stop, "nothing_to_refine");
     EXPECT_TRUE(a.reached_target);
-    EXPECT_EQ(a.scene.size(), s.size());
+    EXPECT_EQ(a.scene->size(), s.size());
     // Split every patch in 3 × 3 anyway and solve the elements: still 2. The correction closes each
     // row to 1 in double and stores it in float (relative rounding 6e-8 per value, at most about
     // 1e-7 on a row's sum s). B = E / (1 − ρ s) moves by ρ E / (1 − ρ)² = 2 per unit of s, so
@@ -63,15 +65,26 @@ TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
     ao.max_levels = 2;
     const AdaptiveResult one = solve_adaptive(s, small_rows(1), direct(), ao);
     const AdaptiveResult two = solve_adaptive(s, small_rows(2), direct(), ao);
-    EXPECT_GT(one.scene.size(), s.size());
-    ASSERT_EQ(one.scene.size(), two.scene.size());
+    EXPECT_GT(one.scene->size(), s.size());
+    ASSERT_EQ(one.scene->size(), two.scene->size());
     EXPECT_EQ(one.origin, two.origin);
-    EXPECT_EQ(one.scene.fingerprint, two.scene.fingerprint);
+    EXPECT_EQ(one.scene->fingerprint, two.scene->fingerprint);
     ASSERT_EQ(one.result.radiosity.size(), two.result.radiosity.size());
     for (std::size_t i = 0; i < one.result.radiosity.size(); ++i) EXPECT_EQ(one.result.radiosity[i], two.result.radiosity[i]) << i;
+    // A result moved into place (cmd_solve assigns it into an optional) keeps its last level's rows
+    // usable: they refer to the scene it holds, not to the moved-from one. Every row they give
+    // equals a fresh source's on that scene (the same options: bitwise the same rows).
+    std::optional<AdaptiveResult> held;
+    held = solve_adaptive(s, small_rows(2), direct(), ao);
+    RowSource fresh = make_row_source(*held->scene, small_rows(2));
+    const CsrMatrix kept = compute_all_rows(held->rows.provider());
+    const CsrMatrix again = compute_all_rows(fresh.provider());
+    ASSERT_EQ(kept.size(), held->scene->size());
+    ASSERT_EQ(kept.nnz(), again.nnz());
+    for (std::uint32_t i = 0; i < kept.size(); ++i) EXPECT_EQ(kept.row(i).sum(), again.row(i).sum()) << i;
     // The shadow is on the floor: the floor is where the elements went.
     std::size_t floor_elements = 0;
-    for (const Patch& p : one.scene.patches) floor_elements += s.objects[p.object] == "floor" ? 1 : 0;
+    for (const Patch& p : one.scene->patches) floor_elements += s.objects[p.object] == "floor" ? 1 : 0;
     std::size_t floor_patches = 0;
     for (const Patch& p : s.patches) floor_patches += s.objects[p.object] == "floor" ? 1 : 0;
     EXPECT_GT(floor_elements, floor_patches);

@@ -10,9 +10,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <span>
-#include <string_view>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "ffcube/io/report.hpp"
@@ -64,7 +65,9 @@ struct ObjectError {
 };
 
 struct AdaptiveResult {
-    Scene scene;                        // the last level's scene (elements)
+    // The last level's scene (elements), on the heap: `rows` refers to it, and a result that is
+    // moved (returned, assigned into an optional) must not leave the rows pointing at a moved-from scene.
+    std::unique_ptr<Scene> scene;
     std::vector<std::uint32_t> origin;  // element → patch of the starting scene
     SolveResult result;                 // the last level's solve
     RowSource rows;                     // the last level's rows (for report_row_source), still running
