@@ -17,7 +17,7 @@ dir="$(mktemp -d)"
 trap 'rm -rf "$dir"' EXIT
 python3 tools/gen_city.py "$dir/city.stl" --binary --triangles "$triangles" --seed "$seed" --ground "${GROUND:-lots}" 2>/dev/null
 echo "city: $triangles triangles (seed $seed, ground ${GROUND:-lots}), N=$resolution, $(nproc) cores, load $(cut -d' ' -f1-3 /proc/loadavg)"
-printf "%-10s %8s %8s %8s %10s %14s %14s\n" build "wall (s)" "cpu (s)" "rows/s" "sub-hemi" "refused pairs" "pieces tested"
+printf "%-10s %8s %8s %8s %10s %14s %14s %9s\n" build "wall (s)" "cpu (s)" "rows/s" "sub-hemi" "refused pairs" "pieces tested" "occluded"
 for which in ${BASELINE:+baseline} current; do
   bin="$build/ffcube"
   [ "$which" = baseline ] && bin="$BASELINE"
@@ -30,7 +30,10 @@ r = json.load(open(sys.argv[2]))
 c, lo = r.get("corrections", {}), r.get("left_out", {})
 tested = lo.get("pieces_tested")
 share = f"{tested / lo['pieces_considered']:.1%}" if tested is not None else "all"
+occ = sum(lo.get("pieces_occluded_per_face", {}).values())
+drawn = sum(r.get("drawn", {}).get("pieces_per_face", {}).values())
+occluded = f"{occ / (occ + drawn):.1%}" if "pieces_occluded_per_face" in lo and occ + drawn else "-"
 print(f"{sys.argv[3]:<10} {wall:>8.1f} {user + system:>8.1f} {r['patches'] / wall:>8.1f} {c.get('rows_sub_hemicubes', 0):>10}"
-      f" {c.get('pairs_refused_possibly_occluded', 0):>14} {share:>14}")
+      f" {c.get('pairs_refused_possibly_occluded', 0):>14} {share:>14} {occluded:>9}")
 PY
 done

@@ -33,9 +33,11 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;
+    a.occlusion_hemicubes += b.occlusion_hemicubes;
     for (std::size_t f = 0; f < 5; ++f) {
         a.pieces_drawn[f] += b.pieces_drawn[f];
         a.pieces_culled[f] += b.pieces_culled[f];
+        a.pieces_occluded[f] += b.pieces_occluded[f];
     }
     a.back_face_weight += b.back_face_weight;
     a.miss_weight += b.miss_weight;

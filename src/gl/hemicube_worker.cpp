@@ -51,6 +51,12 @@ std::array<float, 16> face_matrix(const FaceSpec& f, double near) {
 
 }  // namespace
 
+// Hemicubes that list fewer pieces than this draw them all at once: occlusion culling's extra
+// pass and depth readback would cost more than the pieces it can leave out.
+constexpr std::size_t kOcclusionMinPieces = 128;
+// Occluders chosen by angular size (occlude()), besides those the last hemicube showed.
+constexpr std::size_t kOccluderCount = 32;
+
 int half_resolution(int n) { return n / 2 >= 8 && (n / 2) % 2 == 0 ? n / 2 : n; }
 
 
@@ -137,6 +143,13 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     all_idx_.reserve(slots * 2);
     ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
     acc_.assign(scene.patches.size(), 0.0);
+    piece_of_.resize(scene.patches.size());
+    for (std::size_t g = 0; g < scene.grids.size(); ++g) {  // grids are in patch order
+        const std::size_t end = g + 1 < scene.grids.size() ? scene.grids[g + 1].first_patch : scene.patches.size();
+        for (std::size_t c = scene.grids[g].first_patch; c < end; ++c) piece_of_[c] = static_cast<std::uint32_t>(g);
+    }
+    seen_.assign(scene.grids.size(), 0u);
+    depth_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
     stamp_.assign(scene.patches.size(), 0);
     if (const char* fail = std::getenv("FFCUBE_TEST_WORKER_FAIL"); fail && *fail) {
         const std::string f = fail;
@@ -198,54 +211,19 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     st.prepare_seconds += watch.seconds();
     watch.restart();
 
-    // Upload the corners and the five index lists back to back.
-    gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
-    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
-    all_idx_.clear();
-    for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
-    gl.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
-                  all_idx_.data(), GL_STREAM_DRAW);
-
     gl.BindFramebuffer(GL_FRAMEBUFFER, (half ? half_target_ : target_).fbo.id());
     const std::array<FaceSpec, 5>& faces = half ? half_face_m_ : face_m_;
+    const double near = HemicubeRowProvider::kNear * pa.size;
+    gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
+    if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, half, st);
+    build_lists(false, &st);
+    upload_lists();
     const GLuint zero_id[4] = {0, 0, 0, 0};
     const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
     gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
     gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
-    const double near = HemicubeRowProvider::kNear * pa.size;
-    // Front-facing pieces first, then back-facing ones pushed 64 depth units farther
-    // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
-    // back shows its front side, never the back of the other (no z-fighting; GL_GREATER also
-    // lets the first drawn win exact ties; 4 units were too few for the two faces' rounding,
-    // measured). No slope factor: a back face seen edge-on (a wall standing on the sender's
-    // plate) has a huge depth slope, and slope × 1 let what is behind it show through
-    // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (its program,
-    // from cull()'s classification of the whole piece), not gl_FrontFacing: the rasterizer
-    // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
-    // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
-    // back-face pixel.
-    std::size_t first_index = 0;
-    for (int pass = 0; pass < 2; ++pass) {
-        if (pass == 1) {
-            gl.Enable(GL_POLYGON_OFFSET_FILL);
-            gl.PolygonOffset(0.0f, -64.0f);
-            gl.UseProgram(back_program_.id());  // discards centres outside the piece (item.frag)
-        }
-        for (int f = 0; f < 5; ++f) {
-            const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
-            const std::size_t count = lists_[pass * 5 + f].size();
-            if (count > 0) {
-                const auto m = face_matrix(fs, near);
-                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
-                gl.UniformMatrix4fv(pass == 0 ? u_face_ : u_back_face_, 1, GL_FALSE, m.data());
-                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
-                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
-            }
-            first_index += count;
-        }
-    }
-    gl.Disable(GL_POLYGON_OFFSET_FILL);
-    gl.UseProgram(program_.id());
+    draw_lists(faces, near, 2);
     gl.Finish();
     st.draw_seconds += watch.seconds();
     watch.restart();
@@ -315,6 +293,7 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
             // stopped here instead of writing past the row's arrays.
             FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
                                                             p, k, id, stamp_.size()));
+            seen_[piece_of_[j]] = seen_stamp_;
             if (stamp_[j] != epoch_) {
                 stamp_[j] = epoch_;
                 acc_[j] = 0.0;
@@ -327,19 +306,26 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
             acc_[j] = a;
         }
     }
+    // The pieces this hemicube showed are the next one's occluders (occlude()).
+    last_stamp_ = seen_stamp_;
+    if (++seen_stamp_ == 0) {
+        std::fill(seen_.begin(), seen_.end(), 0u);
+        last_stamp_ = 0;  // no occluders for the next hemicube
+        seen_stamp_ = 1;
+    }
     st.back_face_weight += weight * back;
     st.miss_weight += weight * miss;
     st.accumulate_seconds += watch.seconds();
 }
 
-// Sorts the pieces into the five faces' index lists: a piece goes to a face unless all its
+// Lists the pieces that may show (drawn_) with their faces: a piece goes to a face unless all its
 // corners lie outside one of the face's frustum planes; pieces wholly behind the hemicube
 // plane (z ≤ 0: this includes the patch's own piece and every piece coplanar with it) go
 // nowhere. Corners suffice for pieces drawn with T-vertices too: those lie on the edges.
 // Only the pieces render() marked as maybe in front are tested, in piece order (the draw
 // order, which decides exact depth ties, is the same as when every piece was tested).
 void Worker::cull(HemicubeStats& st) {
-    for (auto& l : lists_) l.clear();
+    drawn_.clear();
     const std::size_t ng = scene_.grids.size();
     st.pieces_considered += ng;
     for (std::size_t g = 0; g < ng; ++g) {
@@ -383,23 +369,161 @@ void Worker::cull(HemicubeStats& st) {
         const double nrm[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
         const bool back = nrm[0] * c0[0] + nrm[1] * c0[1] + nrm[2] * c0[2] > 0;
         if (back && pieces_.has_twin[g]) continue;  // its twin's front covers it (find_twins)
-        const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[g];
-        const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[g + 1];
+        std::uint8_t faces = 0;
         for (std::size_t f = 0; f < 5; ++f) {
-            if (all & masks[f]) {
+            if (all & masks[f])
                 ++st.pieces_culled[f];
+            else
+                faces = static_cast<std::uint8_t>(faces | (1u << f));
+        }
+        if (faces != 0) drawn_.push_back({static_cast<std::uint32_t>(g), faces, back});
+    }
+}
+
+// The index lists of drawn_'s pieces per face and pass, in piece order (the draw order, which
+// decides exact depth ties): every piece, or (occluders_only) the front pieces the last hemicube
+// showed. st: counts the drawn pieces per face.
+void Worker::build_lists(bool occluders_only, HemicubeStats* st) {
+    for (auto& l : lists_) l.clear();
+    for (const Drawn& d : drawn_) {
+        if (occluders_only && !d.occluder) continue;
+        const std::uint32_t base = pieces_.first[d.g];
+        const std::uint32_t count = scene_.grids[d.g].count;
+        const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[d.g];
+        const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[d.g + 1];
+        for (std::size_t f = 0; f < 5; ++f) {
+            if (!(d.faces & (1u << f))) continue;
+            if (st) ++st->pieces_drawn[f];
+            auto& l = lists_[f + (d.back ? 5 : 0)];
+            if (tri_begin == tri_end) {
+                l.insert(l.end(), {base, base + 1, base + 2});
+                if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
             } else {
-                ++st.pieces_drawn[f];
-                auto& l = lists_[f + (back ? 5 : 0)];
-                if (tri_begin == tri_end) {
-                    l.insert(l.end(), {base, base + 1, base + 2});
-                    if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
-                } else {
-                    l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
-                }
+                l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
             }
         }
     }
+}
+
+// The ten index lists back to back into the element buffer.
+void Worker::upload_lists() {
+    all_idx_.clear();
+    for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
+    gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
+                   all_idx_.data(), GL_STREAM_DRAW);
+}
+
+// Draws the uploaded lists into the bound target: the front pass, then (passes 2) the back one.
+void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes) {
+    const gl::Api& gl = gl_;
+    // Front-facing pieces first, then back-facing ones pushed 64 depth units farther
+    // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
+    // back shows its front side, never the back of the other (no z-fighting; GL_GREATER also
+    // lets the first drawn win exact ties; 4 units were too few for the two faces' rounding,
+    // measured). No slope factor: a back face seen edge-on (a wall standing on the sender's
+    // plate) has a huge depth slope, and slope × 1 let what is behind it show through
+    // (test Occluders.WallSeenEdgeOnFromBothSidesBlocksEverything: 508 leaking pairs). Which side a fragment shows is the pass's (its program,
+    // from cull()'s classification of the whole piece), not gl_FrontFacing: the rasterizer
+    // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
+    // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
+    // back-face pixel.
+    std::size_t first_index = 0;
+    for (int pass = 0; pass < passes; ++pass) {
+        if (pass == 1) {
+            gl.Enable(GL_POLYGON_OFFSET_FILL);
+            gl.PolygonOffset(0.0f, -64.0f);
+            gl.UseProgram(back_program_.id());  // discards centres outside the piece (item.frag)
+        }
+        for (int f = 0; f < 5; ++f) {
+            const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
+            const std::size_t count = lists_[pass * 5 + f].size();
+            if (count > 0) {
+                const auto m = face_matrix(fs, near);
+                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
+                gl.UniformMatrix4fv(pass == 0 ? u_face_ : u_back_face_, 1, GL_FALSE, m.data());
+                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
+            }
+            first_index += count;
+        }
+    }
+    if (passes > 1) {
+        gl.Disable(GL_POLYGON_OFFSET_FILL);
+        gl.UseProgram(program_.id());
+    }
+}
+
+// Occlusion culling: the front pieces the worker's last hemicube showed are drawn first, depth
+// only (in a street of a city: the facades around); the depth image is read back, and a piece
+// whose footprint on a face (hemicube/occlusion.hpp) is wholly covered by nearer occluder pixels,
+// by a margin, is left out of that face. Exact: a piece left out has every fragment behind the
+// depth those occluders leave, and the occluder that sets a pixel's depth is never left out
+// itself (it would have to lie behind its own depth), so in the full drawing that follows every
+// pixel ends at least as near, and the left-out piece could not have won one. The item buffer is
+// bitwise the same as without (test OcclusionCulling.*); the choice of occluders only decides how much
+// is left out, never what the hemicube shows, so rows do not depend on which worker drew what.
+void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st) {
+    const gl::Api& gl = gl_;
+    // Occluders: front pieces the last hemicube showed (the same surroundings for the next
+    // sub-hemicube of a row, often for the next row), and the kOccluderCount front pieces of the
+    // largest angular size seen from here (bounding radius over the distance of the nearest
+    // point of the bounding sphere: the facades around the eye).
+    scores_.clear();
+    for (std::size_t k = 0; k < drawn_.size(); ++k) {
+        Drawn& d = drawn_[k];
+        d.occluder = !d.back && seen_[d.g] == last_stamp_ && last_stamp_ != 0;
+        if (d.back || d.occluder) continue;
+        const std::uint32_t base = pieces_.first[d.g];
+        const std::uint32_t count = scene_.grids[d.g].count;
+        Vec3 c(0.0);
+        for (std::uint32_t v = 0; v < count; ++v) c += Vec3(local_[(base + v) * 3], local_[(base + v) * 3 + 1], local_[(base + v) * 3 + 2]);
+        c /= static_cast<double>(count);
+        double r2 = 0;
+        for (std::uint32_t v = 0; v < count; ++v) {
+            const Vec3 e = Vec3(local_[(base + v) * 3], local_[(base + v) * 3 + 1], local_[(base + v) * 3 + 2]) - c;
+            r2 = std::max(r2, glm::dot(e, e));
+        }
+        const double r = std::sqrt(r2), gap = glm::length(c) - r;
+        scores_.emplace_back(gap > 0 ? r / gap : INFINITY, static_cast<std::uint32_t>(k));
+    }
+    if (scores_.size() > kOccluderCount) {
+        std::nth_element(scores_.begin(), scores_.begin() + kOccluderCount, scores_.end(),
+                         [](const auto& a, const auto& b) { return a.first > b.first || (a.first == b.first && a.second < b.second); });
+        scores_.resize(kOccluderCount);
+    }
+    for (const auto& [score, k] : scores_) drawn_[k].occluder = true;
+    build_lists(true, nullptr);
+    std::size_t occluders = 0;
+    for (int f = 0; f < 5; ++f) occluders += lists_[f].size();
+    if (occluders == 0) return;
+    upload_lists();
+    const GLfloat zero_depth = 0.0f;
+    gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
+    gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    draw_lists(faces, near, 1);
+    gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    const HemicubeLayout& lay = half ? half_layout_ : layout_;
+    gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_DEPTH_COMPONENT, GL_FLOAT, depth_.data());
+    const std::span<const float> depth(depth_.data(), static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height());
+    for (std::size_t f = 0; f < 5; ++f) tiles_[f].build(depth, lay.atlas_width(), faces[f].viewport);
+    for (Drawn& d : drawn_) {
+        if (d.occluder) continue;  // drawn, and in the depth image
+        const std::uint32_t base = pieces_.first[d.g];
+        corners_.clear();
+        for (std::uint32_t k = 0; k < scene_.grids[d.g].count; ++k) {
+            const float* c = &local_[(base + k) * 3];
+            corners_.emplace_back(c[0], c[1], c[2]);
+        }
+        for (std::size_t f = 0; f < 5; ++f) {
+            if (!(d.faces & (1u << f))) continue;
+            const std::optional<FaceFootprint> fp = face_footprint(faces[f], corners_, near);
+            if (fp && hidden_behind(tiles_[f], *fp)) {
+                d.faces = static_cast<std::uint8_t>(d.faces & ~(1u << f));
+                ++st.pieces_occluded[f];
+            }
+        }
+    }
+    ++st.occlusion_hemicubes;
 }
 
 void LocalEngine::start() {

@@ -11,6 +11,7 @@
 #include "ffcube/gl/context.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/occlusion.hpp"
 #include "ffcube/hemicube/pieces.hpp"
 #include "ffcube/scene/scene.hpp"
 #include "gl/engine.hpp"
@@ -43,8 +44,19 @@ public:
     const std::vector<std::uint32_t>& ids() const { return ids_; }
 
 private:
+    // A piece cull() found may show: the faces it goes to (bit f) and the pass (front or back).
+    struct Drawn {
+        std::uint32_t g;
+        std::uint8_t faces;
+        bool back;
+        bool occluder = false;  // drawn first by occlude()
+    };
     void accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st);
     void cull(HemicubeStats& st);
+    void occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st);
+    void build_lists(bool occluders_only, HemicubeStats* st);
+    void upload_lists();
+    void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes);
 
     const gl::Api& gl_;
     const Scene& scene_;
@@ -64,7 +76,17 @@ private:
     std::vector<float> local_;
     std::vector<std::uint32_t> visit_;  // per piece: == visit_stamp_ when it may be in front (PieceBvh)
     std::uint32_t visit_stamp_ = 0;
+    std::vector<Drawn> drawn_;                          // cull()'s pieces, in piece order
     std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
+    // Occlusion culling (occlude()): the pieces that showed in this worker's last hemicube are
+    // drawn first, as occluders, and what lies wholly behind them is left out.
+    std::vector<std::uint32_t> piece_of_;  // per patch: its piece
+    std::vector<std::uint32_t> seen_;      // per piece: == seen_stamp_ when the last hemicube showed it
+    std::uint32_t seen_stamp_ = 1, last_stamp_ = 0;
+    std::vector<float> depth_;
+    std::array<FaceDepthTiles, 5> tiles_;
+    std::vector<Vec3> corners_;
+    std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
     std::vector<std::uint32_t> ids_, half_ids_;
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;

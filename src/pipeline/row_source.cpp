@@ -171,7 +171,9 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     for (std::size_t f = 0; f < 5; ++f) {
         r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);
         r.set(fmt::format("drawn.pieces_per_face.{}", names[f]), st.pieces_drawn[f]);
+        r.set(fmt::format("left_out.pieces_occluded_per_face.{}", names[f]), st.pieces_occluded[f]);
     }
+    r.set("left_out.occlusion_hemicubes", st.occlusion_hemicubes);
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);

@@ -29,6 +29,10 @@ struct HemicubeOptions {
     // Workers may be forked processes (when this process has no thread and no context yet).
     // false: always threads, each with its own context; an MPI rank must not fork (src/mpi).
     bool worker_processes = true;
+    // Occlusion culling (docs/architecture.md, "Culling"): in a hemicube of many pieces, those
+    // wholly behind the pieces the worker's previous hemicube showed (drawn first, depth only)
+    // are not drawn. The item buffers are the same bits either way (tested); false: draw all.
+    bool occlusion_culling = true;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -46,6 +50,8 @@ struct HemicubeStats {
     std::uint64_t pieces_tested = 0;                  // classified one by one (the others: PieceBvh)
     std::array<std::uint64_t, 5> pieces_drawn{};      // per face (top, +x, -x, +y, -y)
     std::array<std::uint64_t, 5> pieces_culled{};     // in front of the plane but outside the face
+    std::array<std::uint64_t, 5> pieces_occluded{};   // in the face but behind the occluders
+    std::uint64_t occlusion_hemicubes = 0;            // hemicubes that drew occluders first
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
