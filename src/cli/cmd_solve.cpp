@@ -236,7 +236,7 @@ int run(const Options& o) {
         }
         write_patch_radiosity_csv(o.radiosity, object, area, res.radiosity, scene.objects);
     }
-    if (!o.sky.sky.empty()) write_surface_outputs(o.sky, sky_sums, scene, report, obstructed);
+    if (!o.sky.sky.empty()) write_sky_outputs(o.sky, sky_sums, scene, report, obstructed);
     if (!o.mesh.empty()) {
         write_ply(o.mesh, solved_ply_mesh(scene, res.radiosity, shading, exposure),
                   fmt::format("ffcube solve of {}: colours = sRGB of exposure {:.6g} x radiosity / pi; radiosity_* = B", scene.source,

@@ -145,8 +145,13 @@ std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
                            const RowStreamChecks& checks, const Scene& scene, Report& report,
                            std::span<const double> obstructed) {
-    write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed);
+    write_sky_outputs(o, row_sums, scene, report, obstructed);
     if (!o.view3d.empty()) write_view3d_file(o, checks.object_factors(), scene, report);
+}
+
+void write_sky_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene, Report& report,
+                       std::span<const double> obstructed) {
+    write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed);
 }
 
 }  // namespace ffcube
