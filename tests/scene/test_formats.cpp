@@ -24,45 +24,21 @@
 #include "ffcube/scene/stl_loader.hpp"
 #include "ffcube/scene/vs3_loader.hpp"
 #include "support/gltf.hpp"
+#include "support/temp_files.hpp"
 
 namespace ffcube {
 namespace {
 
 namespace fs = std::filesystem;
 
-class Temp {
-public:
-    Temp() {
-        char tmpl[] = "/tmp/ffcube_formats_XXXXXX";
-        path_ = mkdtemp(tmpl);
-    }
-    ~Temp() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    fs::path write(const std::string& name, const std::string& bytes) const {
-        const fs::path p = path_ / name;
-        std::ofstream(p, std::ios::binary) << bytes;
-        return p;
-    }
-
-private:
-    fs::path path_;
-};
+using Temp = test::TempFiles;
 
 std::string read(const fs::path& p) {
     std::ifstream in(p, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no InputError)";
-}
+const auto error_of = test::input_error_of;
 
 #define EXPECT_CONTAINS(haystack, needle) EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 

@@ -12,6 +12,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/obj_loader.hpp"
+#include "support/temp_files.hpp"
 
 namespace fs = std::filesystem;
 using namespace ffcube;
@@ -21,14 +22,7 @@ namespace {
 const fs::path kScenes = fs::path(FFCUBE_SOURCE_DIR) / "tests" / "data" / "scenes";
 
 // The message of the InputError f throws, or a marker that no InputError came.
-std::string error_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no InputError)";
-}
+const auto error_of = test::input_error_of;
 
 MtlResolver no_mtl() {
     return [](const std::string&) { return std::optional<std::string>(); };
@@ -37,25 +31,7 @@ MtlResolver no_mtl() {
 ObjModel parse(std::string_view text) { return parse_obj(text, "t.obj", no_mtl()); }
 
 // A scratch directory for generated files (binary garbage, huge tokens), removed at the end.
-class TempDir {
-public:
-    TempDir() : path_(fs::path(testing::TempDir()) / ("ffcube_scene_" + std::to_string(::getpid()))) {
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(path_, ec);
-    }
-    fs::path write(const std::string& name, const std::string& bytes) const {
-        const fs::path p = path_ / name;
-        std::ofstream(p, std::ios::binary) << bytes;
-        return p;
-    }
-    const fs::path& path() const { return path_; }
-
-private:
-    fs::path path_;
-};
+using TempDir = test::TempFiles;
 
 struct BadCase {
     const char* file;
