@@ -64,6 +64,8 @@ void add_adaptive_options(CLI::App& app, AdaptiveFlags& o) {
                          ->default_val(o.options.max_elements);
     app.add_flag("!--no-reuse-rows", o.options.reuse_rows,
                  "adaptive meshing: measure every row at every level (default: rows of patches not split are carried over)");
+    app.add_flag("!--restart-workers", o.options.keep_workers,
+                 "adaptive meshing: start new hemicube workers at every level (default: the first level's are kept)");
 }
 
 void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {

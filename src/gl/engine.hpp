@@ -8,6 +8,8 @@
 
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/hemicube/pieces.hpp"
+#include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
 
@@ -21,6 +23,9 @@ public:
     virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) = 0;
     virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
     virtual void stop() = 0;  // on the worker thread, after the last request
+    // Draw `scene` (cut into `pieces`) from the next request on; from the provider's thread,
+    // between runs. Both must outlive the engine or the next call.
+    virtual void set_scene(const Scene& scene, const ScenePieces& pieces) = 0;
 };
 
 // a += b, field by field.

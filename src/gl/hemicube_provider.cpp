@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <exception>
 #include <mutex>
 #include <thread>
 #include <tuple>
@@ -16,6 +17,7 @@
 #include "ffcube/formfactor/ordered_pool.hpp"
 #include "ffcube/hemicube/layout.hpp"
 #include "ffcube/hemicube/pieces.hpp"
+#include "ffcube/io/scene_blob.hpp"
 #include "gl/engine.hpp"
 #include "gl/hemicube_worker.hpp"
 #include "gl/process_engine.hpp"
@@ -47,7 +49,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
 // Engines live as long as the provider; the pool's threads (one per engine) are stopped before
 // the engines (contexts, child processes) go.
 struct HemicubeRowProvider::Impl {
-    const Scene& scene;
+    const Scene* scene;  // set_scene replaces it (and the pieces, in place)
     HemicubeOptions opt;
     HemicubeLayout layout;
     ScenePieces pieces;
@@ -58,7 +60,7 @@ struct HemicubeRowProvider::Impl {
     mutable std::mutex stats_mutex;
     HemicubeStats stats;
 
-    Impl(const Scene& s, const HemicubeOptions& o) : scene(s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {}
+    Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {}
     ~Impl() { pool.reset(); }
 
     // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
@@ -104,7 +106,7 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
     if (im.opt.worker_processes && can_fork_workers()) {
         im.processes = true;
         for (unsigned t = 0; t < n; ++t) {
-            auto remote = std::make_unique<ProcessEngine>(im.scene, im.pieces, im.layout, im.opt);
+            auto remote = std::make_unique<ProcessEngine>(*im.scene, im.pieces, im.layout, im.opt);
             ProcessEngine& r = *remote;
             im.engines.push_back(std::move(remote));
             std::tie(im.backend, im.renderer) = r.hello();  // throws why the child could not start
@@ -115,9 +117,9 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
         im.renderer = first->renderer();
         std::vector<std::unique_ptr<GlContext>> contexts;
         for (unsigned t = 1; t < n; ++t) contexts.push_back(first->create_sibling());
-        im.engines.push_back(std::make_unique<LocalEngine>(std::move(first), im.scene, im.pieces, im.layout, im.opt));
+        im.engines.push_back(std::make_unique<LocalEngine>(std::move(first), *im.scene, im.pieces, im.layout, im.opt));
         for (auto& c : contexts)
-            im.engines.push_back(std::make_unique<LocalEngine>(std::move(c), im.scene, im.pieces, im.layout, im.opt));
+            im.engines.push_back(std::make_unique<LocalEngine>(std::move(c), *im.scene, im.pieces, im.layout, im.opt));
     }
     im.pool = std::make_unique<OrderedRowPool>(
         n, [&im](unsigned w) { im.engines[w]->start(); }, [&im](unsigned w) { im.engines[w]->stop(); });
@@ -125,7 +127,7 @@ HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptio
 
 HemicubeRowProvider::~HemicubeRowProvider() = default;
 
-std::uint32_t HemicubeRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene.patches.size()); }
+std::uint32_t HemicubeRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene->patches.size()); }
 
 void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
@@ -151,6 +153,32 @@ std::vector<std::uint32_t> HemicubeRowProvider::item_buffer(std::uint32_t i) {
     Engine& first = *impl_->engines[0];
     impl_->pool->run_on_first([&] { first.item_buffer(i, result); });
     return result;
+}
+
+void HemicubeRowProvider::set_scene(const Scene& scene) {
+    if (scene.patches.size() >= kBackFace - 1) throw InputError("the scene has too many patches for 32-bit item IDs");
+    Impl& im = *impl_;
+    im.scene = &scene;
+    im.pieces = prepare_pieces(scene.grids);  // in place: the engines hold its address
+    if (im.processes) {
+        // Every child takes the scene at once; then each reply is awaited (all of them, so that
+        // none is left mid-message when one fails).
+        const std::vector<std::uint8_t> blob = serialize_scene(scene);
+        for (auto& e : im.engines) static_cast<ProcessEngine&>(*e).send_scene(blob);
+        std::exception_ptr first;
+        for (auto& e : im.engines) {
+            try {
+                static_cast<ProcessEngine&>(*e).await_scene();
+            } catch (...) {
+                if (!first) first = std::current_exception();
+            }
+        }
+        if (first) std::rethrow_exception(first);
+    } else {
+        for (auto& e : im.engines) e->set_scene(scene, im.pieces);
+    }
+    std::lock_guard lock(im.stats_mutex);
+    im.stats = HemicubeStats{};
 }
 
 HemicubeStats HemicubeRowProvider::stats() const {

@@ -528,17 +528,33 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, bool hal
 
 void LocalEngine::start() {
     ctx_->make_current();
-    worker_ = std::make_unique<Worker>(*ctx_, scene_, pieces_, layout_, opt_);
+    worker_ = std::make_unique<Worker>(*ctx_, *scene_, *pieces_, layout_, opt_);
+}
+
+void LocalEngine::set_scene(const Scene& scene, const ScenePieces& pieces) {
+    scene_ = &scene;
+    pieces_ = &pieces;
+    stale_ = true;
+}
+
+Worker& LocalEngine::worker() {
+    if (stale_) {
+        worker_.reset();  // its GL objects go while the context is current, on this thread
+        worker_ = std::make_unique<Worker>(*ctx_, *scene_, *pieces_, layout_, opt_);
+        stale_ = false;
+    }
+    return *worker_;
 }
 
 void LocalEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
-    worker_->row(p, out, st, sub_points);
+    worker().row(p, out, st, sub_points);
 }
 
 void LocalEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {
     HemicubeStats ignored;
-    worker_->render(p, ignored);
-    out = worker_->ids();
+    Worker& w = worker();
+    w.render(p, ignored);
+    out = w.ids();
 }
 
 void LocalEngine::stop() {

@@ -100,17 +100,22 @@ class LocalEngine final : public Engine {
 public:
     LocalEngine(std::unique_ptr<GlContext> ctx, const Scene& scene, const ScenePieces& pieces,
                 const HemicubeLayout& layout, const HemicubeOptions& opt)
-        : ctx_(std::move(ctx)), scene_(scene), pieces_(pieces), layout_(layout), opt_(opt) {}
+        : ctx_(std::move(ctx)), scene_(&scene), pieces_(&pieces), layout_(layout), opt_(opt) {}
     ~LocalEngine() override { ctx_.reset(); }
     void start() override;
     void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
     void stop() override;
+    // The Worker is rebuilt on this engine's thread (where its context is current) at the next request.
+    void set_scene(const Scene& scene, const ScenePieces& pieces) override;
 
 private:
+    Worker& worker();  // the Worker for the current scene, rebuilt after set_scene
+
     std::unique_ptr<GlContext> ctx_;
-    const Scene& scene_;
-    const ScenePieces& pieces_;
+    const Scene* scene_;
+    const ScenePieces* pieces_;
+    bool stale_ = false;
     const HemicubeLayout& layout_;
     const HemicubeOptions& opt_;
     std::unique_ptr<Worker> worker_;

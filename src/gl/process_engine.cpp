@@ -18,6 +18,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/error_transport.hpp"
 #include "ffcube/gl/context.hpp"
+#include "ffcube/io/scene_blob.hpp"
 #include "gl/gl_api.hpp"
 #include "gl/hemicube_worker.hpp"
 
@@ -25,7 +26,9 @@ namespace ffcube {
 
 // The wire protocol between a ProcessEngine and its child: fixed-size headers and raw arrays
 // over a Unix socket pair (both ends are the same binary).
-enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2, SampledFineRow = 3 };
+// SetScene: a std::uint64_t byte count and that many bytes of io/scene_blob.hpp follow; the reply
+// has no payload.
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2, SampledFineRow = 3, SetScene = 4 };
 struct RequestMsg {
     Request kind;
     std::uint32_t patch;
@@ -94,7 +97,13 @@ void send_current_error(int fd) {
     try {
         std::unique_ptr<GlContext> ctx = create_headless_context(opt.backend);
         ctx->make_current();
-        Worker worker(*ctx, scene, pieces, layout, opt);
+        // The scene drawn: the parent's (copy-on-write since the fork) until a SetScene brings
+        // another, which this child then owns with its pieces.
+        const Scene* current_scene = &scene;
+        const ScenePieces* current_pieces = &pieces;
+        std::unique_ptr<Scene> own_scene;
+        std::unique_ptr<ScenePieces> own_pieces;
+        auto worker = std::make_unique<Worker>(*ctx, *current_scene, *current_pieces, layout, opt);
         const std::string hello = ctx->backend() + '\n' + ctx->renderer();
         ReplyMsg h{0, hello.size(), {}};
         send_all(fd, &h, sizeof h);
@@ -104,8 +113,24 @@ void send_current_error(int fd) {
         while (recv_all(fd, &req, sizeof req)) {
             try {
                 ReplyMsg r{0, 0, {}};
-                if (req.kind == Request::Row || req.kind == Request::SampledRow || req.kind == Request::SampledFineRow) {
-                    worker.row(req.patch, row, r.stats,
+                if (req.kind == Request::SetScene) {
+                    std::uint64_t n = 0;
+                    if (!recv_all(fd, &n, sizeof n)) break;
+                    std::vector<std::uint8_t> blob(n);
+                    if (n && !recv_all(fd, blob.data(), n)) break;
+                    worker.reset();  // before the scene it refers to goes
+                    auto next_scene = std::make_unique<Scene>(deserialize_scene(blob));
+                    auto next_pieces = std::make_unique<ScenePieces>(prepare_pieces(next_scene->grids));
+                    own_scene = std::move(next_scene);
+                    own_pieces = std::move(next_pieces);
+                    current_scene = own_scene.get();
+                    current_pieces = own_pieces.get();
+                    worker = std::make_unique<Worker>(*ctx, *current_scene, *current_pieces, layout, opt);
+                    send_all(fd, &r, sizeof r);
+                } else if (!worker) {
+                    throw IoError("hemicube worker: no scene (the last scene sent could not be taken)");
+                } else if (req.kind == Request::Row || req.kind == Request::SampledRow || req.kind == Request::SampledFineRow) {
+                    worker->row(req.patch, row, r.stats,
                                req.kind == Request::SampledRow ? 2 : req.kind == Request::SampledFineRow ? 4 : 0);
                     r.count = row.nnz();
                     send_all(fd, &r, sizeof r);
@@ -113,11 +138,11 @@ void send_current_error(int fd) {
                     send_vector(fd, row.val);
                 } else {
                     FFCUBE_CHECK_MSG(req.kind == Request::ItemBuffer, "hemicube worker: unknown request");
-                    worker.render(req.patch, r.stats);
+                    worker->render(req.patch, r.stats);
                     r.stats = HemicubeStats{};
-                    r.count = worker.ids().size();
+                    r.count = worker->ids().size();
                     send_all(fd, &r, sizeof r);
-                    send_vector(fd, worker.ids());
+                    send_vector(fd, worker->ids());
                 }
             } catch (...) {
                 send_current_error(fd);
@@ -210,6 +235,25 @@ void ProcessEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out
     const Reply r = request(static_cast<std::uint32_t>(Request::ItemBuffer), p);
     out.resize(r.count);
     if (r.count) recv_or_throw(out.data(), r.count * sizeof(std::uint32_t));
+}
+
+void ProcessEngine::send_scene(std::span<const std::uint8_t> blob) {
+    const RequestMsg req{Request::SetScene, 0};
+    const std::uint64_t n = blob.size();
+    send_all(fd_, &req, sizeof req);
+    send_all(fd_, &n, sizeof n);
+    if (n) send_all(fd_, blob.data(), n);
+}
+
+void ProcessEngine::await_scene() {
+    Reply r{};
+    recv_or_throw(&r, sizeof r);
+    if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
+}
+
+void ProcessEngine::set_scene(const Scene& scene, const ScenePieces&) {
+    send_scene(serialize_scene(scene));
+    await_scene();
 }
 
 ProcessEngine::Reply ProcessEngine::request(std::uint32_t kind, std::uint32_t p) {

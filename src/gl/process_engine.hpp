@@ -11,6 +11,8 @@
 // that dies, are IoError.
 #pragma once
 
+#include <cstdint>
+#include <span>
 #include <string>
 #include <sys/types.h>
 #include <utility>
@@ -37,6 +39,13 @@ public:
     void stop() override {}
     void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
+    // Sends the scene and waits for the child to rebuild its pieces and Worker (a child keeps
+    // its GL context across scenes). `pieces` is not sent: the child prepares its own.
+    void set_scene(const Scene& scene, const ScenePieces& pieces) override;
+    // The same in two halves, so that the children of one provider rebuild at the same time:
+    // send_scene with the serialized scene (io/scene_blob.hpp), then await_scene for the reply.
+    void send_scene(std::span<const std::uint8_t> blob);
+    void await_scene();
 
     struct Reply;  // the wire format's reply header (process_engine.cpp)
 

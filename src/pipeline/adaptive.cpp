@@ -100,8 +100,12 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
     std::vector<double> refined_share;  // per object: the share of its area the last refinement split
     for (std::uint32_t level = 0;; ++level) {
         Stopwatch watch;
-        a.rows = RowSource{};  // the previous level's workers end before the next start
-        a.rows = make_row_source(*a.scene, rows);
+        if (level > 0 && options.keep_workers) {
+            rebind_row_source(a.rows, *a.scene);  // the same workers, this level's elements
+        } else {
+            a.rows = RowSource{};  // the previous level's workers end before the next start
+            a.rows = make_row_source(*a.scene, rows);
+        }
         ReusedRowProvider provider(*a.scene, a.rows.provider(), parent, split,
                                    options.reuse_rows ? std::move(carried) : LevelRows{});
         a.result = solve_radiosity(*a.scene, provider, solver);
@@ -112,6 +116,7 @@ AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const 
         rec.rows_reused = provider.rows_reused();
         rec.objects = object_means(*a.scene, a.result.radiosity);
         rec.seconds = watch.seconds();
+        rec.setup_seconds = a.rows.setup_seconds();
         a.levels.push_back(rec);
         if (!a.result.converged()) {
             a.stop = "unconverged_solve";
@@ -182,8 +187,9 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set("adaptive.elements", a.scene->size());
     r.set("adaptive.start_patches", a.levels.empty() ? 0 : a.levels.front().elements);
     std::vector<std::uint64_t> elements, refined, candidates, rows, reused;
-    std::vector<double> seconds;
+    std::vector<double> seconds, setup;
     for (const AdaptiveLevel& l : a.levels) {
+        setup.push_back(l.setup_seconds);
         elements.push_back(l.elements);
         refined.push_back(l.refined);
         candidates.push_back(l.candidates);
@@ -198,6 +204,8 @@ void report_adaptive(Report& r, const AdaptiveResult& a, const AdaptiveOptions& 
     r.set_array("adaptive.levels.rows_reused", reused);
     r.set("adaptive.reuse_rows", o.reuse_rows);
     r.set_array("adaptive.levels.seconds", seconds);
+    r.set_array("adaptive.levels.setup_seconds", setup);
+    r.set("adaptive.keep_workers", o.keep_workers);
     // Where the refinement went: elements per object.
     std::vector<std::uint64_t> per_object(a.scene->objects.size(), 0);
     for (const Patch& p : a.scene->patches) ++per_object[p.object];

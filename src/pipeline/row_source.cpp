@@ -35,18 +35,38 @@ RowSource make_row_source(const Scene& radiating, const RowOptions& options) {
         rows.raycast_ = std::make_unique<RaycastRowProvider>(scene, raycast_options(options));
     else
         rows.hemicube_ = std::make_unique<HemicubeRowProvider>(scene, hemicube_options(options));
-    if (options.correct == Correction::Near) {
-        RowProvider& inner = rows.hemicube_ ? static_cast<RowProvider&>(*rows.hemicube_) : *rows.raycast_;
-        rows.corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options));
-    }
-    if (radiating.drawn) {
-        RowProvider& inner = rows.corrected_ ? static_cast<RowProvider&>(*rows.corrected_)
-                             : rows.hemicube_ ? static_cast<RowProvider&>(*rows.hemicube_)
-                                              : *rows.raycast_;
-        rows.leading_ = std::make_unique<LeadingRowProvider>(inner, static_cast<std::uint32_t>(radiating.size()));
-    }
+    rows.wrap(radiating);
     rows.setup_seconds_ = watch.seconds();
     return rows;
+}
+
+void RowSource::wrap(const Scene& radiating) {
+    const Scene& scene = radiating.drawn_scene();
+    if (options_.correct == Correction::Near) {
+        RowProvider& inner = hemicube_ ? static_cast<RowProvider&>(*hemicube_) : *raycast_;
+        corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options_));
+    }
+    if (radiating.drawn) {
+        RowProvider& inner = corrected_ ? static_cast<RowProvider&>(*corrected_)
+                             : hemicube_ ? static_cast<RowProvider&>(*hemicube_)
+                                         : *raycast_;
+        leading_ = std::make_unique<LeadingRowProvider>(inner, static_cast<std::uint32_t>(radiating.size()));
+    }
+}
+
+void rebind_row_source(RowSource& rows, const Scene& radiating) {
+    if (!rows.hemicube_) {  // nothing to keep: the ray caster starts no workers
+        const RowOptions options = rows.options_;
+        rows = RowSource{};
+        rows = make_row_source(radiating, options);
+        return;
+    }
+    Stopwatch watch;
+    rows.leading_.reset();  // the wrappers refer to the provider and the old scene: they go first
+    rows.corrected_.reset();
+    rows.hemicube_->set_scene(radiating.drawn_scene());
+    rows.wrap(radiating);
+    rows.setup_seconds_ = watch.seconds();
 }
 
 std::vector<std::string> describe(const RowSource& rows) {

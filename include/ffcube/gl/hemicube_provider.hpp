@@ -85,6 +85,15 @@ public:
     // hemicube/layout.hpp), each pixel 0 (nothing), 1 + patch index, or 0xFFFFFFFF (a back face).
     std::vector<std::uint32_t> item_buffer(std::uint32_t i);
 
+    // Makes the workers draw another scene (the next adaptive level's elements) without
+    // restarting them: forked workers are sent the scene (io/scene_blob.hpp) and rebuild their
+    // pieces and GL state; thread workers rebuild theirs on their own thread before their next
+    // row. Rows are then the same bits as a new provider's on `scene` (tested). The counters
+    // (stats()) start again from zero. Not while a compute_rows call runs; `scene` must outlive
+    // this (or the next set_scene). Throws InputError as the constructor does, IoError when a
+    // worker process cannot take the scene.
+    void set_scene(const Scene& scene);
+
     HemicubeStats stats() const;
     std::string backend() const;   // e.g. "egl-surfaceless"
     std::string renderer() const;  // GL_RENDERER

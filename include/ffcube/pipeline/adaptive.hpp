@@ -39,6 +39,10 @@ struct AdaptiveOptions {
     // Carry the rows of patches not split over to the next level (docs/adaptive.md, "Rows reused
     // between levels"); off: every level measures every row (--no-reuse-rows).
     bool reuse_rows = true;
+    // Keep the first level's row source (its forked hemicube workers) for every level and send
+    // it each level's elements (rebind_row_source); off: a new row source, and new workers, per
+    // level (--restart-workers). The rows are the same bits either way (tested).
+    bool keep_workers = true;
 };
 
 // The starting mesh of an adaptive solve when the command line names none: coarse enough that the
@@ -54,6 +58,7 @@ struct AdaptiveLevel {
     std::uint64_t rows_computed = 0;  // rows measured (hemicubes or ray sets)
     std::uint64_t rows_reused = 0;    // rows carried over from the previous level
     double seconds = 0.0;           // rows and solve of this level
+    double setup_seconds = 0.0;     // of which: starting (or re-pointing) the row source
     std::vector<Vec3> objects;      // area-weighted mean B per object
 };
 

@@ -53,6 +53,8 @@ public:
 
 private:
     friend RowSource make_row_source(const Scene& scene, const RowOptions& options);
+    friend void rebind_row_source(RowSource& rows, const Scene& scene);
+    void wrap(const Scene& radiating);  // the correction and the obstruction cut around the measuring provider
     RowOptions options_;
     // Order matters: the correction holds a reference to the measuring provider, so it is
     // declared last (destroyed first).
@@ -70,6 +72,13 @@ private:
 // columns cut). Start it before this
 // process makes a GL context of its own, so that hemicube workers can be forked processes.
 RowSource make_row_source(const Scene& scene, const RowOptions& options);
+
+// Points `rows` at another scene (the next adaptive level's elements) with the same options,
+// keeping its hemicube workers (forked processes stay; HemicubeRowProvider::set_scene): the rows
+// are the same bits as make_row_source(scene, rows.options())'s. The ray caster and the near-field
+// correction are made again for the new scene (they hold no workers). setup_seconds() is then
+// this call's time. The same rules on `scene` as make_row_source.
+void rebind_row_source(RowSource& rows, const Scene& scene);
 
 // One line per part, saying what it runs on ("hemicube on egl (llvmpipe), 2 threads, ...").
 std::vector<std::string> describe(const RowSource& rows);
