@@ -90,5 +90,60 @@ TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
     EXPECT_GT(floor_elements, floor_patches);
 }
 
+TEST(Adaptive, KeptWorkersGiveTheSameBitsAsWorkersRestartedPerLevel) {
+    // The shadow scene above; rows are not carried over, so every row of level 1 comes from the
+    // workers that level 0 started (kept) or from new ones (restarted). Forked workers first
+    // (this process has no GL context yet), then workers on threads of this process.
+    Scene s = test::make_scene({test::square_z("floor", 0.0, true, 2.0, Vec3(-1, -1, 0)),
+                                test::square_z("occluder", 0.5, true, 0.5, Vec3(-0.25, -0.25, 0)),
+                                test::square_z("light", 1.0, false, 0.5, Vec3(-0.5, -0.25, 0))},
+                               0.5);
+    s.materials.push_back(Material{"lamp", Vec3(0.0), Vec3(10.0)});
+    for (Patch& p : s.patches)
+        if (s.objects[p.object] == "light") p.material = static_cast<std::uint32_t>(s.materials.size() - 1);
+    for (const bool processes : {true, false}) {
+        RowOptions ro = small_rows(2);
+        ro.worker_processes = processes;
+        AdaptiveOptions ao;
+        ao.target_error = 1e-3;
+        ao.max_levels = 2;
+        ao.reuse_rows = false;
+        ao.keep_workers = true;
+        AdaptiveResult kept = solve_adaptive(s, ro, direct(), ao);
+        // The last level's rows, entry by entry, from the kept workers; then those workers end
+        // (their pool's threads would keep the next solve from forking).
+        ASSERT_NE(kept.rows.hemicube(), nullptr);
+        const std::string kept_workers = kept.rows.hemicube()->workers();
+        const CsrMatrix fa = compute_all_rows(kept.rows.provider());
+        kept.rows = RowSource{};
+        ao.keep_workers = false;
+        AdaptiveResult restarted = solve_adaptive(s, ro, direct(), ao);
+        ASSERT_GE(kept.levels.size(), 2u) << "the test needs a refined level";
+        ASSERT_EQ(kept.levels.size(), restarted.levels.size());
+        for (std::size_t l = 0; l < kept.levels.size(); ++l) {
+            EXPECT_EQ(kept.levels[l].elements, restarted.levels[l].elements) << l;
+            EXPECT_EQ(kept.levels[l].objects, restarted.levels[l].objects) << l;
+        }
+        ASSERT_EQ(kept.result.radiosity.size(), restarted.result.radiosity.size());
+        for (std::size_t i = 0; i < kept.result.radiosity.size(); ++i)
+            EXPECT_EQ(kept.result.radiosity[i], restarted.result.radiosity[i]) << i;
+        // Forked workers when this process has made no GL context: so under ctest (one process per
+        // test); run after other tests in one process, both sides fall back to threads alike.
+        EXPECT_EQ(kept_workers, restarted.rows.hemicube()->workers());
+        if (!processes) EXPECT_EQ(kept_workers, "threads");
+        const CsrMatrix fb = compute_all_rows(restarted.rows.provider());
+        ASSERT_EQ(fa.size(), kept.scene->size());
+        ASSERT_EQ(fa.nnz(), fb.nnz());
+        for (std::uint32_t i = 0; i < fa.size(); ++i) {
+            const auto ra = fa.row(i), rb = fb.row(i);
+            ASSERT_EQ(ra.col.size(), rb.col.size()) << i;
+            for (std::size_t k = 0; k < ra.col.size(); ++k) {
+                EXPECT_EQ(ra.col[k], rb.col[k]) << i;
+                EXPECT_EQ(ra.val[k], rb.val[k]) << i;
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace ffcube
