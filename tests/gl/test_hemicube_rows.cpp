@@ -18,8 +18,10 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
+#include <memory>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
@@ -521,6 +523,49 @@ TEST(HemicubeWorkers, ProcessesAndThreadsGiveIdenticalRows) {
     }
     EXPECT_EQ(by_processes.col(), by_threads.col());
     EXPECT_EQ(by_processes.val(), by_threads.val());
+}
+
+// set_scene (adaptive levels keep their workers): a provider started on one scene and sent
+// another gives the rows and item buffers of a provider started on that other scene, bit for
+// bit, and after being sent the first back, the first's again. The scenes differ in geometry,
+// patch count and pieces. Forked workers first, then threads (after this process made a context).
+TEST(HemicubeWorkers, SetSceneGivesTheRowsOfAProviderStartedOnThatScene) {
+    const Scene a = test::make_scene(test::inward_box(1, 2, 1), 0.25);
+    const Scene b = test::make_scene({test::square_z("floor", 0.0, true, 2.0, Vec3(-1, -1, 0)),
+                                      test::square_z("occluder", 0.5, true, 0.5, Vec3(-0.25, -0.25, 0)),
+                                      test::square_z("light", 1.0, false, 0.5, Vec3(-0.5, -0.25, 0))},
+                                     0.25);
+    ASSERT_NE(a.size(), b.size());
+    HemicubeOptions o;
+    o.resolution = 64;
+    o.threads = 2;
+    std::unique_ptr<GlContext> ctx;
+    for (const char* kind : {"processes", "threads"}) {
+        if (std::string(kind) == "threads") ctx = create_headless_context(Backend::Auto);  // no forking from now on
+        CsrMatrix fresh_b;
+        std::vector<std::uint32_t> fresh_ids;
+        {
+            HemicubeRowProvider provider(b, o);
+            EXPECT_EQ(provider.workers(), kind);
+            fresh_b = compute_all_rows(provider);
+            fresh_ids = provider.item_buffer(3);
+        }
+        HemicubeRowProvider provider(a, o);
+        EXPECT_EQ(provider.workers(), kind);
+        const CsrMatrix first_a = compute_all_rows(provider);
+        provider.set_scene(b);
+        EXPECT_EQ(provider.size(), b.size());
+        EXPECT_EQ(provider.stats().hemicubes, 0u);  // the counters start again
+        const CsrMatrix sent_b = compute_all_rows(provider);
+        EXPECT_EQ(sent_b.row_ptr(), fresh_b.row_ptr()) << kind;
+        EXPECT_EQ(sent_b.col(), fresh_b.col()) << kind;
+        EXPECT_EQ(sent_b.val(), fresh_b.val()) << kind;
+        EXPECT_EQ(provider.item_buffer(3), fresh_ids) << kind;
+        provider.set_scene(a);
+        const CsrMatrix again_a = compute_all_rows(provider);
+        EXPECT_EQ(again_a.col(), first_a.col()) << kind;
+        EXPECT_EQ(again_a.val(), first_a.val()) << kind;
+    }
 }
 
 // A worker that cannot start reports why, through the provider's constructor.
