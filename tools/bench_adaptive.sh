@@ -15,8 +15,10 @@
 # adaptive runs as two series.
 #   tools/bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]
 # Environment: UNIFORM="60 30 15", TARGETS="1e-2 1e-3", MAX_ELEMENTS=4000, REFERENCE_FINE, REFERENCE_COARSE,
-# CONTACT_CUTS=auto|on|off (--contact-cuts of every run; auto: off for the default and uniform runs,
-# on for the adaptive ones), ORDER=1, REUSE=on (on, off or "on off").
+# CONTACT_CUTS=auto|on|off (--contact-cuts of every run; auto, the default: cut wherever an object
+# stands on another), ORDER=1, REUSE=on (on, off or "on off"), STARTS=coarse (adaptive starting meshes:
+# coarse, the start of about 500 patches, or N: --patches N; e.g. STARTS="coarse 2000" for both; runs
+# from N are named adaptive_T_startN).
 set -euo pipefail
 build=${1:?usage: bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]}
 out=${2:?usage: bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]}
@@ -27,22 +29,33 @@ max_elements=${MAX_ELEMENTS:-4000}
 cuts=${CONTACT_CUTS:-auto}
 order=${ORDER:-1}
 reuse=${REUSE:-on}
+starts=${STARTS:-coarse}
 mkdir -p "$out"
 ffcube="$build/ffcube"
 runs=()
-"$ffcube" solve $scene -q --contact-cuts "$cuts" --objects "$out/default.csv" --report "$out/default.json"
+# solve NAME ARGS...: one run, its CPU time (user + sys of ffcube and its worker processes, GNU
+# time) in OUT/NAME.cpu when /usr/bin/time is there.
+solve() {
+    local name=$1; shift
+    local timer=()
+    [ -x /usr/bin/time ] && timer=(/usr/bin/time -f "%U %S" -o "$out/$name.cpu")
+    "${timer[@]}" "$ffcube" solve $scene -q --contact-cuts "$cuts" "$@" --objects "$out/$name.csv" --report "$out/$name.json"
+}
+solve default
 runs+=(default)
 for L in $uniform; do
-    "$ffcube" solve $scene -q --contact-cuts "$cuts" --max-patch-edge "$L" --objects "$out/uniform_$L.csv" --report "$out/uniform_$L.json"
+    solve "uniform_$L" --max-patch-edge "$L"
     runs+=("uniform_$L")
 done
 for t in $targets; do
     for r in $reuse; do
-        name="adaptive_$t"; flag=""
-        if [ "$r" = off ]; then name="adaptive_${t}_no_reuse"; flag="--no-reuse-rows"; fi
-        "$ffcube" solve $scene -q --contact-cuts "$cuts" --target-error "$t" --max-elements "$max_elements" $flag \
-            --objects "$out/$name.csv" --report "$out/$name.json"
-        runs+=("$name")
+        for s in $starts; do
+            name="adaptive_$t"; flag=""
+            if [ "$r" = off ]; then name="adaptive_${t}_no_reuse"; flag="--no-reuse-rows"; fi
+            if [ "$s" != coarse ]; then name="${name}_start$s"; flag="$flag --patches $s"; fi
+            solve "$name" --target-error "$t" --max-elements "$max_elements" $flag
+            runs+=("$name")
+        done
     done
 done
 set -- $uniform
@@ -68,8 +81,8 @@ if len(levels) >= 3:  # observed order of the last two halvings, per object
     print("observed order: " + ", ".join(
         f"{o} {math.log2(abs((b[o] - a[o]) / (c3[o] - b[o]))):.2f}" if c3[o] != b[o] and b[o] != a[o] else f"{o} -"
         for o in names))
-print("| run | patches/elements | time.total s | largest error | " + " | ".join(names) + " |")
-print("|---|---|---|---|" + "---|" * len(names))
+print("| run | patches/elements | time.total s | CPU s | largest error | " + " | ".join(names) + " |")
+print("|---|---|---|---|---|" + "---|" * len(names))
 points = []
 for run in runs:
     rep = json.load(open(f"{out}/{run}.json"))
@@ -77,7 +90,11 @@ for run in runs:
     b = objects(f"{out}/{run}.csv")
     err = {o: b[o] / ref[o] - 1 for o in names}
     worst = max(abs(e) for e in err.values())
-    print(f"| {run} | {n} | {rep['time']['total']:.1f} | {worst*100:.2f}% | " +
+    try:
+        cpu = f"{sum(float(x) for x in open(f'{out}/{run}.cpu').read().split()[-2:]):.1f}"
+    except (OSError, ValueError):
+        cpu = "-"
+    print(f"| {run} | {n} | {rep['time']['total']:.1f} | {cpu} | {worst*100:.2f}% | " +
           " | ".join(f"{err[o]*100:+.2f}%" for o in names) + " |")
     points.append((run, rep["time"]["total"], max(worst, 1e-6)))
 # error_vs_time.svg: log-log, uniform (and default) runs in blue, adaptive runs in red.

@@ -47,9 +47,11 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
         ->excludes(edge)
         ->excludes(patches);
     add_word_option(app, "--contact-cuts", o.scene.contact_cuts, parse_contact_cuts, {"auto", "on", "off"},
-                    "cut faces along the polygons where other objects stand on them, before meshing (auto: on for "
-                    "adaptive solves; docs/adaptive.md)",
+                    "cut faces along the polygons where other objects stand on them, before meshing (auto: on "
+                    "unless --no-subdivide; docs/adaptive.md)",
                     "auto");
+    app.add_flag_function(
+        "--no-contact-cuts", [&o](std::int64_t) { o.scene.contact_cuts = ContactCuts::Off; }, "the same as --contact-cuts off");
     add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
                     {"auto", "o", "g", "material"},
                     "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto");
@@ -73,8 +75,6 @@ void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {
     validate(o.options);
     if (scene.patches == 0 && scene.max_patch_edge == 0.0 && scene.subdivide)
         scene.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
-    if (scene.contact_cuts == ContactCuts::Auto && scene.subdivide)
-        scene.contact_cuts = ContactCuts::On;  // contact lines: docs/adaptive.md
 }
 
 void add_row_options(CLI::App& app, RowOptions& o) {

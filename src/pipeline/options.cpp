@@ -35,6 +35,19 @@ ContactCuts parse_contact_cuts(std::string_view text) {
     throw InputError(fmt::format("--contact-cuts {}: must be auto, on or off", text));
 }
 
+bool cuts_contacts(const SceneOptions& o) {
+    return o.contact_cuts == ContactCuts::On || (o.contact_cuts == ContactCuts::Auto && o.subdivide);
+}
+
+const char* to_string(ContactCuts c) {
+    switch (c) {
+        case ContactCuts::Auto: return "auto";
+        case ContactCuts::On: return "on";
+        case ContactCuts::Off: return "off";
+    }
+    return "";
+}
+
 EnforceRequest parse_enforce_request(std::string_view text) {
     if (text.empty()) return EnforceRequest::None;
     if (text == "reciprocity") return EnforceRequest::Reciprocity;

@@ -23,11 +23,14 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
     std::optional<ContactCutStats> cuts;
-    if (o.contact_cuts == ContactCuts::On) {
+    if (cuts_contacts(o)) {
         cuts = cut_contacts(model);
         for (const auto& note : cuts->notes) info("{}", note);
-        info("contact cuts: {} contact polygons cut {} faces into {} (covered area {:.6g})", cuts->contacts, cuts->receivers,
-             cuts->faces, cuts->covered_area);
+        if (cuts->contacts > 0)
+            info("contact cuts ({}; off: --contact-cuts off): {} contact polygons cut {} faces into {} (covered area {:.6g})",
+                 to_string(o.contact_cuts), cuts->contacts, cuts->receivers, cuts->faces, cuts->covered_area);
+        else
+            info("contact cuts ({}): no object stands on another, nothing cut", to_string(o.contact_cuts));
     }
     const double load_s = watch.seconds();
     watch.restart();
@@ -53,7 +56,9 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("meshing.dropped_degenerate", scene.stats.dropped_degenerate);
     report.set("meshing.non_planar", scene.stats.non_planar);
     report.set("meshing.triangulated_ngons", scene.stats.triangulated_ngons);
+    report.set("meshing.contact_cuts.mode", to_string(o.contact_cuts));
     report.set("meshing.contact_cuts.enabled", cuts.has_value());
+    report.set("meshing.contact_cuts.fired", cuts.has_value() && cuts->contacts > 0);
     if (cuts) {
         report.set("meshing.contact_cuts.contacts", cuts->contacts);
         report.set("meshing.contact_cuts.receivers", cuts->receivers);

@@ -80,11 +80,13 @@ TEST(AdaptiveCli, ReportSaysWhatWasRefinedAndEachObjectsError) {
 }
 
 // A 0.5 cube standing on a 2 × 2 floor under a light (contact cuts: scene/contact.hpp).
-void write_block_scene(const TempDir& dir) {
+// `base`: the height of the block's bottom edges ("0": standing on the floor).
+void write_block_scene(const TempDir& dir, const std::string& base = "0") {
     std::ofstream(dir / "b.mtl") << "newmtl grey\nKd 0.5 0.5 0.5\nnewmtl lamp\nKd 0 0 0\nKe 10 10 10\n";
     std::ofstream(dir / "b.obj") << "mtllib b.mtl\n"
                                     "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
-                                    "v -0.25 -0.25 0\nv 0.25 -0.25 0\nv 0.25 0.25 0\nv -0.25 0.25 0\n"
+                                    "v -0.25 -0.25 " + base + "\nv 0.25 -0.25 " + base + "\nv 0.25 0.25 " + base +
+                                    "\nv -0.25 0.25 " + base + "\n"
                                     "v -0.25 -0.25 0.5\nv 0.25 -0.25 0.5\nv 0.25 0.25 0.5\nv -0.25 0.25 0.5\n"
                                     "v -0.5 -0.5 1.5\nv 0.5 -0.5 1.5\nv 0.5 0.5 1.5\nv -0.5 0.5 1.5\n"
                                     "o floor\nusemtl grey\nf 1 2 3 4\n"
@@ -146,6 +148,47 @@ TEST(AdaptiveCli, ContactCutsLeaveTheCoveredFloorDark) {
     r = run_ffcube("solve " + (dir / "b.obj") + " --no-subdivide --contact-cuts on --objects " + (dir / "o.csv"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("--contact-cuts on with --no-subdivide"), std::string::npos) << r.output;
+}
+
+// Contact cuts are on by default (--contact-cuts auto) for every command that meshes, fire only where
+// an object stands on another, say so in the report and on stderr, and --no-contact-cuts (or
+// --contact-cuts off) switches them off. The default run is the --contact-cuts on run, byte for
+// byte; the uncut run meshes the floor as a plain 7 × 7 grid (2 / 0.3 → 7 cells a side).
+TEST(AdaptiveCli, ContactCutsAreOnByDefaultWhereTheSceneHasContacts) {
+    TempDir dir;
+    write_block_scene(dir);
+    const std::string mesh = (dir / "b.obj") + " --max-patch-edge 0.3 --resolution 32 --solver direct --threads 1";
+    auto solve = [&](const std::string& name, const std::string& flags) {
+        auto r = run_ffcube("solve " + mesh + " " + flags + " --radiosity " + (dir / (name + ".csv")) + " --report " +
+                            (dir / (name + ".json")));
+        EXPECT_EQ(r.code, 0) << r.output;
+        return std::pair{r.output, nlohmann::json::parse(test::read_text(dir / (name + ".json")))};
+    };
+    const auto [log, rep] = solve("default", "");
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["mode"], "auto");
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["fired"], true);
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["contacts"], 1);
+    EXPECT_EQ(rep["meshing"]["contact_cuts"]["receivers"], 1);
+    EXPECT_NE(log.find("contact cuts (auto; off: --contact-cuts off): 1 contact polygons cut 1 faces"), std::string::npos) << log;
+    solve("on", "-q --contact-cuts on");
+    EXPECT_EQ(test::read_text(dir / "default.csv"), test::read_text(dir / "on.csv"));
+    const auto [off_log, off_rep] = solve("off", "--no-contact-cuts");
+    EXPECT_EQ(off_rep["meshing"]["contact_cuts"]["enabled"], false);
+    EXPECT_EQ(off_rep["meshing"]["contact_cuts"]["fired"], false);
+    EXPECT_EQ(off_log.find("contact cuts"), std::string::npos) << off_log;
+    const auto b = csv_rows(dir / "off.csv");
+    EXPECT_EQ(std::count_if(b.begin(), b.end(), [](const auto& row) { return row[1] == "floor"; }), 49);
+    // A block raised off the floor stands on nothing: the cuts run, find no contact, and say so.
+    write_block_scene(dir, "0.1");
+    const auto [raised_log, raised] = solve("raised", "");
+    EXPECT_EQ(raised["meshing"]["contact_cuts"]["enabled"], true);
+    EXPECT_EQ(raised["meshing"]["contact_cuts"]["fired"], false);
+    EXPECT_EQ(raised["meshing"]["contact_cuts"]["contacts"], 0);
+    EXPECT_NE(raised_log.find("contact cuts (auto): no object stands on another, nothing cut"), std::string::npos) << raised_log;
+    // --no-subdivide with the default: no cuts and no refusal (only an explicit --contact-cuts on refuses).
+    auto r = run_ffcube("solve " + (dir / "b.obj") + " -q --no-subdivide --resolution 32 --threads 1 --report " + (dir / "n.json"));
+    EXPECT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(nlohmann::json::parse(test::read_text(dir / "n.json"))["meshing"]["contact_cuts"]["enabled"], false);
 }
 
 }  // namespace

@@ -22,7 +22,8 @@ namespace ffcube {
 // Where the scene comes from and how it is meshed.
 
 // --contact-cuts (scene/contact.hpp, docs/adaptive.md): cut receiver faces along the polygons where
-// other objects stand on them before meshing. Auto: on for adaptive solves, off otherwise.
+// other objects stand on them before meshing. Auto (the default): on for every command that meshes
+// (it cuts only where the scene has contacts, and says so), off with --no-subdivide.
 enum class ContactCuts { Auto, On, Off };
 struct SceneOptions {
     std::string path;            // empty: the built-in Cornell box
@@ -32,7 +33,7 @@ struct SceneOptions {
     SceneFormat format = SceneFormat::Auto;  // --format: Auto = by the file's extension
     std::string materials;       // --materials: CSV of Kd and Ke per object (scene/material_map.hpp)
     bool subdivide = true;       // false (--no-subdivide): one patch per input face
-    ContactCuts contact_cuts = ContactCuts::Auto;  // load_and_mesh cuts only when On
+    ContactCuts contact_cuts = ContactCuts::Auto;  // load_and_mesh: cuts_contacts(o)
 };
 
 enum class RowMethod { Hemicube, Raycast };
@@ -71,6 +72,9 @@ Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 ContactCuts parse_contact_cuts(std::string_view text);    // auto | on | off
+// Whether load_and_mesh cuts contacts: On, or Auto with subdivision (a cut face is not one patch).
+bool cuts_contacts(const SceneOptions& o);
+const char* to_string(ContactCuts c);
 std::string_view to_string(RowMethod m);
 std::string_view to_string(Correction c);
 std::string_view to_string(FarFieldMode f);
