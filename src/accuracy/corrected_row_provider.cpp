@@ -23,7 +23,7 @@ namespace {
 // the seconds, which are timings).
 // Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
 // its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 26 * 8, "add the new NearFieldStats field to add_row_stats");
+static_assert(sizeof(NearFieldStats) == 29 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
@@ -46,6 +46,9 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.far_entries += b.far_entries;
     a.far_unproven += b.far_unproven;
     a.rows_analytic += b.rows_analytic;
+    a.exact_visibility += b.exact_visibility;
+    a.exact_visibility_points += b.exact_visibility_points;
+    a.exact_visibility_unconverged += b.exact_visibility_unconverged;
     a.closed_scale_max_change = std::max(a.closed_scale_max_change, b.closed_scale_max_change);
     a.seconds += b.seconds;
     a.near_seconds += b.near_seconds;

@@ -23,6 +23,7 @@
 #include "accuracy/spatial_grid.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/visible_ff.hpp"
 
 namespace ffcube {
 
@@ -46,7 +47,43 @@ struct NearFieldCorrector::Impl {
     bool needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const;
     void add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
     void add_far_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    bool exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
 };
+
+// A refused pair whose shaft holds at most exact_visibility_occluders possible blockers (every
+// patch that no axis separates from the pair's hull: the rest cannot meet a segment from i to j),
+// all convex: F_ij is the point factor to j's visible part past them, integrated over the part of i
+// in front of j's plane (the rest sends nothing to j) and divided by A_i. Made into out.exact when
+// the adaptive rule reaches its tolerance (its estimate joins the row's error as far_error).
+bool NearFieldCorrector::Impl::exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out,
+                                                NearFieldScratch::Buffers& b) const {
+    const std::size_t k = options.exact_visibility_occluders;
+    if (k == 0) return false;
+    if (!shaft_blockers(patches, grid, i, j, b.shaft, b.blockers, k)) return false;
+    if (!polygon_is_convex(patches.polys[i].span()) || !polygon_is_convex(patches.polys[j].span())) return false;
+    b.occluders.resize(b.blockers.size());
+    for (std::size_t q = 0; q < b.blockers.size(); ++q) {
+        const auto poly = patches.polys[b.blockers[q]].span();
+        if (!polygon_is_convex(poly)) return false;
+        b.occluders[q].assign(poly.begin(), poly.end());
+    }
+    const Patch& pj = patches.scene.patches[j];
+    clip_front(patches.polys[i].span(), pj.centroid, pj.normal, b.sender);
+    if (b.sender.size() < 3) return false;
+    VisibleFFOptions vo;
+    vo.tolerance = options.exact_visibility_tolerance;
+    const VisibleFFResult r = ff_polygon_visible_polygon(b.sender, patches.polys[j].span(), b.occluders, vo);
+    out.exact_visibility_points += r.points;
+    if (!r.converged) {
+        ++out.exact_visibility_unconverged;
+        return false;
+    }
+    const double scale = polygon_area(b.sender) / patches.scene.patches[i].area;
+    out.exact.emplace_back(j, r.f * scale);
+    out.far_error += r.error * scale;
+    ++out.exact_visibility;
+    return true;
+}
 
 // Whether a refused pair's centre value may be off by more than e = (1/k)²/20 (k =
 // sub_hemicube_k; 5e-4 at the default 10), so that its row needs sub-hemicubes (docs/accuracy.md,
@@ -92,6 +129,7 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
         }
         ++out.near_pairs;
         if (!shaft_unoccluded(patches, grid, i, j, b.shaft)) {
+            if (needs_sub_hemicubes(i, j) && exact_visibility(i, j, out, b)) continue;
             ++out.refused;
             out.refused_sampled += needs_sub_hemicubes(i, j);
             continue;
@@ -233,6 +271,9 @@ void add_analysis_stats(const NearAnalysis& a, NearFieldStats& stats) {
     stats.far_entries += a.far_entries;
     stats.far_unproven += a.far_unproven;
     stats.rows_analytic += a.skipped;
+    stats.exact_visibility += a.exact_visibility;
+    stats.exact_visibility_points += a.exact_visibility_points;
+    stats.exact_visibility_unconverged += a.exact_visibility_unconverged;
     stats.near_seconds += a.seconds;
 }
 

@@ -37,8 +37,13 @@ bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, doub
 // Candidate axes: the normals of q, i and j; the cross products of q's edges with every segment
 // between two hull points (the edge–edge axes of the full test); and the normals of every plane
 // through three hull points (the hull's face planes are among them).
-bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
-                      ShaftScratch& scratch) {
+namespace {
+
+// Visits every candidate q of the pair's shaft with whether an axis separates it from the hull,
+// until on_candidate returns false; returns whether it never did.
+template <class OnCandidate>
+bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                 ShaftScratch& scratch, OnCandidate&& on_candidate) {
     const Scene& scene = patches.scene;
     const Box pair = patches.pair_box(i, j);
     const double scale = glm::length(pair.hi - pair.lo);
@@ -107,8 +112,26 @@ bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uin
                 sep = separated(axis / std::sqrt(len2), hull, q, tol);
             }
         }
-        return sep;
+        return on_candidate(qi, sep);
     });
+}
+
+}  // namespace
+
+bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                      ShaftScratch& scratch) {
+    return visit_shaft(patches, grid, i, j, scratch, [](std::uint32_t, bool sep) { return sep; });
+}
+
+bool shaft_blockers(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                    ShaftScratch& scratch, std::vector<std::uint32_t>& blockers, std::size_t max) {
+    blockers.clear();
+    const bool few = visit_shaft(patches, grid, i, j, scratch, [&](std::uint32_t q, bool sep) {
+        if (!sep) blockers.push_back(q);
+        return blockers.size() <= max;
+    });
+    std::sort(blockers.begin(), blockers.end());
+    return few;
 }
 
 }  // namespace ffcube::accuracy

@@ -26,4 +26,11 @@ struct ShaftScratch {
 bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
                       ShaftScratch& scratch);
 
+// The same test, collecting every candidate that no axis separates from the hull (the possible
+// blockers: a patch not among them cannot meet a segment between i and j). Stops once more than
+// `max` are found; returns whether at most `max` were (blockers then sorted, so the caller's use
+// of them does not depend on the grid's visiting order).
+bool shaft_blockers(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
+                    ShaftScratch& scratch, std::vector<std::uint32_t>& blockers, std::size_t max);
+
 }  // namespace ffcube::accuracy

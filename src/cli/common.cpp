@@ -104,6 +104,12 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                    "K x the sender's size (docs/accuracy.md); 0: every such pair")
         ->check(CLI::NonNegativeNumber)
         ->default_val(10.0);
+    app.add_option("--exact-visibility", o.exact_visibility_occluders,
+                   "--correct near: a possibly occluded near pair with at most K possible occluders in its shaft gets "
+                   "the exact factor past them instead of sub-hemicubes (docs/accuracy.md; for large patches, e.g. "
+                   "--no-subdivide); 0: off")
+        ->check(CLI::Range(0, 64))
+        ->default_val(0);
     add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
                     "--correct near: analytic values for every pair beyond the near range that a plane test proves "
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "

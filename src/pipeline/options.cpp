@@ -123,11 +123,13 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         nf.k = o.near_k;
         nf.rays = static_cast<double>(o.rays);
         nf.obstruction_receivers = false;  // it credits either side of an obstruction (raycast_provider.cpp)
+        nf.exact_visibility_occluders = o.exact_visibility_occluders;
         return nf;
     }
     NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);
     nf.far_field = o.far_field;
     nf.sub_hemicube_k = o.sub_hemicube_k;
+    nf.exact_visibility_occluders = o.exact_visibility_occluders;
     return nf;
 }
 

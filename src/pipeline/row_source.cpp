@@ -99,6 +99,7 @@ FfmMetadata row_metadata(const RowOptions& o) {
         if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
+        if (o.exact_visibility_occluders > 0) meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
     }
     return meta;
 }
@@ -122,6 +123,9 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.rows_capped_at_one", c.rows_capped);
     r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
     r.set("corrections.pairs_refused_sub_hemicubes", c.refused_sampled);
+    r.set("corrections.pairs_exact_visibility", c.exact_visibility);
+    r.set("corrections.exact_visibility_points", c.exact_visibility_points);
+    r.set("corrections.exact_visibility_unconverged", c.exact_visibility_unconverged);
     r.set("corrections.rows_sub_hemicubes_occluder", c.rows_sampled_occluder);
     r.set("corrections.rows_sub_hemicubes_4x4", c.rows_sampled_fine);
     r.set("corrections.rows_sub_hemicubes_unproven", c.rows_sampled_unproven);

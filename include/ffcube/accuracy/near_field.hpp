@@ -103,6 +103,14 @@ struct NearFieldOptions {
     // two (the hemicube, which never draws a back face with a twin); false for one that credits
     // whichever it hits, front or back (the ray caster): their entries then stay as measured.
     bool obstruction_receivers = true;
+    // Exact visibility (issue 14/15; docs/accuracy.md, "Exact visibility past a few occluders"):
+    // a refused near pair that asks for sub-hemicubes (sub_hemicube_k) and whose shaft holds at
+    // most this many possible blockers, all convex (as are i and j), gets the exact factor past
+    // them (geometry/visible_ff.hpp: the point factor to the visible part, integrated adaptively
+    // over i) instead of being refused. 0: off (the default: on finely meshed scenes such pairs
+    // are many and sub-hemicubes measure them well; `--exact-visibility 8` for unsubdivided ones).
+    std::size_t exact_visibility_occluders = 0;
+    double exact_visibility_tolerance = 1e-6;  // the adaptive rule's tolerance on F_ij
     // (New fields go last: tests initialise the first ones by position, {k, sender_quadrature}.)
 };
 
@@ -138,6 +146,9 @@ struct NearFieldStats {
     std::uint64_t far_entries = 0;
     std::uint64_t far_unproven = 0;
     std::uint64_t rows_analytic = 0;  // rows made wholly of analytic values, not measured at all
+    std::uint64_t exact_visibility = 0;        // refused near pairs given the exact value past their occluders
+    std::uint64_t exact_visibility_points = 0;  // point-kernel evaluations they took
+    std::uint64_t exact_visibility_unconverged = 0;  // tried, tolerance not reached: left refused
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // seconds spent correcting, summed over threads (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
@@ -156,6 +167,9 @@ struct NearAnalysis {
     std::uint64_t refused_sampled = 0;                    // of which asking for sub-hemicubes
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
+    std::uint64_t exact_visibility = 0;                   // near pairs exact past their occluders
+    std::uint64_t exact_visibility_points = 0;
+    std::uint64_t exact_visibility_unconverged = 0;
     bool far = false;                                     // the far field was computed
     // Every facing pair of the row has its value here (far field on, nothing refused or
     // unproven): the row is known without measuring it.
