@@ -19,26 +19,13 @@ namespace {
 using test::example;
 using test::read_text;
 using test::run_ffcube;
+using test::last_column_by_first;
 using test::TempDir;
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-// CSV rows "name,...,value" → name → last column (the header skipped).
-std::map<std::string, double> last_column_by_first(const std::string& text) {
-    std::map<std::string, double> m;
-    std::istringstream in(text);
-    std::string line;
-    std::getline(in, line);
-    while (std::getline(in, line)) {
-        const auto first = line.find(','), last = line.rfind(',');
-        m[line.substr(0, first)] = std::stod(line.substr(last + 1));
-    }
-    return m;
-}
+using test::write_file;
 
 // examples/parallel_squares.obj with square a emitting: the solve has something to shoot.
 std::string emitting_squares(const TempDir& dir) {
-    write(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\na,0.5,0.5,0.5,1,1,1\nb,0.5,0.5,0.5,0,0,0\n");
+    write_file(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\na,0.5,0.5,0.5,1,1,1\nb,0.5,0.5,0.5,0,0,0\n");
     return example("parallel_squares.obj") + " --materials " + (dir / "m.csv");
 }
 

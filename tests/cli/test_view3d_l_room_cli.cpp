@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "support/view3d_text.hpp"
 #include "cli/l_room_reference.hpp"
 
 namespace ffcube {
@@ -92,27 +93,21 @@ TEST(LRoomCli, View3dFileWithin2e5OfTheReference) {
     TempDir dir;
     const auto r = run_ffcube("formfactors " + kRoom + " --max-patch-edge 0.5 --resolution 512 -q --view3d " + (dir / "vf.txt"));
     ASSERT_EQ(r.code, 0) << r.output;
-    std::istringstream in(read_text(dir / "vf.txt"));
-    std::string program, version;
-    int format = -1, encl = -1, emit = -1;
-    std::size_t n = 0;
-    in >> program >> version >> format >> encl >> emit >> n;
-    ASSERT_EQ(program, "View3D");
-    EXPECT_EQ(encl, 0);
-    EXPECT_EQ(emit, 0);
+    const test::View3dText f = test::read_view3d(read_text(dir / "vf.txt"));
+    EXPECT_EQ(f.encl, 0);
+    EXPECT_EQ(f.emit, 0);
+    const std::size_t n = f.n;
     ASSERT_EQ(n, kGroups.size());
     const auto ref = combined(test::l_room_reference(16));
     for (std::size_t g = 0; g < n; ++g) {
-        double area = 0.0, expected = 0.0;
-        in >> area;
+        double expected = 0.0;
         for (const int i : kGroups[g]) expected += kArea[static_cast<std::size_t>(i)];
-        EXPECT_NEAR(area, expected, 1e-5) << g;
+        EXPECT_NEAR(f.area[g], expected, 1e-5) << g;
     }
     double worst = 0.0;
     for (std::size_t g = 0; g < n; ++g)
         for (std::size_t h = 0; h < n; ++h) {
-            double v = 0.0;
-            ASSERT_TRUE(in >> v);
+            const double v = f.F[g][h];
             EXPECT_NEAR(v, ref[g][h], 2e-5) << g + 1 << " -> " << h + 1;
             worst = std::max(worst, std::abs(v - ref[g][h]));
         }
