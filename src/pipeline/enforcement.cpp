@@ -104,7 +104,8 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
     const std::vector<double> areas = patch_areas(scene);
     EnforceStats st;
     Stopwatch watch;
-    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what));
+    Progress rows_bar(fmt::format("--enforce {}: rows with columns (in memory)", what), F.size(), progress);
+    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what), &rows_bar);
     report_enforcement(report, what, st, watch.seconds());
     return E.to_csr();
 }
