@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/progress.hpp"
 
 namespace ffcube {
 
@@ -216,7 +217,7 @@ void enforce_passes(std::uint32_t n, std::span<const double> areas, EnforceMode 
 }
 
 EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats,
-                       const std::function<void(unsigned, double, double)>& iteration) {
+                       const std::function<void(unsigned, double, double)>& iteration, Progress* rows) {
     const std::uint32_t n = F.size();
     FFCUBE_CHECK(F.rows_filled() == n);
     // Fᵀ: rows are read with i increasing, so each column lists its rows in increasing order.
@@ -249,7 +250,9 @@ EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, Enforc
         for (std::uint32_t i = 0; i < n; ++i) {
             const std::size_t b = tptr[i], e = tptr[i + 1];
             f(i, F.row(i), RowView{std::span(trow).subspan(b, e - b), std::span(tval).subspan(b, e - b)});
+            if (rows) rows->add();
         }
+        if (rows) rows->finish();
     };
     passes.store_g = [&](std::uint32_t, std::span<const std::uint32_t> col, std::span<const double> val) {
         append(G, col, val);

@@ -25,6 +25,7 @@
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/surface_outputs.hpp"
+#include "ffcube/scene/patch_areas.hpp"
 
 namespace ffcube::cli {
 namespace {
@@ -108,8 +109,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         if (first_is_output) report_ffm(writer);
     }
     Stopwatch watch;
-    std::vector<double> areas;
-    for (const Patch& p : scene.patches) areas.push_back(p.area);
+    const std::vector<double> areas = patch_areas(scene);
     const RowStreamChecks* final_checks = &checks;
     std::optional<RowStreamChecks> out_checks;
     if (enforce) {

@@ -15,6 +15,7 @@
 #include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/core/progress.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
@@ -50,14 +51,65 @@ struct Options {
     SurfaceOutputOptions sky;  // --sky, --sky-by only (add_sky_options)
 };
 
+// A row's sum as the streamed row holds it (float entries, as CsrMatrix, summed in double):
+// RowView::sum of what stream_rows hands on, bit for bit.
+double stored_row_sum(const SparseRow& row) {
+    double s = 0.0;
+    for (const double v : row.val) s += static_cast<float>(v);
+    return s;
+}
+
+// The solve's provider, passed through, keeping the sum of each row it hands on: the rows the
+// solve shoots, for the sky view factors (--sky), which then compute only the rows not shot.
+class RowSumKeeper final : public RowProvider {
+public:
+    explicit RowSumKeeper(RowProvider& inner) : inner_(inner), sums_(inner.size(), NAN) {}
+    std::uint32_t size() const override { return inner_.size(); }
+    std::string name() const override { return inner_.name(); }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override {
+        inner_.compute_rows(rows, keeping(sink));
+    }
+    bool can_sample_sender() const override { return inner_.can_sample_sender(); }
+    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                              const RowSink& sink) override {
+        inner_.compute_rows_planned(rows, plans, keeping(sink));
+    }
+    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override {
+        inner_.compute_rows_staged(rows, stages, keeping(sink));
+    }
+    // Per row: its stored sum, or NaN for a row not handed on.
+    std::vector<double>& sums() { return sums_; }
+
+private:
+    RowSink keeping(const RowSink& sink) {
+        return [this, &sink](std::uint32_t i, const SparseRow& row) {
+            sums_[i] = stored_row_sum(row);
+            sink(i, row);
+        };
+    }
+    RowProvider& inner_;
+    std::vector<double> sums_;
+};
+
 // Each row's sum for the sky view factors (--sky), as `ffcube formfactors` takes them: every row
-// of F, not only the shooters' (the solve asks only for those). From the .ffm given with
-// --matrix, or through the solve's own provider, so the rows are those formfactors computes for
-// the same options.
-std::vector<double> sky_row_sums(RowProvider& provider, std::size_t n, bool progress) {
-    std::vector<double> sums(n, 0.0);
-    stream_rows(provider, nullptr, progress, [&](std::uint32_t i, RowView row) { sums[i] = row.sum(); });
-    return sums;
+// of F, not only the shooters' (the solve asks only for those). `known` holds the sums of the
+// rows the solve already had (NaN for the others; empty: none); only the rest are computed,
+// through the solve's own provider, so the rows are those formfactors computes for the same
+// options (a provider's row does not depend on which rows are asked with it). Returns how many
+// were reused.
+std::size_t sky_row_sums(RowProvider& provider, std::vector<double>& sums, bool progress) {
+    const std::uint32_t n = provider.size();
+    sums.resize(n, NAN);
+    std::vector<std::uint32_t> missing;
+    for (std::uint32_t i = 0; i < n; ++i)
+        if (std::isnan(sums[i])) missing.push_back(i);
+    if (missing.empty()) return n;
+    Progress bar("sky rows", missing.size(), progress);
+    provider.compute_rows(missing, [&](std::uint32_t i, const SparseRow& row) {
+        sums[i] = stored_row_sum(row);
+        bar.add();
+    });
+    return n - missing.size();
 }
 
 int run(const Options& o) {
@@ -153,6 +205,9 @@ int run(const Options& o) {
         computed_rows = std::move(refined->rows);
         report_solve(scene, refined->result, level_options, report);
     }
+    // With --sky, the rows the solve shoots keep their sums: the sky then computes only the others.
+    std::optional<RowSumKeeper> keeper;
+    if (!o.sky.sky.empty() && provider && !ffm) provider = &keeper.emplace(*provider);
     const SolveResult res = refined ? std::move(refined->result) : solve_and_report(scene, *provider, so, report);
     // Sky view factors need every row: computed now, while the row workers are up and before this
     // process makes a GL context of its own (the picture's). Not for a solve that stops at exit 5.
@@ -164,7 +219,11 @@ int run(const Options& o) {
             sky_sums.resize(scene.size());
             for (std::uint32_t i = 0; i < scene.size(); ++i) sky_sums[i] = ffm->matrix.row(i).sum();
         } else {
-            sky_sums = sky_row_sums(computed_rows.provider(), scene.size(), !o.scene.quiet);
+            if (keeper) sky_sums = std::move(keeper->sums());
+            const std::size_t reused = sky_row_sums(computed_rows.provider(), sky_sums, !o.scene.quiet);
+            report.set("sky.rows_reused", reused);
+            report.set("sky.rows_computed", scene.size() - reused);
+            info("sky: {} rows kept from the solve, {} computed", reused, scene.size() - reused);
             const std::span<const double> cut = computed_rows.obstructed();
             obstructed.assign(cut.begin(), cut.end());
         }

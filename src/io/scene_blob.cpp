@@ -89,7 +89,8 @@ void put_material(Writer& w, const Material& m) {
 
 std::vector<std::uint8_t> serialize_scene(const Scene& s) {
     if (s.drawn)
-        throw InputError(fmt::format("{}: obstruction-only surfaces (O) are not supported under mpirun yet (run without mpirun)",
+        throw InputError(fmt::format("{}: obstruction-only surfaces (View3D's O, N or M: null and masking surfaces block as "
+                                     "obstructions) are not supported under mpirun yet; run without mpirun (docs/scaling.md)",
                                      s.source));
     Writer w;
     w.put(kMagic);

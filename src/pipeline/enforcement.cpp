@@ -17,6 +17,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/transpose_scratch.hpp"
+#include "ffcube/scene/patch_areas.hpp"
 
 namespace ffcube {
 ClosureEvidence closure_evidence(const RowSource& rows) {
@@ -27,13 +28,6 @@ ClosureEvidence closure_evidence(const RowSource& rows) {
 }
 
 namespace {
-
-std::vector<double> areas_of(const Scene& scene) {
-    std::vector<double> areas;
-    areas.reserve(scene.size());
-    for (const Patch& p : scene.patches) areas.push_back(p.area);
-    return areas;
-}
 
 void report_enforcement(Report& report, const std::string& what, const EnforceStats& st, double seconds) {
     report.set("enforce.mode", what);
@@ -107,10 +101,11 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
         refuse_enforcement_with_obstructions(request, scene);
         require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), F);
     }
-    const std::vector<double> areas = areas_of(scene);
+    const std::vector<double> areas = patch_areas(scene);
     EnforceStats st;
     Stopwatch watch;
-    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what));
+    Progress rows_bar(fmt::format("--enforce {}: rows with columns (in memory)", what), F.size(), progress);
+    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what), &rows_bar);
     report_enforcement(report, what, st, watch.seconds());
     return E.to_csr();
 }
@@ -129,7 +124,7 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
         refuse_enforcement_with_obstructions(request, scene);
         require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), raw_row_sums);
     }
-    const std::vector<double> areas = areas_of(scene);
+    const std::vector<double> areas = patch_areas(scene);
     const auto n = static_cast<std::uint32_t>(scene.size());
     Stopwatch watch;
     StreamedEnforcement s;

@@ -6,6 +6,10 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cmath>
+#include <cstdlib>
+#include <optional>
+#include <string_view>
 #include <string>
 #include <vector>
 
@@ -91,14 +95,36 @@ double parse_overshoot(std::string_view text) {
     return value;
 }
 
+std::optional<double> solve_eta_seconds(double t0, double f0, double t1, double f1, double tolerance) {
+    if (!(t1 > t0) || !std::isfinite(f0) || !std::isfinite(f1) || !(f1 > 0.0)) return std::nullopt;
+    if (f1 <= tolerance) return 0.0;
+    if (!(f0 > f1) || !(tolerance > 0.0)) return std::nullopt;
+    const double rate = std::log(f0 / f1) / (t1 - t0);  // per second
+    return std::log(f1 / tolerance) / rate;
+}
+
 SolverOptions front_end_solver_options(SolverOptions so) {
     so.batch = kShotBatch;
-    auto last_print = std::make_shared<double>(0.0);
-    so.progress = [last_print](const SolveProgress& p) {
-        if (p.seconds - *last_print < 1.0) return;
-        *last_print = p.seconds;
-        info("{}: {} {}, unshot {:.3e} of emitted, {:.1f} s", to_string(p.method), p.iterations,
-             p.method == SolverMethod::Shoot ? "shots" : "sweeps", p.unshot_fraction, p.seconds);
+    // A line about once a second (every sample under FFCUBE_PROGRESS=always, for tests), with the
+    // ETA from the decay since the previous line's sample.
+    struct Last {
+        double seconds = 0.0, fraction = NAN;
+    };
+    auto last = std::make_shared<Last>();
+    const char* env = std::getenv("FFCUBE_PROGRESS");
+    const bool always = env && std::string_view(env) == "always";
+    so.progress = [last, always, tolerance = so.tolerance](const SolveProgress& p) {
+        if (p.seconds < last->seconds) *last = Last{};  // a new solve (adaptive meshing's next level)
+        if (!always && p.seconds - last->seconds < 1.0) return;
+        const std::optional<double> eta = std::isnan(last->fraction)
+                                              ? std::nullopt
+                                              : solve_eta_seconds(last->seconds, last->fraction, p.seconds,
+                                                                  p.unshot_fraction, tolerance);
+        last->seconds = p.seconds;
+        last->fraction = p.unshot_fraction;
+        info("{}: {} {}, unshot {:.3e} of emitted (target {:.0e}), {:.1f} s, {}", to_string(p.method), p.iterations,
+             p.method == SolverMethod::Shoot ? "shots" : "sweeps", p.unshot_fraction, tolerance, p.seconds,
+             eta ? fmt::format("ETA {:.0f} s", *eta) : std::string("ETA not known yet"));
     };
     return so;
 }

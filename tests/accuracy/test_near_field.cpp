@@ -394,15 +394,26 @@ TEST(NearField, SeparatedNearPairsMatchTheContourIntegral) {
 }
 
 // Asking for no rows hands nothing to the sink and does not fail (a resumed checkpoint, or an MPI
-// rank's shard, that already holds every row asks for none).
-TEST(NearField, NoRowsAskedIsNothingToDo) {
+// rank's shard, that already holds every row asks for none). The corrected rows' estimates are
+// written per row without a lock, so a row listed twice in one call (two writers) is refused
+// before any work, and so is a row out of range; a call after a refusal, with each row listed
+// once, runs as usual (the marks were cleared).
+TEST(NearField, NoRowsAskedIsNothingToDoAndARowListedTwiceIsRefused) {
     const Scene s = test::make_scene(perpendicular_squares(), 0.25);
     const CsrMatrix plain = midpoint_matrix(s);
     MatrixRowProvider inner(plain);
     CorrectedRowProvider corrected(s, inner);
     std::size_t delivered = 0;
-    corrected.compute_rows({}, [&](std::uint32_t, const SparseRow&) { ++delivered; });
+    const auto count = [&](std::uint32_t, const SparseRow&) { ++delivered; };
+    corrected.compute_rows({}, count);
     EXPECT_EQ(delivered, 0u);
+    const std::vector<std::uint32_t> twice = {0, 1, 0}, out_of_range = {1, static_cast<std::uint32_t>(s.size())};
+    EXPECT_THROW(corrected.compute_rows(twice, count), InternalError);
+    EXPECT_THROW(corrected.compute_rows(out_of_range, count), InternalError);
+    EXPECT_EQ(delivered, 0u);
+    const std::vector<std::uint32_t> once = {0, 1};
+    corrected.compute_rows(once, count);
+    EXPECT_EQ(delivered, 2u);
 }
 
 }  // namespace

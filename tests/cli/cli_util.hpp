@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
 
@@ -57,6 +58,18 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+inline void write_file(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+// CSV rows "name,...,value" → name → last column (the header line skipped).
+inline std::map<std::string, double> last_column_by_first(const std::string& text) {
+    std::map<std::string, double> m;
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) m[line.substr(0, line.find(','))] = std::stod(line.substr(line.rfind(',') + 1));
+    return m;
+}
 
 inline std::string example(const std::string& name) { return std::string(FFCUBE_SOURCE_DIR) + "/examples/" + name; }
 

@@ -18,8 +18,7 @@ namespace {
 using test::read_text;
 using test::run_ffcube;
 using test::TempDir;
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using test::write_file;
 
 struct PatchB {
     std::string object;
@@ -62,7 +61,7 @@ TEST(AssimpMaterialsCli, GltfFurnaceWithALampFloorConservesEnergy) {
       {"name":"lamp","pbrMetallicRoughness":{"baseColorFactor":[0.8,0.5,0.2,1]},"emissiveFactor":[1,1,1]},
       {"name":"wall","pbrMetallicRoughness":{"baseColorFactor":[0.8,0.5,0.2,1]}}])";
     TempDir dir;
-    write(dir / "furnace.gltf", test::gltf_json({{"box", faces}}, materials));
+    write_file(dir / "furnace.gltf", test::gltf_json({{"box", faces}}, materials));
     const auto r = run_ffcube("solve " + (dir / "furnace.gltf") + kSolve + (dir / "b.csv") + " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::vector<PatchB> patches = read_radiosity(read_text(dir / "b.csv"));
@@ -89,7 +88,7 @@ TEST(AssimpMaterialsCli, GltfVertexColouredFurnaceIsEOverOneMinusRho) {
         f.colors.assign(4, Vec3(0.8, 1.0, 0.4));
     }
     TempDir dir;
-    write(dir / "v.gltf",
+    write_file(dir / "v.gltf",
           test::gltf_json({{"box", faces}},
                           R"([{"name":"glow","pbrMetallicRoughness":{"baseColorFactor":[1,0.5,0.5,1]},"emissiveFactor":[0.5,0.25,1]}])"));
     const auto r = run_ffcube("solve " + (dir / "v.gltf") + kSolve + (dir / "b.csv"));
@@ -116,7 +115,7 @@ TEST(AssimpMaterialsCli, PlyColoursAreReportedAndMaterialsCsvOverridesThem) {
     for (int k = 0; k < 8; ++k) ply += fmt_vertex(k);
     ply += "4 0 1 2 3\n4 4 7 6 5\n4 0 4 5 1\n4 3 2 6 7\n4 0 3 7 4\n4 1 5 6 2\n";
     TempDir dir;
-    write(dir / "cube.ply", ply);
+    write_file(dir / "cube.ply", ply);
     auto r = run_ffcube("formfactors " + (dir / "cube.ply") + " --no-subdivide -q --patch-table " + (dir / "t.csv") +
                         " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
@@ -127,7 +126,7 @@ TEST(AssimpMaterialsCli, PlyColoursAreReportedAndMaterialsCsvOverridesThem) {
     const std::string table = read_text(dir / "t.csv");
     const std::size_t line = table.find('\n') + 1, a = table.find(',', line) + 1;
     const std::string object = table.substr(a, table.find(',', a) - a);
-    write(dir / "m.csv", object + ",0.5,0.5,0.5,1,1,1\n");
+    write_file(dir / "m.csv", object + ",0.5,0.5,0.5,1,1,1\n");
     r = run_ffcube("solve " + (dir / "cube.ply") + " --materials " + (dir / "m.csv") + kSolve + (dir / "b.csv"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::vector<PatchB> patches = read_radiosity(read_text(dir / "b.csv"));

@@ -12,6 +12,7 @@
 #include "cli/cli_util.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/io/ffm.hpp"
+#include "support/view3d_text.hpp"
 
 namespace ffcube {
 namespace {
@@ -37,11 +38,11 @@ std::string inward_cube_stl() {
     return s;
 }
 
-void write(const std::string& path, const std::string& bytes) { std::ofstream(path, std::ios::binary) << bytes; }
+using test::write_file;
 
 TEST(FormatsCli, StlCubeRowsSumToOne) {
     TempDir dir;
-    write(dir / "cube.stl", inward_cube_stl());
+    write_file(dir / "cube.stl", inward_cube_stl());
     constexpr int kResolution = 64;
     const auto r = run_ffcube("formfactors " + (dir / "cube.stl") + " --max-patch-edge 0.5 --resolution 64 -q -o " +
                               (dir / "F.ffm") + " --report " + (dir / "r.json"));
@@ -69,18 +70,9 @@ TEST(FormatsCli, StlCubeRowsSumToOne) {
 
 TEST(FormatsCli, View3dParallelSquaresWithNoSubdivide) {
     TempDir dir;
-    write(dir / "pair.vs3", R"(T two parallel unit squares at distance 1
+    write_file(dir / "pair.vs3", R"(T two parallel unit squares at distance 1
 C eps=1e-6
-F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-S 1 1 2 3 4 0 0 0.9 lower
+)" + std::string(test::kView3dCubeVertices) + R"(S 1 1 2 3 4 0 0 0.9 lower
 S 2 5 8 7 6 0 0 0.9 upper
 End
 )");
@@ -107,13 +99,13 @@ End
 TEST(FormatsCli, RefusalsExitTwoAndWriteNothing) {
     TempDir dir;
     std::string cube = inward_cube_stl();
-    write(dir / "cut.stl", cube.substr(0, cube.size() - 30));
+    write_file(dir / "cut.stl", cube.substr(0, cube.size() - 30));
     auto r = run_ffcube("formfactors " + (dir / "cut.stl") + " -q -o " + (dir / "F.ffm"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("cut.stl: binary STL cut short"), std::string::npos) << r.output;
     EXPECT_NE(r.output.find("facet 12 is incomplete"), std::string::npos) << r.output;
     // An obstruction-only surface has no row to combine with another's.
-    write(dir / "o.vs3", "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nS 1 1 2 3 0 0 0 0.9 a\nO 2 1 2 3 0 0 1 0.9 box\n");
+    write_file(dir / "o.vs3", "F 3\nV 1 0 0 0\nV 2 1 0 0\nV 3 1 1 0\nS 1 1 2 3 0 0 0 0.9 a\nO 2 1 2 3 0 0 1 0.9 box\n");
     r = run_ffcube("formfactors " + (dir / "o.vs3") + " -q -o " + (dir / "F.ffm"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("o.vs3:6: obstruction surface 2 has cmb 1: an O surface cannot be combined"), std::string::npos)
@@ -125,8 +117,8 @@ TEST(FormatsCli, RefusalsExitTwoAndWriteNothing) {
 
 TEST(FormatsCli, FormatOptionAndMaterials) {
     TempDir dir;
-    write(dir / "cube.dat", inward_cube_stl());
-    write(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\ncube,0.8,0.8,0.8,1,1,1\n");
+    write_file(dir / "cube.dat", inward_cube_stl());
+    write_file(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\ncube,0.8,0.8,0.8,1,1,1\n");
     const auto r = run_ffcube("formfactors " + (dir / "cube.dat") + " --format stl --materials " + (dir / "m.csv") +
                               " --no-subdivide --resolution 16 -q -o " + (dir / "F.ffm") + " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "support/view3d_text.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
 namespace ffcube {
@@ -20,9 +21,9 @@ namespace {
 
 using test::read_text;
 using test::run_ffcube;
+using test::last_column_by_first;
 using test::TempDir;
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+using test::write_file;
 
 // "from,to,F" (--groups) → (from, to) → F.
 std::map<std::pair<std::string, std::string>, double> groups(const std::string& text) {
@@ -37,16 +38,6 @@ std::map<std::pair<std::string, std::string>, double> groups(const std::string& 
     return m;
 }
 
-// CSV rows "name,...,value" → name → last column (the header skipped).
-std::map<std::string, double> last_column_by_first(const std::string& text) {
-    std::map<std::string, double> m;
-    std::istringstream in(text);
-    std::string line;
-    std::getline(in, line);
-    while (std::getline(in, line)) m[line.substr(0, line.find(','))] = std::stod(line.substr(line.rfind(',') + 1));
-    return m;
-}
-
 std::size_t lines(const std::string& text) {
     std::size_t n = 0;
     for (const char c : text) n += c == '\n';
@@ -56,16 +47,7 @@ std::size_t lines(const std::string& text) {
 // The unit cube's corners; the open box's five faces facing inward; the lid as an O surface
 // (written facing outward: an O surface blocks and intercepts from both sides, whatever its
 // winding).
-const char* kBox = R"(F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-S 1 1 2 3 4 0 0 0.9 floor
+const std::string kBox = std::string(test::kView3dCubeVertices) + R"(S 1 1 2 3 4 0 0 0.9 floor
 S 2 1 5 6 2 0 0 0.9 south
 S 3 4 3 7 8 0 0 0.9 north
 O 4 5 6 7 8 0 0 0.9 lid
@@ -76,25 +58,17 @@ End
 
 TEST(ObstructionCli, ALidClosesTheOpenBoxsSkyAndLeavesFAsItWas) {
     TempDir dir;
-    write(dir / "box.vs3", kBox);
+    write_file(dir / "box.vs3", kBox);
     const auto r = run_ffcube("formfactors " + (dir / "box.vs3") + " --no-subdivide -q --view3d " + (dir / "vf.txt") + " -o " +
                               (dir / "F.mtx") + " --sky " + (dir / "sky.csv") + " --sky-by object --patch-table " +
                               (dir / "p.csv") + " --elmer " + (dir / "vf.dat") + " --groups " + (dir / "g.csv") +
                               " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     // No row, no column: five surfaces everywhere.
-    std::istringstream vf(read_text(dir / "vf.txt"));
-    std::string program, version;
-    int out = -1, encl = -1, emit = -1;
-    std::size_t n = 0;
-    vf >> program >> version >> out >> encl >> emit >> n;
+    const test::View3dText vf = test::read_view3d(read_text(dir / "vf.txt"));
+    const std::size_t n = vf.n;
     ASSERT_EQ(n, 5u);
-    std::vector<double> area(n);
-    std::vector<std::vector<double>> F(n, std::vector<double>(n));
-    for (double& a : area) vf >> a;
-    for (auto& row : F)
-        for (double& v : row) vf >> v;
-    ASSERT_TRUE(vf);
+    const auto& F = vf.F;
     {
         std::istringstream mtx(read_text(dir / "F.mtx"));
         std::string line;
@@ -167,16 +141,7 @@ TEST(ObstructionCli, ALidClosesTheOpenBoxsSkyAndLeavesFAsItWas) {
 // Two opposed unit squares at distance 1 and, halfway, an O plate 3 × 3 that hides each from the
 // other completely: F = 0 exactly, and each square's sky is 1 − its factor to the plate, a
 // parallel rectangle offset (Howell C-12) at distance 0.5.
-const char* kHidden = R"(F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-V 9 -1 -1 0.5
+const std::string kHidden = std::string(test::kView3dCubeVertices) + R"(V 9 -1 -1 0.5
 V 10 2 -1 0.5
 V 11 2 2 0.5
 V 12 -1 2 0.5
@@ -188,7 +153,7 @@ End
 
 TEST(ObstructionCli, APlateBetweenTwoSquaresHidesThemExactly) {
     TempDir dir;
-    write(dir / "hidden.vs3", kHidden);
+    write_file(dir / "hidden.vs3", kHidden);
     const double svf = 1.0 - ff_parallel_rectangles_offset(0, 1, 0, 1, -1, 2, -1, 2, 0.5);
     const int rays = 40000;
     for (const std::string method : {"hemicube", "raycast"}) {
@@ -221,16 +186,7 @@ TEST(ObstructionCli, APlateBetweenTwoSquaresHidesThemExactly) {
 
 // A plate over half of the lower square's view: the hemicube and the ray caster agree on F and
 // on the sky, per object, within their derived errors.
-const char* kHalf = R"(F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-V 9 -1 -1 0.5
+const std::string kHalf = std::string(test::kView3dCubeVertices) + R"(V 9 -1 -1 0.5
 V 10 0.5 -1 0.5
 V 11 0.5 2 0.5
 V 12 -1 2 0.5
@@ -242,7 +198,7 @@ End
 
 TEST(ObstructionCli, APlateOverHalfTheViewAgreesWithTheRayCaster) {
     TempDir dir;
-    write(dir / "half.vs3", kHalf);
+    write_file(dir / "half.vs3", kHalf);
     const std::string common = "formfactors " + (dir / "half.vs3") + " --max-patch-edge 0.25 -q";
     auto r = run_ffcube(common + " --groups " + (dir / "h.csv") + " --sky " + (dir / "hs.csv") + " --sky-by object --report " +
                         (dir / "r.json"));
@@ -275,7 +231,7 @@ TEST(ObstructionCli, APlateOverHalfTheViewAgreesWithTheRayCaster) {
 
 TEST(ObstructionCli, UnsupportedCombinationsAreRefused) {
     TempDir dir;
-    write(dir / "box.vs3", kBox);
+    write_file(dir / "box.vs3", kBox);
     const auto r = run_ffcube("formfactors " + (dir / "box.vs3") + " --no-subdivide -q --checkpoint " + (dir / "cp"));
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("--checkpoint: " + (dir / "box.vs3") + " has obstruction-only surfaces (O)"), std::string::npos)

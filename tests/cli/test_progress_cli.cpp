@@ -52,10 +52,11 @@ TEST(ProgressCli, EveryPhaseShowsItsLine) {
     expect_bar(r.output, "rows: ");
     expect_bar(r.output, "reciprocity (2 passes over F.ffm, ");
 
-    // The matrix in memory (--ffm-version 1): its reciprocity and its writing.
-    r = test::run_ffcube_env(env, "formfactors " + cube + " --ffm-version 1 -o " + (dir / "G.ffm"));
+    // The matrix in memory (--ffm-version 1): its enforcement, its reciprocity and its writing.
+    r = test::run_ffcube_env(env, "formfactors " + cube + " --ffm-version 1 --enforce reciprocity -o " + (dir / "G.ffm"));
     ASSERT_EQ(r.code, 0) << r.output;
     expect_bar(r.output, "rows: ");
+    expect_bar(r.output, "--enforce reciprocity: rows with columns (in memory): ");
     expect_bar(r.output, "reciprocity: ");
     expect_bar(r.output, "writing " + (dir / "G.ffm") + ": ");
 
@@ -64,6 +65,12 @@ TEST(ProgressCli, EveryPhaseShowsItsLine) {
     r = test::run_ffcube_env(env, "solve --patches 200 --resolution 16 --matrix " + (dir / "H.ffm"));
     ASSERT_EQ(r.code, 0) << r.output;
     EXPECT_NE(r.output.find("ffcube: reading " + (dir / "H.ffm") + " (the whole matrix"), std::string::npos) << r.output;
+    // The solver's lines (every batch under FFCUBE_PROGRESS=always): the first has no decay to
+    // measure yet; the later ones an ETA from the unshot fraction's decay since the line before.
+    EXPECT_NE(r.output.find(" of emitted (target 1e-04), "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(" s, ETA not known yet"), std::string::npos) << r.output;
+    EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(\d+ shots, unshot \S+ of emitted \(target 1e-04\), \d+\.\d s, ETA \d+ s)")))
+        << r.output;
 }
 
 }  // namespace

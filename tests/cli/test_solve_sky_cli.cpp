@@ -19,26 +19,13 @@ namespace {
 using test::example;
 using test::read_text;
 using test::run_ffcube;
+using test::last_column_by_first;
 using test::TempDir;
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-// CSV rows "name,...,value" → name → last column (the header skipped).
-std::map<std::string, double> last_column_by_first(const std::string& text) {
-    std::map<std::string, double> m;
-    std::istringstream in(text);
-    std::string line;
-    std::getline(in, line);
-    while (std::getline(in, line)) {
-        const auto first = line.find(','), last = line.rfind(',');
-        m[line.substr(0, first)] = std::stod(line.substr(last + 1));
-    }
-    return m;
-}
+using test::write_file;
 
 // examples/parallel_squares.obj with square a emitting: the solve has something to shoot.
 std::string emitting_squares(const TempDir& dir) {
-    write(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\na,0.5,0.5,0.5,1,1,1\nb,0.5,0.5,0.5,0,0,0\n");
+    write_file(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\na,0.5,0.5,0.5,1,1,1\nb,0.5,0.5,0.5,0,0,0\n");
     return example("parallel_squares.obj") + " --materials " + (dir / "m.csv");
 }
 
@@ -71,13 +58,31 @@ TEST(SolveSky, SameFileAsFormfactorsForTheSameOptions) {
     // Meshed (32 patches; hemicube rows, partly measured), per patch: the solve's provider computes
     // every row, as formfactors does, so the files are the same bytes.
     const std::string common = emitting_squares(dir) + " --max-patch-edge 0.25 --resolution 64 -q --sky ";
-    auto r = run_ffcube("solve " + common + (dir / "solve.csv"));
+    auto r = run_ffcube("solve " + common + (dir / "solve.csv") + " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     r = run_ffcube("formfactors " + common + (dir / "ff.csv") + " -o " + (dir / "F.ffm"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::string ff = read_text(dir / "ff.csv");
     EXPECT_EQ(last_column_by_first(ff).size(), 32u);
     EXPECT_EQ(read_text(dir / "solve.csv"), ff);
+    // The rows the solve shot kept their sums (those bytes above included them): exactly the
+    // patches that got a row in the solve; only the others were computed for the sky.
+    const auto report = nlohmann::json::parse(read_text(dir / "r.json"));
+    const auto without_row = report["row_cache"]["patches_without_row"].get<double>();
+    EXPECT_EQ(report["sky"]["rows_reused"].get<double>(), 32.0 - without_row);
+    EXPECT_EQ(report["sky"]["rows_computed"].get<double>(), without_row);
+    EXPECT_GT(report["sky"]["rows_reused"].get<double>(), 0.0);
+    // Square b black (ρ = 0, no emission): its 16 patches never hold unshot energy, so the solve
+    // never asks for their rows, and the sky computes those 16 alone; the bytes stay the same.
+    write_file(dir / "black.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\na,0.5,0.5,0.5,1,1,1\nb,0,0,0,0,0,0\n");
+    r = run_ffcube("solve " + example("parallel_squares.obj") + " --materials " + (dir / "black.csv") +
+                   " --max-patch-edge 0.25 --resolution 64 -q --sky " + (dir / "black_sky.csv") + " --report " + (dir / "b.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    EXPECT_EQ(read_text(dir / "black_sky.csv"), ff);
+    const auto black = nlohmann::json::parse(read_text(dir / "b.json"));
+    EXPECT_EQ(black["row_cache"]["patches_without_row"].get<double>(), 16.0);
+    EXPECT_EQ(black["sky"]["rows_computed"].get<double>(), 16.0);
+    EXPECT_EQ(black["sky"]["rows_reused"].get<double>(), 16.0);
     // Rows from the .ffm (--matrix): the same again.
     r = run_ffcube("solve " + emitting_squares(dir) + " --max-patch-edge 0.25 -q --matrix " + (dir / "F.ffm") + " --sky " +
                    (dir / "matrix.csv"));

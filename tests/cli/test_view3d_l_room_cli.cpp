@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "support/view3d_text.hpp"
 #include "cli/l_room_reference.hpp"
 
 namespace ffcube {
@@ -85,27 +86,21 @@ TEST(LRoomReference, IsExactToRounding) {
 // The View3D file's largest |F − reference| into `worst` (each entry also asserted within
 // `tolerance`).
 void view3d_file_error(const std::string& path, double tolerance, double& worst) {
-    std::istringstream in(read_text(path));
-    std::string program, version;
-    int format = -1, encl = -1, emit = -1;
-    std::size_t n = 0;
-    in >> program >> version >> format >> encl >> emit >> n;
-    ASSERT_EQ(program, "View3D");
-    EXPECT_EQ(encl, 0);
-    EXPECT_EQ(emit, 0);
+    const test::View3dText f = test::read_view3d(read_text(path));
+    EXPECT_EQ(f.encl, 0);
+    EXPECT_EQ(f.emit, 0);
+    const std::size_t n = f.n;
     ASSERT_EQ(n, kGroups.size());
     const auto ref = combined(test::l_room_reference(16));
     for (std::size_t g = 0; g < n; ++g) {
-        double area = 0.0, expected = 0.0;
-        in >> area;
+        double expected = 0.0;
         for (const int i : kGroups[g]) expected += kArea[static_cast<std::size_t>(i)];
-        EXPECT_NEAR(area, expected, 1e-5) << g;
+        EXPECT_NEAR(f.area[g], expected, 1e-5) << g;
     }
     worst = 0.0;
     for (std::size_t g = 0; g < n; ++g)
         for (std::size_t h = 0; h < n; ++h) {
-            double v = 0.0;
-            ASSERT_TRUE(in >> v);
+            const double v = f.F[g][h];
             EXPECT_NEAR(v, ref[g][h], tolerance) << g + 1 << " -> " << h + 1;
             worst = std::max(worst, std::abs(v - ref[g][h]));
         }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "support/view3d_text.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
 namespace ffcube {
@@ -21,67 +22,16 @@ namespace {
 using test::read_text;
 using test::run_ffcube;
 using test::TempDir;
-
-void write(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-// The unit cube's 8 corners, then its faces as View3D surfaces facing inward.
-const char* kCubeVertices = R"(F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-)";
-const char* kOpenBoxSurfaces = R"(S 1 1 2 3 4 0 0 0.9 floor
-S 2 1 5 6 2 0 0 0.9 south
-S 3 4 3 7 8 0 0 0.9 north
-S 4 1 4 8 5 0 0 0.9 west
-S 5 2 6 7 3 0 0 0.9 east
-)";
-
-// CSV rows "name,...,value" → name → last column.
-std::map<std::string, double> last_column_by_first(const std::string& text) {
-    std::map<std::string, double> m;
-    std::istringstream in(text);
-    std::string line;
-    std::getline(in, line);  // header
-    while (std::getline(in, line)) {
-        const auto first = line.find(','), last = line.rfind(',');
-        m[line.substr(0, first)] = std::stod(line.substr(last + 1));
-    }
-    return m;
-}
-
-struct View3dText {
-    int format = -1, encl = -1, emit = -1;
-    std::size_t n = 0;
-    std::vector<double> area, emissivity;
-    std::vector<std::vector<double>> F;
-};
-// As View3D's readvf.c reads it: header words, then whitespace-separated numbers.
-View3dText read_view3d(const std::string& bytes) {
-    View3dText f;
-    std::istringstream in(bytes);
-    std::string program, version;
-    in >> program >> version >> f.format >> f.encl >> f.emit >> f.n;
-    EXPECT_EQ(program, "View3D");
-    f.area.resize(f.n);
-    f.emissivity.resize(f.n);
-    f.F.assign(f.n, std::vector<double>(f.n));
-    for (auto& a : f.area) in >> a;
-    for (auto& row : f.F)
-        for (auto& v : row) in >> v;
-    for (auto& e : f.emissivity) in >> e;
-    EXPECT_TRUE(in);
-    return f;
-}
+using test::kView3dCubeVertices;
+using test::kView3dOpenBoxSurfaces;
+using test::last_column_by_first;
+using test::read_view3d;
+using test::View3dText;
+using test::write_file;
 
 TEST(SkyCli, OpenBoxMatchesClosedFormsAndTheRayCaster) {
     TempDir dir;
-    write(dir / "box.vs3", std::string("T open unit box\n") + kCubeVertices + kOpenBoxSurfaces + "End\n");
+    write_file(dir / "box.vs3", std::string("T open unit box\n") + kView3dCubeVertices + kView3dOpenBoxSurfaces + "End\n");
     // Sky view factor of the floor = its factor to the opening, a parallel unit square at distance
     // 1 (Howell C-11); of a wall = its factor to the opening, a square sharing an edge (C-14).
     const double floor_exact = ff_parallel_rectangles(1.0, 1.0, 1.0);                  // 0.19982
@@ -125,7 +75,7 @@ TEST(View3dCli, CombinedHalvesOfAPlateGiveTheWholePlatesFactor) {
     // A unit plate made of two halves (surface 2 combined with surface 1: cmb = 1) facing a unit
     // square at distance 1. Combined, the plate's factor to the square is Howell C-11's 0.19982,
     // and the square's factor to the plate the same (equal areas).
-    write(dir / "halves.vs3", R"(T halves
+    write_file(dir / "halves.vs3", R"(T halves
 F 3
 V 1 0 0 0
 V 2 0.5 0 0
@@ -202,10 +152,10 @@ End
 
 TEST(View3dCli, ControlKeysEnclEmitOutAreHonoured) {
     TempDir dir;
-    const std::string cube = std::string(kCubeVertices) + kOpenBoxSurfaces + "S 6 5 8 7 6 0 0 0.3 top\nEnd\n";
+    const std::string cube = std::string(kView3dCubeVertices) + kView3dOpenBoxSurfaces + "S 6 5 8 7 6 0 0 0.3 top\nEnd\n";
     // encl=1: closure enforced on a closed cube; the rows of the file sum to 1 up to the six
     // %.6f roundings (6 × 5e-7).
-    write(dir / "encl.vs3", "C encl=1 eps=1e-6\n" + cube);
+    write_file(dir / "encl.vs3", "C encl=1 eps=1e-6\n" + cube);
     auto r = run_ffcube("formfactors " + (dir / "encl.vs3") + " --no-subdivide -q --view3d " + (dir / "e.txt") + " --report " +
                         (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
@@ -225,7 +175,7 @@ TEST(View3dCli, ControlKeysEnclEmitOutAreHonoured) {
 
     // emit=1: Hottel's exchange factors; in a closed enclosure row n sums to its emissivity
     // (the rows are closed to 1e-7 by encl=1; then six %.6f roundings).
-    write(dir / "emit.vs3", "C encl=1 emit=1\n" + cube);
+    write_file(dir / "emit.vs3", "C encl=1 emit=1\n" + cube);
     r = run_ffcube("formfactors " + (dir / "emit.vs3") + " --no-subdivide -q --view3d " + (dir / "x.txt"));
     ASSERT_EQ(r.code, 0) << r.output;
     f = read_view3d(read_text(dir / "x.txt"));
@@ -239,7 +189,7 @@ TEST(View3dCli, ControlKeysEnclEmitOutAreHonoured) {
     EXPECT_NEAR(f.emissivity[5], 0.3, 5e-4);
 
     // out=1: the binary file, its header exactly 32 bytes as savevf.c writes it.
-    write(dir / "out.vs3", "C out=1\n" + cube);
+    write_file(dir / "out.vs3", "C out=1\n" + cube);
     r = run_ffcube("formfactors " + (dir / "out.vs3") + " --no-subdivide -q --view3d " + (dir / "b.vf"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::string b = read_text(dir / "b.vf");

@@ -2,6 +2,9 @@
 // back bit for bit; a damaged blob is refused with an InputError, never read out of bounds.
 #include <gtest/gtest.h>
 
+#include <memory>
+#include <string>
+
 #include "ffcube/core/error.hpp"
 #include "ffcube/io/scene_blob.hpp"
 #include "ffcube/scene/builtin.hpp"
@@ -71,6 +74,23 @@ TEST(SceneBlob, RoundTripIsExact) {
     EXPECT_EQ(b.view3d.title, a.view3d.title);
     EXPECT_EQ(b.view3d.ignored, a.view3d.ignored);
     EXPECT_EQ(serialize_scene(b), serialize_scene(a));
+}
+
+// A scene with obstruction-only surfaces (View3D's O, and N and M, cut out of their base) carries
+// a second, drawn scene that the blob does not hold: refused, naming the file and what to do,
+// rather than broadcast without its obstructions.
+TEST(SceneBlob, ObstructionSurfacesAreRefusedNamingThem) {
+    Scene s = cornell();
+    s.source = "wall.vs3";
+    s.drawn = std::make_shared<const Scene>(cornell());
+    try {
+        (void)serialize_scene(s);
+        FAIL() << "a scene with a drawn scene was serialized";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("wall.vs3: obstruction-only surfaces (View3D's O, N or M"), std::string::npos) << what;
+        EXPECT_NE(what.find("run without mpirun"), std::string::npos) << what;
+    }
 }
 
 TEST(SceneBlob, DamagedBlobsAreRefused) {

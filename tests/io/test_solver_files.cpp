@@ -7,6 +7,7 @@
 
 #include "ffcube/io/solver_files.hpp"
 #include "io/io_test_util.hpp"
+#include "support/view3d_text.hpp"
 
 namespace ffcube {
 namespace {
@@ -15,32 +16,7 @@ using test::read_all;
 
 class SolverFiles : public test::ScratchDir {};
 
-struct View3dFile {
-    std::string program, version;
-    int format = -1, encl = -1, emit = -1;
-    std::size_t n = 0;
-    std::vector<double> area, emissivity;
-    std::vector<std::vector<double>> F;
-};
-
-// readvf.c: the header's words by sscanf, then whitespace-separated numbers.
-View3dFile read_view3d_text(const std::string& bytes) {
-    View3dFile f;
-    std::istringstream in(bytes);
-    in >> f.program >> f.version >> f.format >> f.encl >> f.emit >> f.n;
-    f.area.resize(f.n);
-    f.emissivity.resize(f.n);
-    f.F.assign(f.n, std::vector<double>(f.n));
-    for (auto& a : f.area) in >> a;
-    for (auto& row : f.F)
-        for (auto& v : row) in >> v;
-    for (auto& e : f.emissivity) in >> e;
-    EXPECT_TRUE(in) << "short file";
-    std::string rest;
-    in >> rest;
-    EXPECT_TRUE(rest.empty()) << "trailing data: " << rest;
-    return f;
-}
+using View3dFile = test::View3dText;
 
 // readvf.c's ReadF1s: fread(header, 32), then float32 blocks.
 View3dFile read_view3d_binary(const std::string& bytes) {
@@ -89,7 +65,7 @@ TEST_F(SolverFiles, View3dTextRoundTrips) {
     const std::string bytes = read_all(path("vf.txt"));
     EXPECT_EQ(bytes.substr(0, 31), view3d_header(0, 1, 0, 3));
     EXPECT_NE(bytes.find("\n1 0.5 12.25\n0.000000 0.123457 0.500000\n"), std::string::npos) << bytes;
-    const View3dFile f = read_view3d_text(bytes);
+    const View3dFile f = test::read_view3d(bytes);
     EXPECT_EQ(f.program, "View3D");
     EXPECT_EQ(f.format, 0);
     EXPECT_EQ(f.encl, 1);

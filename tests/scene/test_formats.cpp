@@ -25,6 +25,7 @@
 #include "ffcube/scene/vs3_loader.hpp"
 #include "support/gltf.hpp"
 #include "support/temp_files.hpp"
+#include "support/view3d_text.hpp"
 
 namespace ffcube {
 namespace {
@@ -298,16 +299,7 @@ S 3 2 5 6 0 0 0 0.9 tri
 // as two faces back to back; the mesher keeps them out of the scene's patches (no row, no column)
 // and in Scene::drawn.
 TEST(View3d, ObstructionSurfacesAreDrawnButHaveNoPatchIndex) {
-    const ObjModel m = parse_vs3(R"(F 3
-V 1 0 0 0
-V 2 1 0 0
-V 3 1 1 0
-V 4 0 1 0
-V 5 0 0 1
-V 6 1 0 1
-V 7 1 1 1
-V 8 0 1 1
-S 1 1 2 3 4 0 0 0.9 lower
+    const ObjModel m = parse_vs3(std::string(test::kView3dCubeVertices) + R"(S 1 1 2 3 4 0 0 0.9 lower
 O 2 5 6 7 8 0 0 0.9 lid
 S 3 5 8 7 6 0 0 0.5 upper
 )",

@@ -11,11 +11,13 @@
 #include <functional>
 #include <numbers>
 #include <string>
+#include <vector>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/builtin.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/obj_loader.hpp"
+#include "ffcube/scene/patch_areas.hpp"
 
 namespace fs = std::filesystem;
 using namespace ffcube;
@@ -89,6 +91,7 @@ TEST(Mesher, UnitSquareQuarterPatches) {
     }
     // 16 exact areas of 1/16 sum exactly.
     EXPECT_EQ(s.total_area(), 1.0);
+    EXPECT_EQ(patch_areas(s), std::vector<double>(16, 0.0625));  // each 0.25 × 0.25 exactly
     EXPECT_EQ(s.stats.triangulated_ngons, 0u);
     EXPECT_EQ(s.stats.how, "--max-patch-edge 0.25 (16 patches)");
     EXPECT_DOUBLE_EQ(s.extent(), std::sqrt(2.0));

@@ -9,6 +9,7 @@
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/vs3_loader.hpp"
 #include "scene/vs3_subsurfaces.hpp"
+#include "support/view3d_text.hpp"
 
 namespace ffcube {
 namespace {
@@ -66,17 +67,7 @@ TEST(Vs3Subsurfaces, CutHolesTilesTheRest) {
     EXPECT_EQ(detail::cut_holes(wall, {}), (std::vector<std::vector<Vec3>>{wall}));
 }
 
-const char* kWallWithWindow = R"(T wall, window, null surface
-F 3
-V 1 0 0 0
-V 2 2 0 0
-V 3 2 2 0
-V 4 0 2 0
-V 5 0.5 0.5 0
-V 6 1.5 0.5 0
-V 7 1.5 1.5 0
-V 8 0.5 1.5 0
-V 9 0.2 1.6 0
+const std::string kWallWithWindow = std::string("T wall, window, null surface\n") + test::kVs3WindowWallVertices + R"(V 9 0.2 1.6 0
 V 10 0.4 1.6 0
 V 11 0.4 1.8 0
 S 1 1 2 3 4 0 0 0.9 wall

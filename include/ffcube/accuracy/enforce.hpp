@@ -25,6 +25,8 @@
 
 namespace ffcube {
 
+class Progress;
+
 enum class EnforceMode { Reciprocity, Closure };
 
 // Parses "reciprocity", "closure" or "both" (= closure, which implies reciprocity); InputError
@@ -76,9 +78,10 @@ void require_closed_scene(std::string_view what, const ClosureEvidence& evidence
 // areas.size() == F.size(), every area > 0 (InputError otherwise). Closure also throws
 // InputError for a row with no entries (nothing to scale) and when 100000 iterations do not
 // reach 1e-12 (the pattern has no symmetric scaling, e.g. a patch seen by no one).
-// iteration, when given: as EnforcePasses::iteration.
+// iteration, when given: as EnforcePasses::iteration. rows, when given: a step per row of the
+// pass over rows and columns (the whole of reciprocity's work), finished after it.
 EnforcedMatrix enforce(const CsrMatrix& F, std::span<const double> areas, EnforceMode mode, EnforceStats& stats,
-                       const std::function<void(unsigned, double, double)>& iteration = {});
+                       const std::function<void(unsigned, double, double)>& iteration = {}, Progress* rows = nullptr);
 
 MatrixFigures matrix_figures(const EnforcedMatrix& F, std::span<const double> areas);
 

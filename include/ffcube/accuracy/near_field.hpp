@@ -295,6 +295,7 @@ private:
     std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
+    std::vector<std::uint8_t> listed_;    // all 0 between calls: marks a call's rows, to refuse a repeat
     // Scratch spaces and analysis buffers reused across rows, one per row being planned or
     // corrected at once on the inner provider's threads (corrected_row_provider.cpp).
     struct Pools;

@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string_view>
 
 #include "ffcube/formfactor/row_provider.hpp"
@@ -34,6 +35,13 @@ SolveResult solve_and_report(const Scene& scene, RowProvider& rows, SolverOption
 // and report keys of a finished solve.
 SolverOptions front_end_solver_options(SolverOptions options);
 void report_solve(const Scene& scene, const SolveResult& result, const SolverOptions& options, Report& report);
+
+// The solver's ETA, from the measured decay of the unshot power (or the residual): between two
+// progress samples (t0, f0) and (t1, f1), t1 > t0, the fraction is taken to decay exponentially at
+// the rate measured, r = ln(f0/f1)/(t1 − t0), so it reaches the tolerance after ln(f1/tol)/r more
+// seconds. nullopt when there is no decay to measure (f1 ≥ f0, a zero or non-finite value, or
+// t1 ≤ t0); 0 when f1 is already at or under the tolerance.
+std::optional<double> solve_eta_seconds(double t0, double f0, double t1, double f1, double tolerance);
 
 // An RGB value as a three-number array at key.
 void report_vec3(Report& report, std::string_view key, const Vec3& value);
