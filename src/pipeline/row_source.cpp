@@ -79,6 +79,7 @@ FfmMetadata row_metadata(const RowOptions& o) {
         if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
+        if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
     }
     return meta;
 }
@@ -179,6 +180,9 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
     r.set("sub_hemicube_rows", st.sampled_rows);
+    // Adaptive sender sampling of the rows planned at 4 × 4 (docs/accuracy.md).
+    r.set("sub_hemicube_rows_refined_4x4", st.fine_rows_refined);
+    r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 
