@@ -110,6 +110,10 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                    "--no-subdivide); 0: off")
         ->check(CLI::Range(0, 64))
         ->default_val(0);
+    app.add_flag_function(
+        "--adaptive-sampling", [&o](std::int64_t) { o.adaptive_sampling = true; },
+        "--correct near: rows planned at 4 x 4 sub-hemicubes are measured at 2 x 2 and the centre first, and "
+        "refined to 4 x 4 only where the 2 x 2 rule's estimated error exceeds 5e-4 (docs/accuracy.md)");
     add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
                     "--correct near: analytic values for every pair beyond the near range that a plane test proves "
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "

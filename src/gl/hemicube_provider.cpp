@@ -32,6 +32,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.accumulate_seconds += b.accumulate_seconds;
     a.sampled_rows += b.sampled_rows;
     a.skipped_rows += b.skipped_rows;
+    a.fine_rows_refined += b.fine_rows_refined;
+    a.fine_rows_stopped += b.fine_rows_stopped;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <numbers>
 #include <string>
 
 #include "ffcube/core/error.hpp"
@@ -13,6 +14,7 @@
 #include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/hemicube/frame.hpp"
 #include "gl/gl_api.hpp"
+#include "gl/sample_agreement.hpp"
 #include "gl/shaders.hpp"
 
 namespace ffcube {
@@ -240,22 +242,39 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
 // quadrature uses; 4 × 4 for a sender with an occluder touching it), each with its own visibility.
 void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
     if (test_fail_ != 0) fail_for_test(test_fail_, p);
+    if (sub_points >= 4 && opt_.adaptive_sampling) {
+        if (sample_adaptive(p, out, st)) {
+            ++st.fine_rows_stopped;
+            ++st.sampled_rows;
+            return;
+        }
+        ++st.fine_rows_refined;
+    }
     ++epoch_;
     touched_.clear();
     if (sub_points < 2) {
         render(p, st);
         accumulate(p, 1.0, false, st);
     } else {
-        const auto v = scene_.patch_vertices(p);
-        patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
-        // At half the resolution: four of them cost about one full hemicube, and their
-        // average has about the pixel noise of one (each has twice the relative noise).
-        for (std::size_t q = 0; q < points_.size(); ++q) {
-            render(p, points_[q], true, st);
-            accumulate(p, weights_[q], true, st);
-        }
+        sample(p, sub_points, st);
         ++st.sampled_rows;
     }
+    take_row(out, st);
+}
+
+void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
+    const auto v = scene_.patch_vertices(p);
+    patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
+    // At half the resolution: four of them cost about one full hemicube, and their
+    // average has about the pixel noise of one (each has twice the relative noise).
+    for (std::size_t q = 0; q < points_.size(); ++q) {
+        render(p, points_[q], true, st);
+        accumulate(p, weights_[q], true, st);
+    }
+}
+
+// The row made in acc_ over touched_, sorted by column.
+void Worker::take_row(SparseRow& out, HemicubeStats& st) {
     Stopwatch watch;
     std::sort(touched_.begin(), touched_.end());
     out.clear();
@@ -266,6 +285,31 @@ void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_poi
         out.val.push_back(acc_[j]);
     }
     st.accumulate_seconds += watch.seconds();
+}
+
+bool Worker::sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st) {
+    const auto v = scene_.patch_vertices(p);
+    patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
+    sample_rows_.resize(points_.size());
+    for (std::size_t q = 0; q < points_.size(); ++q) {
+        ++epoch_;
+        touched_.clear();
+        render(p, points_[q], true, st);
+        accumulate(p, 1.0, true, st);
+        take_row(sample_rows_[q], st);
+    }
+    ++epoch_;
+    touched_.clear();
+    render(p, scene_.patches[p].centroid, true, st);
+    accumulate(p, 1.0, true, st);
+    take_row(centre_row_, st);
+    Stopwatch watch;
+    SampleAgreementOptions o;
+    const double n = half_layout_.resolution();
+    o.pixel_delta_ff = 4.0 / (std::numbers::pi * n * n);
+    const SampleAgreement a = judge_samples(scene_, p, points_, weights_, sample_rows_, centre_row_, o, out);
+    st.accumulate_seconds += watch.seconds();
+    return !a.refine;
 }
 
 // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).

@@ -52,6 +52,12 @@ private:
         bool occluder = false;  // drawn first by occlude()
     };
     void accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st);
+    // The sub-hemicubes at sub_points × sub_points points into acc_/touched_ (this epoch_).
+    void sample(std::uint32_t p, int sub_points, HemicubeStats& st);
+    // Adaptive sampling of a 4 × 4 row: the 2 × 2 samples and the centre, each its own row, then judge_samples;
+    // true (out made) when they agree.
+    bool sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st);
+    void take_row(SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
     void occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st);
     void build_lists(bool occluders_only, HemicubeStats* st);
@@ -93,6 +99,8 @@ private:
     std::uint32_t epoch_ = 0;
     std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row
     std::vector<double> weights_;
+    std::vector<SparseRow> sample_rows_;  // sample_adaptive's per-sample rows
+    SparseRow centre_row_;                // and its half-resolution hemicube at the centroid
 };
 
 // A worker in this process: the context is made current on the worker thread (start).

@@ -104,6 +104,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.rotate = o.rotate;
     h.seed = o.seed;
     h.worker_processes = o.worker_processes;
+    h.adaptive_sampling = o.adaptive_sampling;
     return h;
 }
 

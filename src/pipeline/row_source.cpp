@@ -100,6 +100,7 @@ FfmMetadata row_metadata(const RowOptions& o) {
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
         if (o.exact_visibility_occluders > 0) meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
+        if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
     }
     return meta;
 }
@@ -203,6 +204,9 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
     r.set("sub_hemicube_rows", st.sampled_rows);
+    // Adaptive sender sampling of the rows planned at 4 × 4 (docs/accuracy.md).
+    r.set("sub_hemicube_rows_refined_4x4", st.fine_rows_refined);
+    r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 

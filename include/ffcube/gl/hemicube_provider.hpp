@@ -33,6 +33,11 @@ struct HemicubeOptions {
     // wholly behind the pieces the worker's previous hemicube showed (drawn first, depth only)
     // are not drawn. The item buffers are the same bits either way (tested); false: draw all.
     bool occlusion_culling = true;
+    // Adaptive sender sampling (docs/accuracy.md, "Adaptive sender sampling"): a row planned at
+    // 4 × 4 sub-hemicubes is measured at 2 × 2 (and the centre) first, and refined to 4 × 4 only
+    // where the 2 × 2 rule's estimated error exceeds 5e-4 (gl/sample_agreement.hpp). Off by
+    // default: on a city it stops rows whose error it underestimates (docs/benchmarks.md).
+    bool adaptive_sampling = false;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -57,6 +62,10 @@ struct HemicubeStats {
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
     std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_planned)
     std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
+    // Rows planned at 4 × 4 (RowPlan::sampled_fine) under adaptive_sampling: refined to 4 × 4
+    // (the 2 × 2 samples disagreed) or stopped at 2 × 2 (they agreed).
+    std::uint64_t fine_rows_refined = 0;
+    std::uint64_t fine_rows_stopped = 0;
 };
 
 class HemicubeRowProvider final : public RowProvider {

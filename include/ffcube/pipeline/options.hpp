@@ -61,6 +61,7 @@ struct RowOptions {
     double near_k = 3.0;
     double sub_hemicube_k = 10.0;  // NearFieldOptions::sub_hemicube_k (0: every refused near pair)
     std::size_t exact_visibility_occluders = 0;  // NearFieldOptions::exact_visibility_occluders (0: off)
+    bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
