@@ -51,8 +51,8 @@ TEST(Adaptive, TheFurnaceNeedsNoRefinementAndRefiningItChangesNothing) {
     for (const Vec3& b : a.result.radiosity) EXPECT_NEAR(b.g, 2.0, 1e-6);
 }
 
-TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
-    // A floor under a square light, a square occluder between them: a shadow with a penumbra.
+// A floor under a square light, a square occluder between them: a shadow with a penumbra.
+Scene shadow_scene() {
     Scene s = test::make_scene({test::square_z("floor", 0.0, true, 2.0, Vec3(-1, -1, 0)),
                                 test::square_z("occluder", 0.5, true, 0.5, Vec3(-0.25, -0.25, 0)),
                                 test::square_z("light", 1.0, false, 0.5, Vec3(-0.5, -0.25, 0))},
@@ -60,6 +60,11 @@ TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
     s.materials.push_back(Material{"lamp", Vec3(0.0), Vec3(10.0)});
     for (Patch& p : s.patches)
         if (s.objects[p.object] == "light") p.material = static_cast<std::uint32_t>(s.materials.size() - 1);
+    return s;
+}
+
+TEST(Adaptive, SameRefinementAndRadiosityOnOneThreadAndTwo) {
+    const Scene s = shadow_scene();
     AdaptiveOptions ao;
     ao.target_error = 1e-3;
     ao.max_levels = 2;
@@ -95,13 +100,7 @@ TEST(Adaptive, KeptWorkersGiveTheSameBitsAsWorkersRestartedPerLevel) {
     // workers that level 0 started (kept) or from new ones (restarted). Forked workers (the
     // default); workers on threads are checked in tests/gl (HemicubeWorkers.SetScene...), which
     // keeps this test within its time.
-    Scene s = test::make_scene({test::square_z("floor", 0.0, true, 2.0, Vec3(-1, -1, 0)),
-                                test::square_z("occluder", 0.5, true, 0.5, Vec3(-0.25, -0.25, 0)),
-                                test::square_z("light", 1.0, false, 0.5, Vec3(-0.5, -0.25, 0))},
-                               0.5);
-    s.materials.push_back(Material{"lamp", Vec3(0.0), Vec3(10.0)});
-    for (Patch& p : s.patches)
-        if (s.objects[p.object] == "light") p.material = static_cast<std::uint32_t>(s.materials.size() - 1);
+    const Scene s = shadow_scene();
     {
         const RowOptions ro = small_rows(2);
         AdaptiveOptions ao;
