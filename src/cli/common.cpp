@@ -107,8 +107,8 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     app.add_option("--exact-visibility", o.exact_visibility_occluders,
                    "--correct near: a possibly occluded near pair with at most K possible occluders in its shaft gets "
                    "the exact factor past them instead of sub-hemicubes (docs/accuracy.md; for large patches, e.g. "
-                   "--no-subdivide); 0: off")
-        ->check(CLI::Range(0, 64))
+                   "--no-subdivide); 0: off, at most 64")
+        ->check(CLI::NonNegativeNumber)  // (a size_t would take -1 as 2^64 - 1); the range: validate(RowOptions)
         ->default_val(0);
     app.add_flag_function(
         "--adaptive-sampling", [&o](std::int64_t) { o.adaptive_sampling = true; },

@@ -94,6 +94,9 @@ void validate(const RowOptions& o) {
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
     if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))
         throw InputError(fmt::format("--sub-hemicube-k {}: must be a finite number >= 0", o.sub_hemicube_k));
+    if (o.exact_visibility_occluders > kMaxExactVisibilityOccluders)
+        throw InputError(fmt::format("--exact-visibility {}: must be within 0..{} (possible occluders in a near pair's shaft; 0: off)",
+                                     o.exact_visibility_occluders, kMaxExactVisibilityOccluders));
 }
 
 HemicubeOptions hemicube_options(const RowOptions& o) {

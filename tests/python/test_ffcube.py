@@ -23,6 +23,7 @@ BINARY = os.environ["FFCUBE_BINARY"]
 EXAMPLES = os.path.join(os.environ["FFCUBE_SOURCE_DIR"], "examples")
 SQUARES = os.path.join(EXAMPLES, "parallel_squares.obj")
 CUBE = os.path.join(EXAMPLES, "cube.obj")
+L_ROOM = os.path.join(EXAMPLES, "l_shaped_room.vs3")
 
 
 def run_cli(*args):
@@ -125,6 +126,15 @@ class FormFactors(unittest.TestCase):
         self.assert_same_as_cli(SQUARES, ["--max-patch-edge", 0.5, "--method", "raycast", "--rays", 256, "--seed", 7,
                                           "--near-k", 2],
                                 max_patch_edge=0.5, method="raycast", rays=256, seed=7, near_k=2)
+
+    def test_exact_visibility_is_the_command_lines(self):
+        # --exact-visibility changes F on the unsubdivided L-room (its refused near pairs get the
+        # exact factor past their occluders, tests/cli/test_view3d_l_room_cli.cpp), so a dropped
+        # keyword would differ from the command line's matrix.
+        F = self.assert_same_as_cli(L_ROOM, ["--no-subdivide", "--exact-visibility", 8],
+                                    no_subdivide=True, exact_visibility=8)
+        F0 = ffcube.form_factors(L_ROOM, no_subdivide=True, quiet=True)
+        self.assertNotEqual((F != F0).nnz, 0)
 
     def test_same_rows_for_any_thread_count(self):
         s = ffcube.load_scene(CUBE, max_patch_edge=0.5, quiet=True)
@@ -296,6 +306,15 @@ class Errors(unittest.TestCase):
         with self.assertRaises(ffcube.InputError) as e:
             ffcube.form_factors(CUBE, resolution=7, quiet=True)
         self.assertEqual(str(e.exception), self.cli_message("formfactors", CUBE, "--resolution", 7, "-q"))
+        # The range of --exact-visibility is checked in one place (validate(RowOptions)) for both.
+        with self.assertRaises(ffcube.InputError) as e:
+            ffcube.form_factors(CUBE, exact_visibility=65, quiet=True)
+        self.assertEqual(str(e.exception), self.cli_message("formfactors", CUBE, "--exact-visibility", 65, "-q"))
+        self.assertIn("--exact-visibility 65: must be within 0..64", str(e.exception))
+        with self.assertRaises(ValueError) as e:
+            ffcube.form_factors(CUBE, exact_visibility=-1, quiet=True)
+        self.assertIn("--exact-visibility -1", str(e.exception))
+        self.assertNotEqual(run_cli("formfactors", CUBE, "--exact-visibility", -1, "-q").returncode, 0)
         with self.assertRaises(ValueError) as e:
             ffcube.form_factors(CUBE, method="radiance", quiet=True)
         self.assertIn("--method radiance", str(e.exception))

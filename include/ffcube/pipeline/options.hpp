@@ -42,6 +42,9 @@ using FarFieldMode = NearFieldOptions::FarField;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
+// --exact-visibility K: at most this many possible occluders (validate(RowOptions) refuses more).
+constexpr std::size_t kMaxExactVisibilityOccluders = 64;
+
 struct RowOptions {
     RowMethod method = RowMethod::Hemicube;
     // Hemicube (gl/hemicube_provider.hpp): top-face pixels (hemicube/layout.hpp's rule), context.
