@@ -3,7 +3,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <map>
+#include <optional>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "ffcube/core/error.hpp"
@@ -12,13 +16,44 @@
 
 namespace ffcube {
 
-void apply_material_map(ObjModel& model, std::string_view csv, const std::string& source) {
-    std::unordered_map<std::string, std::uint32_t> object_of_name;
-    for (std::size_t i = 0; i < model.objects.size(); ++i) object_of_name.emplace(model.objects[i], static_cast<std::uint32_t>(i));
-    std::vector<std::uint32_t> material_of_object(model.objects.size(), std::uint32_t(-1));
-    std::unordered_map<std::string, std::uint32_t> line_of_name;
+namespace {
+
+constexpr std::uint32_t kNone = std::uint32_t(-1);
+
+// One line's Kd (fields 1..3) or Ke (fields 4..6): three numbers, or three empty fields (nullopt:
+// keep the file's).
+std::optional<Vec3> read_triple(const std::vector<std::string_view>& field, bool kd, const std::string& source,
+                                std::uint32_t line) {
+    const char* what = kd ? "Kd" : "Ke";
+    const std::size_t first = kd ? 1 : 4;
+    const auto empty = std::count_if(field.begin() + first, field.begin() + first + 3, [](std::string_view f) { return f.empty(); });
+    if (empty == 3) return std::nullopt;
+    if (empty > 0)
+        detail::fail_at(source, line, fmt::format("{} has {} of its 3 fields empty: give all three, or leave all three empty "
+                                                  "to keep the scene file's {}", what, empty, what));
+    Vec3 v(0.0);
+    for (int c = 0; c < 3; ++c) {
+        v[c] = detail::parse_number(field[first + c], source, line,
+                                    kd ? "Kd: diffuse reflectance within [0,1]" : "Ke: emitted radiosity >= 0");
+        if (kd && !(v[c] >= 0.0 && v[c] <= 1.0))
+            detail::fail_at(source, line, fmt::format("Kd {} must be within [0,1] (diffuse reflectance per channel)", v[c]));
+        if (!kd && !(v[c] >= 0.0))
+            detail::fail_at(source, line, fmt::format("Ke {} must be >= 0 (emitted radiosity per channel)", v[c]));
+    }
+    return v;
+}
+
+// What one line asks of its object: Kd, Ke, or both (what is not given stays the file's).
+struct Override {
+    std::string name;
+    std::optional<Vec3> kd, ke;
+    std::uint32_t whole = kNone;  // both given: the object's one material
+};
+
+// The lines of the CSV, split at commas; blank, comment and header lines left out.
+std::vector<Override> read_overrides(std::string_view csv, const std::string& source, std::vector<std::uint32_t>& lines) {
+    std::vector<Override> out;
     std::uint32_t number = 0;
-    std::size_t unknown = 0;
     for (bool done = false; !done;) {
         const std::size_t eol = csv.find('\n');
         std::string_view line = csv.substr(0, eol);
@@ -41,30 +76,59 @@ void apply_material_map(ObjModel& model, std::string_view csv, const std::string
         }
         if (field.size() != 7)
             detail::fail_at(source, number, fmt::format("expected 7 fields (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b), found {}", field.size()));
-        const std::string name(field[0]);
-        if (name.empty()) detail::fail_at(source, number, "the object name is empty");
-        Material m{name, Vec3(0.0), Vec3(0.0)};
-        for (int c = 0; c < 3; ++c) {
-            m.kd[c] = detail::parse_number(field[1 + c], source, number, "Kd: diffuse reflectance within [0,1]");
-            if (!(m.kd[c] >= 0.0 && m.kd[c] <= 1.0))
-                detail::fail_at(source, number, fmt::format("Kd {} must be within [0,1] (diffuse reflectance per channel)", m.kd[c]));
-            m.ke[c] = detail::parse_number(field[4 + c], source, number, "Ke: emitted radiosity >= 0");
-            if (!(m.ke[c] >= 0.0)) detail::fail_at(source, number, fmt::format("Ke {} must be >= 0 (emitted radiosity per channel)", m.ke[c]));
-        }
-        if (const auto [it, inserted] = line_of_name.try_emplace(name, number); !inserted)
-            detail::fail_at(source, number, fmt::format("object '{}' is given twice (first on line {})", name, it->second));
-        const auto obj = object_of_name.find(name);
-        if (obj == object_of_name.end()) {
-            if (unknown++ < 10)
-                model.warnings.push_back(fmt::format("{}:{}: the scene has no object '{}'; the line is ignored", source, number, name));
-            continue;
-        }
-        material_of_object[obj->second] = static_cast<std::uint32_t>(model.materials.size());
+        if (field[0].empty()) detail::fail_at(source, number, "the object name is empty");
+        std::optional<Vec3> kd = read_triple(field, true, source, number);
+        out.push_back(Override{std::string(field[0]), kd, read_triple(field, false, source, number)});
+        lines.push_back(number);
+    }
+    return out;
+}
+
+// The material of a face of `o`'s object that had `old`: o's own when it gives both, else one per
+// (object, old material) with what o does not give kept from `old`.
+std::uint32_t overridden(ObjModel& model, const Override& o, std::uint32_t object, std::uint32_t old,
+                         std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>& made) {
+    if (o.whole != kNone) return o.whole;
+    const auto [it, inserted] = made.try_emplace({object, old}, static_cast<std::uint32_t>(model.materials.size()));
+    if (inserted) {
+        const Material& was = model.materials[old];
+        Material m{o.name, o.kd.value_or(was.kd), o.ke.value_or(was.ke)};
         model.materials.push_back(std::move(m));
     }
+    return it->second;
+}
+
+}  // namespace
+
+void apply_material_map(ObjModel& model, std::string_view csv, const std::string& source) {
+    std::unordered_map<std::string, std::uint32_t> object_of_name;
+    for (std::size_t i = 0; i < model.objects.size(); ++i) object_of_name.emplace(model.objects[i], static_cast<std::uint32_t>(i));
+    std::vector<std::uint32_t> lines;
+    std::vector<Override> overrides = read_overrides(csv, source, lines);
+    std::vector<const Override*> override_of_object(model.objects.size(), nullptr);
+    std::unordered_map<std::string, std::uint32_t> line_of_name;
+    std::size_t unknown = 0;
+    for (std::size_t k = 0; k < overrides.size(); ++k) {
+        Override& o = overrides[k];
+        if (const auto [it, inserted] = line_of_name.try_emplace(o.name, lines[k]); !inserted)
+            detail::fail_at(source, lines[k], fmt::format("object '{}' is given twice (first on line {})", o.name, it->second));
+        const auto obj = object_of_name.find(o.name);
+        if (obj == object_of_name.end()) {
+            if (unknown++ < 10)
+                model.warnings.push_back(fmt::format("{}:{}: the scene has no object '{}'; the line is ignored", source, lines[k], o.name));
+            continue;
+        }
+        if (!o.kd && !o.ke) continue;  // both kept: nothing to do
+        if (o.kd && o.ke) {
+            o.whole = static_cast<std::uint32_t>(model.materials.size());
+            model.materials.push_back(Material{o.name, *o.kd, *o.ke});
+        }
+        override_of_object[obj->second] = &o;
+    }
     if (unknown > 10) model.warnings.push_back(fmt::format("{}: {} more unknown objects ignored", source, unknown - 10));
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> made;
     for (ObjFace& f : model.faces)
-        if (material_of_object[f.object] != std::uint32_t(-1)) f.material = material_of_object[f.object];
+        if (const Override* o = override_of_object[f.object]) f.material = overridden(model, *o, f.object, f.material, made);
 }
 
 void apply_material_map_file(ObjModel& model, const std::filesystem::path& path) {

@@ -3,6 +3,7 @@
 // glTF and PLY files written here.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -106,27 +107,33 @@ std::string fmt_vertex(int k) {
     return std::to_string(x) + " " + std::to_string(y) + " " + std::to_string(z) + " 204 102 51\n";
 }
 
-TEST(AssimpMaterialsCli, PlyColoursAreReportedAndMaterialsCsvOverridesThem) {
-    // The closed cube as one PLY object with vertex colours (Kd, no emission: PLY has none), then
-    // --materials giving the object ρ = 0.5 and E = 1: B = E/(1 − ρ) = 2 on every patch.
+// The closed unit cube as one PLY object with vertex colours (204, 102, 51): Kd = (0.8, 0.4, 0.2),
+// no emission (PLY has none).
+std::string coloured_cube_ply() {
     std::string ply = "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float z\n"
                       "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 6\n"
                       "property list uchar int vertex_indices\nend_header\n";
     for (int k = 0; k < 8; ++k) ply += fmt_vertex(k);
-    ply += "4 0 1 2 3\n4 4 7 6 5\n4 0 4 5 1\n4 3 2 6 7\n4 0 3 7 4\n4 1 5 6 2\n";
+    return ply + "4 0 1 2 3\n4 4 7 6 5\n4 0 4 5 1\n4 3 2 6 7\n4 0 3 7 4\n4 1 5 6 2\n";
+}
+
+// The name of the object of the first patch, as `formfactors --patch-table` gives it.
+std::string first_object(const std::string& table) {
+    const std::size_t line = table.find('\n') + 1, a = table.find(',', line) + 1;
+    return table.substr(a, table.find(',', a) - a);
+}
+
+TEST(AssimpMaterialsCli, PlyColoursAreReportedAndMaterialsCsvOverridesThem) {
+    // --materials giving the object ρ = 0.5 and E = 1: B = E/(1 − ρ) = 2 on every patch.
     TempDir dir;
-    write_file(dir / "cube.ply", ply);
+    write_file(dir / "cube.ply", coloured_cube_ply());
     auto r = run_ffcube("formfactors " + (dir / "cube.ply") + " --no-subdivide -q --patch-table " + (dir / "t.csv") +
                         " --report " + (dir / "r.json"));
     ASSERT_EQ(r.code, 0) << r.output;
     const auto report = nlohmann::json::parse(read_text(dir / "r.json"));
     EXPECT_EQ(report["loading"]["materials"]["faces_vertex_colour"].get<int>(), 6);
     EXPECT_EQ(report["loading"]["materials"]["from_file"].get<int>(), 0);
-    // The object's name, as the patch table gives it.
-    const std::string table = read_text(dir / "t.csv");
-    const std::size_t line = table.find('\n') + 1, a = table.find(',', line) + 1;
-    const std::string object = table.substr(a, table.find(',', a) - a);
-    write_file(dir / "m.csv", object + ",0.5,0.5,0.5,1,1,1\n");
+    write_file(dir / "m.csv", first_object(read_text(dir / "t.csv")) + ",0.5,0.5,0.5,1,1,1\n");
     r = run_ffcube("solve " + (dir / "cube.ply") + " --materials " + (dir / "m.csv") + kSolve + (dir / "b.csv"));
     ASSERT_EQ(r.code, 0) << r.output;
     const std::vector<PatchB> patches = read_radiosity(read_text(dir / "b.csv"));
@@ -134,6 +141,31 @@ TEST(AssimpMaterialsCli, PlyColoursAreReportedAndMaterialsCsvOverridesThem) {
     // ρ = 0.5: the bound above at ρ = 0.5 is 0.5 × 1/(0.25) × 6e-7 = 1.2e-6 of E, under 2e-5 × 2.
     for (const PatchB& p : patches)
         for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.B[c], 2.0, kRelative * 2.0) << p.object;
+}
+
+TEST(AssimpMaterialsCli, MaterialsCsvWithOnlyKeLightsAPlyKeepingItsColours) {
+    // "object,,,,1,1,1": E = 1 on every face, Kd the PLY's own ρ = (0.8, 0.4, 0.2): a uniform closed
+    // enclosure, B = E/(1 − ρ) = (5, 5/3, 1.25). Had the CSV replaced Kd by the default 0.5, B = 2.
+    // The colours are float32 c/255 (2^-24 relative: ΔB/B = ρ/(1 − ρ) × 6e-8 ≤ 2.4e-7), well under kRelative.
+    TempDir dir;
+    write_file(dir / "cube.ply", coloured_cube_ply());
+    auto r = run_ffcube("formfactors " + (dir / "cube.ply") + " --no-subdivide -q --method raycast --rays 1 --patch-table " +
+                        (dir / "t.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    write_file(dir / "m.csv", "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\n" + first_object(read_text(dir / "t.csv")) + ",,,,1,1,1\n");
+    r = run_ffcube("solve " + (dir / "cube.ply") + " --materials " + (dir / "m.csv") + kSolve + (dir / "b.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::vector<PatchB> patches = read_radiosity(read_text(dir / "b.csv"));
+    ASSERT_EQ(patches.size(), 6u);
+    const Vec3 want(5.0, 5.0 / 3.0, 1.25);
+    for (const PatchB& p : patches)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(p.B[c], want[c], kRelative * want[c]) << p.object << " channel " << c;
+    // One of a triple left empty: refused, naming the file, the line and the rule; nothing written.
+    write_file(dir / "bad.csv", "# lamp\n" + first_object(read_text(dir / "t.csv")) + ",0.5,,,1,1,1\n");
+    r = run_ffcube("solve " + (dir / "cube.ply") + " --materials " + (dir / "bad.csv") + kSolve + (dir / "bad_b.csv"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find((dir / "bad.csv") + ":2: Kd has 2 of its 3 fields empty"), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "bad_b.csv"));
 }
 
 }  // namespace

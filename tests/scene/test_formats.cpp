@@ -430,6 +430,51 @@ TEST(MaterialMap, SetsKdAndKePerObject) {
     EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0\n", "m.csv"); }), "m.csv:1: expected 7 fields");
 }
 
+TEST(MaterialMap, AnEmptyTripleKeepsTheFilesKdOrKe) {
+    ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
+    // Two faces of "upper" with different materials: each keeps its own Kd and takes the new Ke.
+    m.faces.push_back(m.faces[1]);
+    m.materials.push_back(Material{"blue", Vec3(0.1, 0.2, 0.9), Vec3(7.0)});
+    m.faces.back().material = static_cast<std::uint32_t>(m.materials.size() - 1);
+    const Vec3 kd1 = m.materials[m.faces[1].material].kd, ke0 = m.materials[m.faces[0].material].ke;
+    const Vec3 kd0 = m.materials[m.faces[0].material].kd;
+    apply_material_map(m, "object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b\nupper,,,,3,4,5\nlower,0.25,0.5,0.75,,,\n", "m.csv");
+    EXPECT_EQ(m.materials[m.faces[1].material].kd, kd1);
+    EXPECT_EQ(m.materials[m.faces[1].material].ke, Vec3(3, 4, 5));
+    EXPECT_EQ(m.materials[m.faces[2].material].kd, Vec3(0.1, 0.2, 0.9));
+    EXPECT_EQ(m.materials[m.faces[2].material].ke, Vec3(3, 4, 5));
+    EXPECT_EQ(m.materials[m.faces[0].material].kd, Vec3(0.25, 0.5, 0.75));
+    EXPECT_EQ(m.materials[m.faces[0].material].ke, ke0);
+    EXPECT_NE(kd0, Vec3(0.25, 0.5, 0.75));  // so that the line above shows a change
+    // Both empty: the object keeps its materials.
+    const std::uint32_t before = m.faces[0].material;
+    apply_material_map(m, "lower,,,,,,\n", "m.csv");
+    EXPECT_EQ(m.faces[0].material, before);
+}
+
+TEST(MaterialMap, RefusalsNameTheFileLineAndRule) {
+    ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
+    const std::vector<Material> materials = m.materials;
+    const auto refused = [&](const char* csv) {
+        ObjModel copy = m;
+        return error_of([&] { apply_material_map(copy, csv, "m.csv"); });
+    };
+    EXPECT_CONTAINS(refused("# c\nupper,0.5,,,1,1,1\n"), "m.csv:2: Kd has 2 of its 3 fields empty: give all three, or leave all three empty");
+    EXPECT_CONTAINS(refused("upper,0.5,0.5,0.5,1,,1\n"), "m.csv:1: Ke has 1 of its 3 fields empty");
+    EXPECT_CONTAINS(refused("upper,,,,x,1,1\n"), "m.csv:1: ");
+    EXPECT_CONTAINS(refused("upper,,,,x,1,1\n"), "Ke: emitted radiosity >= 0");
+    EXPECT_CONTAINS(refused("upper,0.5,0.5,abc,,,\n"), "Kd: diffuse reflectance within [0,1]");
+    EXPECT_CONTAINS(refused("upper,,,,1,-2,1\n"), "m.csv:1: Ke -2 must be >= 0");
+    EXPECT_CONTAINS(refused("upper,0.5,1.25,0.5,,,\n"), "m.csv:1: Kd 1.25 must be within [0,1]");
+    EXPECT_CONTAINS(refused("upper,,,,1,1,1\nupper,0.5,0.5,0.5,,,\n"), "m.csv:2: object 'upper' is given twice (first on line 1)");
+    EXPECT_CONTAINS(refused(",,,,1,1,1\n"), "m.csv:1: the object name is empty");
+    // Nothing half-applied: a refusal on line 2 leaves line 1's object as it was.
+    ObjModel copy = m;
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(copy, "upper,,,,1,1,1\nlower,0.5,,,,,\n", "m.csv"); }), "m.csv:2: Kd has 2");
+    EXPECT_EQ(copy.materials.size(), materials.size());
+    EXPECT_EQ(copy.faces[1].material, m.faces[1].material);
+}
+
 TEST(NoSubdivide, EveryFaceIsOnePatchOrTheFaceIsRefused) {
     const ObjModel m = parse_vs3(kTwoSquaresVs3, "pair.vs3");
     MeshOptions o;
