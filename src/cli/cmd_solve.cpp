@@ -51,43 +51,20 @@ struct Options {
     SurfaceOutputOptions sky;  // --sky, --sky-by only (add_sky_options)
 };
 
-// A row's sum as the streamed row holds it (float entries, as CsrMatrix, summed in double):
-// RowView::sum of what stream_rows hands on, bit for bit.
-double stored_row_sum(const SparseRow& row) {
-    double s = 0.0;
-    for (const double v : row.val) s += static_cast<float>(v);
-    return s;
-}
-
 // The solve's provider, passed through, keeping the sum of each row it hands on: the rows the
 // solve shoots, for the sky view factors (--sky), which then compute only the rows not shot.
-class RowSumKeeper final : public RowProvider {
+// Sums as stored (SparseRow::stored_sum: RowView::sum of what stream_rows hands on, bit for bit).
+class RowSumKeeper final : public ObservingRowProvider {
 public:
-    explicit RowSumKeeper(RowProvider& inner) : inner_(inner), sums_(inner.size(), NAN) {}
-    std::uint32_t size() const override { return inner_.size(); }
-    std::string name() const override { return inner_.name(); }
-    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override {
-        inner_.compute_rows(rows, keeping(sink));
-    }
-    bool can_sample_sender() const override { return inner_.can_sample_sender(); }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                              const RowSink& sink) override {
-        inner_.compute_rows_planned(rows, plans, keeping(sink));
-    }
-    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override {
-        inner_.compute_rows_staged(rows, stages, keeping(sink));
-    }
+    explicit RowSumKeeper(RowProvider& inner) : ObservingRowProvider(inner), sums_(inner.size(), NAN) {}
     // Per row: its stored sum, or NaN for a row not handed on.
     std::vector<double>& sums() { return sums_; }
 
 private:
-    RowSink keeping(const RowSink& sink) {
-        return [this, &sink](std::uint32_t i, const SparseRow& row) {
-            sums_[i] = stored_row_sum(row);
-            sink(i, row);
-        };
+    const SparseRow& observe(std::uint32_t i, const SparseRow& row) override {
+        sums_[i] = row.stored_sum();
+        return row;
     }
-    RowProvider& inner_;
     std::vector<double> sums_;
 };
 
@@ -106,7 +83,7 @@ std::size_t sky_row_sums(RowProvider& provider, std::vector<double>& sums, bool 
     if (missing.empty()) return n;
     Progress bar("sky rows", missing.size(), progress);
     provider.compute_rows(missing, [&](std::uint32_t i, const SparseRow& row) {
-        sums[i] = stored_row_sum(row);
+        sums[i] = row.stored_sum();
         bar.add();
     });
     return n - missing.size();

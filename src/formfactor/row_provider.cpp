@@ -61,32 +61,39 @@ void MatrixRowProvider::compute_rows(std::span<const std::uint32_t> rows, const 
     }
 }
 
-LeadingRowProvider::LeadingRowProvider(RowProvider& inner, std::uint32_t n) : inner_(inner), n_(n), cut_(n, 0.0) {
+RowSink ObservingRowProvider::observing(const RowSink& sink) {
+    return [this, &sink](std::uint32_t i, const SparseRow& row) { sink(i, observe(i, row)); };
+}
+
+void ObservingRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
+    inner_.compute_rows(rows, observing(sink));
+}
+
+void ObservingRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                                                const RowSink& sink) {
+    inner_.compute_rows_planned(rows, plans, observing(sink));
+}
+
+void ObservingRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                                               const RowSink& sink) {
+    inner_.compute_rows_staged(rows, stages, observing(sink));
+}
+
+LeadingRowProvider::LeadingRowProvider(RowProvider& inner, std::uint32_t n) : ObservingRowProvider(inner), n_(n), cut_(n, 0.0) {
     FFCUBE_CHECK_MSG(n <= inner.size(), "LeadingRowProvider: more rows than the inner provider has");
 }
 
-RowSink LeadingRowProvider::cutting(const RowSink& sink) {
-    return [this, &sink](std::uint32_t i, const SparseRow& full) {
-        FFCUBE_CHECK(i < n_);
-        // Columns are increasing: the kept ones are a prefix.
-        const auto keep = static_cast<std::size_t>(std::lower_bound(full.col.begin(), full.col.end(), n_) - full.col.begin());
-        double cut = 0.0;
-        for (std::size_t k = keep; k < full.col.size(); ++k) cut += full.val[k];
-        cut_[i] = cut;
-        if (keep == full.col.size()) return sink(i, full);
-        row_.col.assign(full.col.begin(), full.col.begin() + static_cast<std::ptrdiff_t>(keep));
-        row_.val.assign(full.val.begin(), full.val.begin() + static_cast<std::ptrdiff_t>(keep));
-        sink(i, row_);
-    };
-}
-
-void LeadingRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
-    inner_.compute_rows(rows, cutting(sink));
-}
-
-void LeadingRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                                              const RowSink& sink) {
-    inner_.compute_rows_planned(rows, plans, cutting(sink));
+const SparseRow& LeadingRowProvider::observe(std::uint32_t i, const SparseRow& full) {
+    FFCUBE_CHECK(i < n_);
+    // Columns are increasing: the kept ones are a prefix.
+    const auto keep = static_cast<std::size_t>(std::lower_bound(full.col.begin(), full.col.end(), n_) - full.col.begin());
+    double cut = 0.0;
+    for (std::size_t k = keep; k < full.col.size(); ++k) cut += full.val[k];
+    cut_[i] = cut;
+    if (keep == full.col.size()) return full;
+    row_.col.assign(full.col.begin(), full.col.begin() + static_cast<std::ptrdiff_t>(keep));
+    row_.val.assign(full.val.begin(), full.val.begin() + static_cast<std::ptrdiff_t>(keep));
+    return row_;
 }
 
 CsrMatrix compute_all_rows(RowProvider& provider) {

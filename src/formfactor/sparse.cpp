@@ -12,11 +12,22 @@ double SparseRow::sum() const {
     return s;
 }
 
-double RowView::sum() const {
+namespace {
+
+// The one rule of a stored row's sum (CsrMatrix keeps float entries): each entry as float, summed
+// in double, in order. --sky's file bytes depend on SparseRow::stored_sum and RowView::sum agreeing.
+template <typename T>
+double float_entries_sum(std::span<const T> val) {
     double s = 0.0;
-    for (float v : val) s += v;
+    for (const T v : val) s += static_cast<float>(v);
     return s;
 }
+
+}  // namespace
+
+double SparseRow::stored_sum() const { return float_entries_sum<double>(val); }
+
+double RowView::sum() const { return float_entries_sum<float>(val); }
 
 CsrMatrix::CsrMatrix(std::uint32_t n) : n_(n) { row_ptr_.reserve(std::size_t(n) + 1); }
 

@@ -71,25 +71,49 @@ private:
     const CsrMatrix& m_;
 };
 
-// Rows 0 .. n−1 of an inner provider that measures a larger scene, each cut to its columns below
-// n: the radiating part of a scene with obstruction-only surfaces (Scene::drawn: their patches
-// come last and get no row or column). What a row's cut entries sum to is kept: the share of the
-// energy leaving that patch that the left-out patches intercept (not sky, not in F).
-class LeadingRowProvider final : public RowProvider {
+// An inner provider's rows, passed through every entry point (compute_rows, compute_rows_planned,
+// compute_rows_staged, can_sample_sender), each row shown once to observe(i, row) on its way to
+// the sink: the one place where wrappers that watch (or trim) the rows forward the calls.
+class ObservingRowProvider : public RowProvider {
 public:
-    LeadingRowProvider(RowProvider& inner, std::uint32_t n);
-    std::uint32_t size() const override { return n_; }
+    explicit ObservingRowProvider(RowProvider& inner) : inner_(inner) {}
+    std::uint32_t size() const override { return inner_.size(); }
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     bool can_sample_sender() const override { return inner_.can_sample_sender(); }
     void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                               const RowSink& sink) override;
+    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override;
+
+protected:
+    // Row i as the inner provider hands it (on the calling thread, in list order); returns the row
+    // to hand on: `row` itself, or one the wrapper holds (valid until the next call).
+    virtual const SparseRow& observe(std::uint32_t i, const SparseRow& row) = 0;
+    RowProvider& inner() const { return inner_; }
+
+private:
+    RowSink observing(const RowSink& sink);
+    RowProvider& inner_;
+};
+
+// Rows 0 .. n−1 of an inner provider that measures a larger scene, each cut to its columns below
+// n: the radiating part of a scene with obstruction-only surfaces (Scene::drawn: their patches
+// come last and get no row or column). What a row's cut entries sum to is kept: the share of the
+// energy leaving that patch that the left-out patches intercept (not sky, not in F).
+class LeadingRowProvider final : public ObservingRowProvider {
+public:
+    LeadingRowProvider(RowProvider& inner, std::uint32_t n);
+    std::uint32_t size() const override { return n_; }
+    // Not the inner provider's staged rows: its finish stage would see rows not yet cut. The
+    // default (plans and finish on the calling thread, rows through compute_rows_planned) instead.
+    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override {
+        RowProvider::compute_rows_staged(rows, stages, sink);
+    }
     // Per row: Σ of the entries cut from it (0 for rows not computed through this provider).
     std::span<const double> cut() const { return cut_; }
 
 private:
-    RowSink cutting(const RowSink& sink);
-    RowProvider& inner_;
+    const SparseRow& observe(std::uint32_t i, const SparseRow& full) override;
     std::uint32_t n_;
     SparseRow row_;
     std::vector<double> cut_;

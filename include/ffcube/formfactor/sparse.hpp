@@ -21,6 +21,9 @@ struct SparseRow {
     }
     std::size_t nnz() const { return col.size(); }
     double sum() const;
+    // The sum of the row as a CsrMatrix stores it: each entry rounded to float, summed in double
+    // in column order; equal bit for bit to RowView::sum of the appended row (the same rule).
+    double stored_sum() const;
 };
 
 // Read-only view of one row of a CsrMatrix.
