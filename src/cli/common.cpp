@@ -39,7 +39,8 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
                     {"auto", "obj", "stl", "vs3", "ply", "gltf", "glb", "assimp"},
                     "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp)", "auto");
     app.add_option("--materials", o.scene.materials,
-                   "CSV of Kd and Ke per object (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b) for formats without materials")
+                   "CSV of Kd and Ke per object (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b) for formats without materials; "
+                   "a triple left empty keeps the file's (docs/scene-format.md)")
         ->check(CLI::ExistingFile);
     app.add_flag_function(
            "--no-subdivide", [&o](std::int64_t) { o.scene.subdivide = false; },
