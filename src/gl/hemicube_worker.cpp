@@ -250,15 +250,25 @@ void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_poi
         }
         ++st.fine_rows_refined;
     }
+    if (sub_points < 2) {
+        hemicube_row(p, scene_.patches[p].centroid, false, out, st);
+        return;
+    }
+    begin_row();
+    sample(p, sub_points, st);
+    ++st.sampled_rows;
+    take_row(out, st);
+}
+
+void Worker::begin_row() {
     ++epoch_;
     touched_.clear();
-    if (sub_points < 2) {
-        render(p, st);
-        accumulate(p, 1.0, false, st);
-    } else {
-        sample(p, sub_points, st);
-        ++st.sampled_rows;
-    }
+}
+
+void Worker::hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st) {
+    begin_row();
+    render(p, at, half, st);
+    accumulate(p, 1.0, half, st);
     take_row(out, st);
 }
 
@@ -291,18 +301,8 @@ bool Worker::sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st)
     const auto v = scene_.patch_vertices(p);
     patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
     sample_rows_.resize(points_.size());
-    for (std::size_t q = 0; q < points_.size(); ++q) {
-        ++epoch_;
-        touched_.clear();
-        render(p, points_[q], true, st);
-        accumulate(p, 1.0, true, st);
-        take_row(sample_rows_[q], st);
-    }
-    ++epoch_;
-    touched_.clear();
-    render(p, scene_.patches[p].centroid, true, st);
-    accumulate(p, 1.0, true, st);
-    take_row(centre_row_, st);
+    for (std::size_t q = 0; q < points_.size(); ++q) hemicube_row(p, points_[q], true, sample_rows_[q], st);
+    hemicube_row(p, scene_.patches[p].centroid, true, centre_row_, st);
     Stopwatch watch;
     SampleAgreementOptions o;
     const double n = half_layout_.resolution();

@@ -58,6 +58,10 @@ private:
     // true (out made) when they agree.
     bool sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st);
     void take_row(SparseRow& out, HemicubeStats& st);
+    // A new row in acc_/touched_: a new epoch_, nothing touched.
+    void begin_row();
+    // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
+    void hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
     void occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st);
     void build_lists(bool occluders_only, HemicubeStats* st);
