@@ -222,8 +222,9 @@ public:
             }
             if (close_inspector_) inspected_.reset(), close_inspector_ = false;
             if (last) break;
-            // Between frames (no shots running): a level whose solve stopped hands over to the next.
-            if (!levels_done_ && solver_->status() != StopReason::Running) next_level();
+            // Between frames (no shots running): a level whose solve stopped hands over to the next
+            // (not while a scripted run settles: its pick and its picture are of one level).
+            if (!settling && !levels_done_ && solver_->status() != StopReason::Running) next_level();
             if (options_.until_done && !settling && levels_done_)
                 settle_from = frame + 1;
         }
