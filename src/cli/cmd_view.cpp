@@ -71,14 +71,12 @@ void run_adaptive(const Options& o, const Scene& scene) {
     for (const std::string& line : describe(run.rows())) info("{}", line);
     AdaptiveLevels levels(run);
     const SolveResult shown = run_viewer(levels, o.solver, o.viewer);
-    if (run.done()) {
-        const AdaptiveResult refined = run.take_result();
-        info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
-             refined.scene->size(), scene.size(), refined.max_relative_error);
-        if (!o.objects.empty()) write_objects_csv(o.objects, *refined.scene, shown.radiosity);
-    } else if (!o.objects.empty()) {  // the window closed during a level: that level's solve as it stands
-        write_objects_csv(o.objects, run.scene(), shown.radiosity);
-    }
+    // The level shown last: the last level, or the one whose solve the closed window interrupted.
+    if (!o.objects.empty()) write_objects_csv(o.objects, run.scene(), shown.radiosity);
+    if (!run.done()) return;
+    const AdaptiveResult refined = run.take_result();
+    info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
+         refined.scene->size(), scene.size(), refined.max_relative_error);
 }
 
 int run(Options& o) {
