@@ -162,7 +162,7 @@ public:
         for (int frame = 0; !glfwWindowShouldClose(window_.window()); ++frame) {
             const bool scripted = this->scripted();
             const bool settling = scripted && frame >= settle_from;
-            const bool last = scripted && frame == settle_from + 1;
+            const bool last = settling && frame - settle_from == 1;  // (settle_from + 1 would overflow at max)
             if (scripted || solving()) glfwPollEvents();
             else glfwWaitEventsTimeout(0.1);  // idle: no busy loop while nothing changes
 
