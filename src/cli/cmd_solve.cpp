@@ -251,18 +251,7 @@ int run(const Options& o) {
 
     // Every result is computed; now the files, each atomically.
     watch.restart();
-    if (!o.objects.empty()) {
-        const std::vector<ObjectRadiosity> objs = object_radiosity(scene, res.radiosity);
-        std::vector<std::string> names;
-        std::vector<double> areas;
-        std::vector<Vec3> B;
-        for (const ObjectRadiosity& ob : objs) {
-            names.push_back(ob.name);
-            areas.push_back(ob.area);
-            B.push_back(ob.radiosity);
-        }
-        write_object_radiosity_csv(o.objects, names, areas, B);
-    }
+    if (!o.objects.empty()) write_objects_csv(o.objects, scene, res.radiosity);
     if (!o.radiosity.empty()) {
         std::vector<std::uint32_t> object(scene.size());
         std::vector<double> area(scene.size());

@@ -25,7 +25,7 @@ struct Options {
     RowOptions rows;
     SolverOptions solver;
     ViewerOptions viewer;
-    std::string size = "1280x800", pick;
+    std::string size = "1280x800", pick, objects;
     double exposure = NAN;
     std::uint32_t batch = kShotBatch;  // as solve
     bool no_ambient = false;
@@ -43,6 +43,42 @@ std::pair<int, int> parse_pair(const std::string& option, const std::string& tex
     return v;
 }
 
+// The adaptive levels as the viewer shows them: each level's solve is the viewer's own progressive
+// shooting; AdaptiveRun estimates, refines and re-points the hemicube workers in between.
+class AdaptiveLevels final : public ViewerLevels {
+public:
+    explicit AdaptiveLevels(AdaptiveRun& run) : run_(run) {}
+    const Scene& scene() const override { return run_.scene(); }
+    RowProvider& provider() override { return run_.provider(); }
+    HemicubeRowProvider* hemicube() override { return run_.hemicube(); }
+    std::span<const std::uint32_t> origin() const override { return run_.origin(); }
+    std::uint32_t level() const override { return run_.level(); }
+    bool finish(const SolveResult& result) override {
+        run_.finish_level(result);
+        return !run_.done();
+    }
+    void advance() override { run_.next_level(); }
+
+private:
+    AdaptiveRun& run_;
+};
+
+void run_adaptive(const Options& o, const Scene& scene) {
+    // The first level's row source is made here, before the window: its hemicube workers fork
+    // while this process has no GL context, and every later level re-points them (nothing forks).
+    AdaptiveRun run(scene, o.rows, front_end_solver_options(o.solver), o.adaptive.options,
+                    [](const std::string& line) { info("{}", line); });
+    for (const std::string& line : describe(run.rows())) info("{}", line);
+    AdaptiveLevels levels(run);
+    const SolveResult shown = run_viewer(levels, o.solver, o.viewer);
+    // The level shown last: the last level, or the one whose solve the closed window interrupted.
+    if (!o.objects.empty()) write_objects_csv(o.objects, run.scene(), shown.radiosity);
+    if (!run.done()) return;
+    const AdaptiveResult refined = run.take_result();
+    info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
+         refined.scene->size(), scene.size(), refined.max_relative_error);
+}
+
 int run(Options& o) {
     std::tie(o.viewer.width, o.viewer.height) = parse_pair("--size", o.size, 'x');
     if (!o.pick.empty()) o.viewer.pick = parse_pair("--pick", o.pick, ',');
@@ -55,6 +91,7 @@ int run(Options& o) {
     validate(o.viewer);
     check_output_path("--screenshot", o.viewer.screenshot);
     check_output_path("--exr", o.viewer.exr);
+    check_output_path("--objects", o.objects);
     validate(o.rows);
 
     SceneOptions scene_options = o.scene.scene;
@@ -63,22 +100,15 @@ int run(Options& o) {
     Report report;
     const Scene scene = load_and_mesh(scene_options, report);
     if (o.adaptive.on()) {
-        // The levels as `ffcube solve --target-error` runs them (pipeline/adaptive.hpp), before the
-        // window; the window then shows the last level's elements converge on that level's rows
-        // (their workers too were forked while this process had no GL context).
-        AdaptiveResult refined = solve_adaptive(scene, o.rows, front_end_solver_options(o.solver), o.adaptive.options,
-                                                [](const std::string& line) { info("{}", line); });
-        info("adaptive: {} ({} elements from {} patches), largest estimated object error {:.3g}", refined.stop,
-             refined.scene->size(), scene.size(), refined.max_relative_error);
-        for (const std::string& line : describe(refined.rows)) info("{}", line);
-        run_viewer(*refined.scene, refined.rows.provider(), refined.rows.hemicube(), o.solver, o.viewer, refined.origin);
+        run_adaptive(o, scene);
         return 0;
     }
     // Before the window: with no GL context in this process yet, the provider can fork its
     // workers (each with its own headless context) instead of sharing one process's llvmpipe.
     RowSource rows = make_row_source(scene, o.rows);
     for (const std::string& line : describe(rows)) info("{}", line);
-    run_viewer(scene, rows.provider(), rows.hemicube(), o.solver, o.viewer);
+    const SolveResult shown = run_viewer(scene, rows.provider(), rows.hemicube(), o.solver, o.viewer);
+    if (!o.objects.empty()) write_objects_csv(o.objects, scene, shown.radiosity);
     return 0;
 }
 
@@ -116,6 +146,9 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--pick", opts->pick, "after the frames, inspect the patch at window pixel X,Y (from the top left)");
     sub->add_option("--screenshot", v.screenshot, "after the frames, save the window as PNG");
     sub->add_option("--exr", v.exr, "after the frames, save the linear radiosity of the view as OpenEXR");
+    sub->add_flag("--until-done", v.until_done,
+                  "run frames until the (last adaptive level's) solve stops, then act as after --frames");
+    sub->add_option("--objects", opts->objects, "at the end, write the radiosity per object as solve --objects does");
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/io/csv.hpp"
+#include "ffcube/solver/solver.hpp"
 
 namespace ffcube::cli {
 
@@ -136,6 +138,18 @@ void check_output_path(const std::string& option, const std::string& path) {
         throw InputError(fmt::format("{} {}: the directory {} does not exist", option, path, dir.string()));
     if (std::filesystem::is_directory(p, ec))
         throw InputError(fmt::format("{} {}: is a directory, not a file name", option, path));
+}
+
+void write_objects_csv(const std::string& path, const Scene& scene, std::span<const Vec3> radiosity) {
+    std::vector<std::string> names;
+    std::vector<double> areas;
+    std::vector<Vec3> b;
+    for (const ObjectRadiosity& o : object_radiosity(scene, radiosity)) {
+        names.push_back(o.name);
+        areas.push_back(o.area);
+        b.push_back(o.radiosity);
+    }
+    write_object_radiosity_csv(path, names, areas, b);
 }
 
 }  // namespace ffcube::cli

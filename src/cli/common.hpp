@@ -6,10 +6,12 @@
 #include <CLI/CLI.hpp>
 
 #include <cstdint>
+#include <span>
 #include <string>
 
 #include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/pipeline/options.hpp"
+#include "ffcube/scene/scene.hpp"
 
 namespace ffcube::cli {
 
@@ -38,6 +40,10 @@ void add_scene_options(CLI::App& app, SceneFlags& o);
 void add_row_options(CLI::App& app, RowOptions& o);
 // --enforce (formfactors only: it acts on the finished matrix).
 void add_enforce_option(CLI::App& app, RowOptions& o);
+
+// Writes the area-weighted mean radiosity per object of `scene` (io/csv.hpp's object CSV,
+// atomically): solve --objects and view --objects.
+void write_objects_csv(const std::string& path, const Scene& scene, std::span<const Vec3> radiosity);
 
 // Refuses an output path up front (before hours of work) when its directory does not exist.
 void check_output_path(const std::string& option, const std::string& path);

@@ -13,6 +13,7 @@
 #include <deque>
 #include <filesystem>
 #include <future>
+#include <optional>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -127,29 +128,25 @@ std::string next_file_name(const char* extension) {
 
 class Viewer {
 public:
-    Viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-           const ViewerOptions& o, std::span<const std::uint32_t> origin)
-        : scene_(scene),
-          provider_(rows),
-          hemicube_(hemicube),
+    Viewer(ViewerLevels& levels, const SolverOptions& solver_options, const ViewerOptions& o)
+        : levels_(levels),
+          solver_options_(solver_options),
           options_(o),
-          solver_(scene, rows, solver_options),
-          window_(o.width, o.height, scene.source.empty() ? "ffcube view" : "ffcube view: " + scene.source),
+          solver_(std::make_unique<ProgressiveSolver>(levels.scene(), levels.provider(), solver_options)),
+          window_(o.width, o.height, levels.scene().source.empty() ? "ffcube view" : "ffcube view: " + levels.scene().source),
           imgui_(window_.window()),
-          mesh_(build_display_mesh(scene, origin)),
-          obstructions_(build_obstruction_mesh(scene)),
-          renderer_(window_.api(), mesh_, obstructions_),
-          camera_(OrbitCamera::frame(scene)),
+          obstructions_(build_obstruction_mesh(levels.scene())),
+          camera_(OrbitCamera::frame(levels.scene())),
           tone_map_(parse_tone_map(o.tone_map)),
           ambient_(o.ambient),
           smooth_(!o.flat),
           wireframe_(o.wireframe),
           show_ui_(!o.hide_ui),
           paused_(o.paused) {
-        if (!origin.empty()) start_patches_ = 1 + static_cast<std::size_t>(*std::max_element(origin.begin(), origin.end()));
+        upload_level();
         exposure_ = static_cast<float>(o.exposure ? *o.exposure : default_exposure());
-        glfwSwapInterval(o.frames > 0 ? 0 : 1);  // scripted runs do not wait for the display
-        info("viewer: {} patches, window {}x{} on {} ({})", scene.size(), o.width, o.height, window_.renderer(),
+        glfwSwapInterval(scripted() ? 0 : 1);  // scripted runs do not wait for the display
+        info("viewer: {} patches, window {}x{} on {} ({})", scene().size(), o.width, o.height, window_.renderer(),
              window_.version());
         if (obstructions_.patches > 0)
             info("viewer: {} obstruction-only patches drawn as translucent glass (no radiosity; O toggles them)",
@@ -160,10 +157,12 @@ public:
         // A scripted run shoots in frames 0 .. N-1, then draws two more frames without shooting:
         // the first picks, the second is saved (Dear ImGui sizes a newly shown window during one
         // frame before it draws it).
+        // With --until-done the settling frames start once the last level's solve has stopped.
+        int settle_from = options_.until_done ? std::numeric_limits<int>::max() : options_.frames;
         for (int frame = 0; !glfwWindowShouldClose(window_.window()); ++frame) {
-            const bool scripted = options_.frames > 0;
-            const bool settling = scripted && frame >= options_.frames;
-            const bool last = scripted && frame == options_.frames + 1;
+            const bool scripted = this->scripted();
+            const bool settling = scripted && frame >= settle_from;
+            const bool last = settling && frame - settle_from == 1;  // (settle_from + 1 would overflow at max)
             if (scripted || solving()) glfwPollEvents();
             else glfwWaitEventsTimeout(0.1);  // idle: no busy loop while nothing changes
 
@@ -179,7 +178,7 @@ public:
             glfwGetFramebufferSize(window_.window(), &width, &height);
             const bool draw = width > 0 && height > 0;
             // The picture shows the state before this frame's shots (read now, before they start).
-            if (draw) renderer_.set_colors(colors());
+            if (draw) renderer_->set_colors(colors());
             // This frame's shots run on a thread while this thread draws: the rows are measured
             // in the worker processes (forked before the window existed), which would otherwise
             // idle while the window's context draws. The step's budget is the solver time per
@@ -188,7 +187,7 @@ public:
             const bool shoot = !settling && solving();
             const bool saving = !save_png_.empty() || !save_exr_.empty() || last;
             const double frame_start = glfwGetTime();
-            const std::uint64_t shots_before = solver_.shots();
+            const std::uint64_t shots_before = solver_->shots();
             if (shoot && shots_while_shooting_ == 0 && shooting_end_ == 0.0) shooting_start_ = frame_start;
             const StepBudget budget{options_.shots_per_frame ? options_.shots_per_frame : std::numeric_limits<std::uint64_t>::max(),
                                     std::max(options_.budget_ms / 1000.0, draw_seconds_)};
@@ -196,16 +195,16 @@ public:
             if (shoot && !saving) {
                 stepping = std::async(std::launch::async, [this, budget] {
                     Stopwatch watch;
-                    solver_.step(budget);
+                    solver_->step(budget);
                     return watch.seconds();
                 });
             } else if (shoot) {
                 step(budget);
-                if (draw) renderer_.set_colors(colors());
+                if (draw) renderer_->set_colors(colors());
             }
             Stopwatch drawing;
             if (draw) {
-                renderer_.draw(settings(width, height), width, height);
+                renderer_->draw(settings(width, height), width, height);
                 ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
                 if (!save_png_.empty()) write_screenshot(std::exchange(save_png_, {}), width, height);
                 if (!save_exr_.empty()) write_linear(std::exchange(save_exr_, {}), width, height);
@@ -219,32 +218,71 @@ public:
             if (stepping.valid()) record_step(stepping.get());
             if (shoot) {
                 shooting_end_ = glfwGetTime();
-                shots_while_shooting_ += solver_.shots() - shots_before;
+                shots_while_shooting_ += solver_->shots() - shots_before;
             }
             if (close_inspector_) inspected_.reset(), close_inspector_ = false;
             if (last) break;
+            // Between frames (no shots running): a level whose solve stopped hands over to the next
+            // (not while a scripted run settles: its pick and its picture are of one level).
+            if (!settling && !levels_done_ && solver_->status() != StopReason::Running) next_level();
+            if (options_.until_done && !settling && levels_done_)
+                settle_from = frame + 1;
         }
         // Over the frames that shot: the throughput tools/bench_viewer.sh reads.
         const double shooting = shooting_end_ - shooting_start_;
-        info("viewer: {} shots, unshot fraction {:.3g}; {} shots in {:.2f} s of frames that shot ({:.1f} shots/s)", solver_.shots(),
-             solver_.unshot_fraction(), shots_while_shooting_, shooting,
+        if (levels_.level() > 0)
+            info("viewer: {} adaptive levels shown, the last with {} elements", levels_.level() + 1, scene().size());
+        info("viewer: {} shots, unshot fraction {:.3g}; {} shots in {:.2f} s of frames that shot ({:.1f} shots/s)", earlier_shots_ + solver_->shots(),
+             solver_->unshot_fraction(), shots_while_shooting_, shooting,
              shooting > 0 ? static_cast<double>(shots_while_shooting_) / shooting : 0.0);
     }
 
+    SolveResult result() const { return solver_->result(); }
+
 private:
-    bool solving() const { return !paused_ && solver_.status() == StopReason::Running; }
+    bool scripted() const { return options_.frames > 0 || options_.until_done; }
+    const Scene& scene() const { return levels_.scene(); }
+
+    // The display mesh and its GPU buffers for the current level's scene.
+    void upload_level() {
+        renderer_.reset();  // it refers to the mesh replaced now
+        const std::span<const std::uint32_t> origin = levels_.origin();
+        mesh_ = build_display_mesh(scene(), origin);
+        start_patches_ = origin.empty() ? 0 : 1 + static_cast<std::size_t>(*std::max_element(origin.begin(), origin.end()));
+        renderer_.emplace(window_.api(), mesh_, obstructions_);
+    }
+
+    // The level's solve stopped: the levels estimate and refine. The last level stays on screen with
+    // its solver; otherwise the old solver goes first (it refers to the old level's scene and rows),
+    // then the new level gets its own solver, display mesh and buffers.
+    void next_level() {
+        if (!levels_.finish(solver_->result())) {
+            levels_done_ = true;
+            return;
+        }
+        earlier_shots_ += solver_->shots();
+        solver_.reset();
+        levels_.advance();
+        inspected_.reset();  // patch indices of the old level
+        upload_level();
+        solver_ = std::make_unique<ProgressiveSolver>(scene(), levels_.provider(), solver_options_);
+        reset_plot();
+        info("viewer: level {}: {} elements in {} patches", levels_.level(), scene().size(), start_patches_);
+    }
+
+    bool solving() const { return !paused_ && solver_->status() == StopReason::Running; }
 
     void step(const StepBudget& budget) {
         Stopwatch watch;
-        solver_.step(budget);
+        solver_->step(budget);
         record_step(watch.seconds());
     }
 
     void record_step(double seconds) {
         solver_seconds_ += seconds;
-        plot_.add(solver_seconds_, solver_.unshot_fraction());
+        plot_.add(solver_seconds_, solver_->unshot_fraction());
         const double now = glfwGetTime();
-        rate_window_.push_back({now, solver_.shots()});
+        rate_window_.push_back({now, solver_->shots()});
         while (rate_window_.size() > 2 && now - rate_window_.front().first > 1.0) rate_window_.pop_front();
     }
 
@@ -257,16 +295,16 @@ private:
     // See run_viewer: the average radiosity to expect maps to 0.5 before tone mapping.
     double default_exposure() const {
         Vec3 rho(0.0);
-        for (const Patch& p : scene_.patches) rho += p.area * scene_.materials[p.material].kd;
-        rho /= std::max(scene_.total_area(), 1e-300);
-        const Vec3 expected = rho * solver_.ambient();
+        for (const Patch& p : scene().patches) rho += p.area * scene().materials[p.material].kd;
+        rho /= std::max(scene().total_area(), 1e-300);
+        const Vec3 expected = rho * solver_->ambient();
         const double luminance = 0.2126 * expected.r + 0.7152 * expected.g + 0.0722 * expected.b;
         return luminance > 0.0 ? std::log2(0.5 / luminance) : 0.0;
     }
 
     std::vector<Vec3> displayed_radiosity() const {
-        const auto b = solver_.radiosity();
-        return ambient_ ? display_radiosity(scene_, b, solver_.ambient()) : std::vector<Vec3>(b.begin(), b.end());
+        const auto b = solver_->radiosity();
+        return ambient_ ? display_radiosity(scene(), b, solver_->ambient()) : std::vector<Vec3>(b.begin(), b.end());
     }
 
     const std::vector<float>& colors() {
@@ -274,7 +312,7 @@ private:
             flat_colors(mesh_, inspected_->heat, colors_);
         } else {
             const std::vector<Vec3> b = displayed_radiosity();
-            if (smooth_) smooth_colors(mesh_, scene_, b, colors_);
+            if (smooth_) smooth_colors(mesh_, scene(), b, colors_);
             else flat_colors(mesh_, b, colors_);
         }
         return colors_;
@@ -322,7 +360,7 @@ private:
         if (ImGui::IsKeyPressed(GLFW_KEY_A, false)) ambient_ = !ambient_;
         if (ImGui::IsKeyPressed(GLFW_KEY_H, false)) show_ui_ = !show_ui_;
         if (ImGui::IsKeyPressed(GLFW_KEY_T, false)) tone_map_ = static_cast<ToneMap>((static_cast<int>(tone_map_) + 1) % 3);
-        if (ImGui::IsKeyPressed(GLFW_KEY_C, false)) camera_ = OrbitCamera::frame(scene_);
+        if (ImGui::IsKeyPressed(GLFW_KEY_C, false)) camera_ = OrbitCamera::frame(scene());
         if (ImGui::IsKeyPressed(GLFW_KEY_EQUAL) || ImGui::IsKeyPressed(GLFW_KEY_KP_ADD)) exposure_ += 0.25f;
         if (ImGui::IsKeyPressed(GLFW_KEY_MINUS) || ImGui::IsKeyPressed(GLFW_KEY_KP_SUBTRACT)) exposure_ -= 0.25f;
         if (ImGui::IsKeyPressed(GLFW_KEY_ESCAPE, false)) inspected_.reset();
@@ -330,11 +368,15 @@ private:
     }
 
     void single_step() {
-        if (solver_.status() == StopReason::Running) step(StepBudget{1, INFINITY});
+        if (solver_->status() == StopReason::Running) step(StepBudget{1, INFINITY});
     }
 
     void reset() {
-        solver_.reset();
+        solver_->reset();
+        reset_plot();
+    }
+
+    void reset_plot() {
         plot_.clear();
         rate_window_.clear();
         solver_seconds_ = 0.0;
@@ -348,7 +390,7 @@ private:
         if (width <= 0 || height <= 0 || fb_width <= 0 || fb_height <= 0) return;
         // Framebuffer pixels may be finer than window coordinates (HiDPI); GL rows run bottom-up.
         const int px = x * fb_width / width, py = fb_height - 1 - y * fb_height / height;
-        const std::uint32_t item = renderer_.pick(camera_.view_projection(aspect(fb_width, fb_height)), fb_width, fb_height, px, py);
+        const std::uint32_t item = renderer_->pick(camera_.view_projection(aspect(fb_width, fb_height)), fb_width, fb_height, px, py);
         if (item == 0) {
             inspected_.reset();
             return;
@@ -360,14 +402,14 @@ private:
         auto in = std::make_unique<Inspected>();
         in->patch = patch;
         const std::uint32_t rows[1] = {patch};
-        provider_.compute_rows(rows, [&](std::uint32_t, const SparseRow& row) { in->row = row; });
-        in->heat = row_heat_map(scene_, patch, in->row);
+        levels_.provider().compute_rows(rows, [&](std::uint32_t, const SparseRow& row) { in->row = row; });
+        in->heat = row_heat_map(scene(), patch, in->row);
         // The picture is the plain hemicube's item buffer (what the row was measured from); the
         // numbers are the row as the solver gets it (corrected when the correction is on).
-        if (hemicube_) in->image.upload(window_.api(), hemicube_->item_buffer(patch), hemicube_->resolution());
+        if (levels_.hemicube()) in->image.upload(window_.api(), levels_.hemicube()->item_buffer(patch), levels_.hemicube()->resolution());
         inspected_ = std::move(in);
         row_mode_ = true;
-        info("picked patch {} ({}): {} form factors, row sum {:.9g}", patch, scene_.objects[scene_.patches[patch].object],
+        info("picked patch {} ({}): {} form factors, row sum {:.9g}", patch, scene().objects[scene().patches[patch].object],
              inspected_->row.nnz(), inspected_->row.sum());
     }
 
@@ -383,10 +425,10 @@ private:
         std::vector<Vec3> b = displayed_radiosity();
         for (Vec3& v : b) v /= std::numbers::pi;
         std::vector<float> linear;
-        if (smooth_) smooth_colors(mesh_, scene_, b, linear);
+        if (smooth_) smooth_colors(mesh_, scene(), b, linear);
         else flat_colors(mesh_, b, linear);
-        renderer_.set_colors(linear);
-        write_exr(path, renderer_.render_linear(camera_.view_projection(aspect(width, height)), width, height));
+        renderer_->set_colors(linear);
+        write_exr(path, renderer_->render_linear(camera_.view_projection(aspect(width, height)), width, height));
         status_ = "saved " + path;
         info("viewer: wrote {}", path);
     }
@@ -395,16 +437,17 @@ private:
         ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
         ImGui::Begin("ffcube view", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
         ImGui::PushItemWidth(200);
-        if (hemicube_)
-            ImGui::Text("%zu patches, hemicube %d px, %s", scene_.size(), hemicube_->resolution(), hemicube_->backend().c_str());
+        if (levels_.hemicube())
+            ImGui::Text("%zu patches, hemicube %d px, %s", scene().size(), levels_.hemicube()->resolution(), levels_.hemicube()->backend().c_str());
         else
-            ImGui::Text("%zu patches, rows by %s", scene_.size(), provider_.name().c_str());
+            ImGui::Text("%zu patches, rows by %s", scene().size(), levels_.provider().name().c_str());
         if (start_patches_ > 0)
-            ImGui::Text("adaptive: %zu elements in %zu patches (W: amber patches, blue elements)", scene_.size(), start_patches_);
-        ImGui::Text("shots %llu   unshot %.3e", static_cast<unsigned long long>(solver_.shots()), solver_.unshot_fraction());
+            ImGui::Text("adaptive level %u%s: %zu elements in %zu patches (W: amber patches, blue elements)", levels_.level(),
+                        levels_done_ ? " (last)" : "", scene().size(), start_patches_);
+        ImGui::Text("shots %llu   unshot %.3e", static_cast<unsigned long long>(solver_->shots()), solver_->unshot_fraction());
         ImGui::Text("%.0f shots/s   %s", shots_per_second(),
-                    solver_.status() == StopReason::Running ? (paused_ ? "paused" : "running")
-                                                            : to_string(solver_.status()).c_str());
+                    solver_->status() == StopReason::Running ? (paused_ ? "paused" : "running")
+                                                            : to_string(solver_->status()).c_str());
         plot_.draw();
         if (ImGui::Button(paused_ ? "resume" : "pause")) paused_ = !paused_;
         ImGui::SameLine();
@@ -438,21 +481,21 @@ private:
 
     void draw_inspector() {
         const Inspected& in = *inspected_;
-        const Patch& p = scene_.patches[in.patch];
-        const Material& m = scene_.materials[p.material];
-        const Vec3 b = solver_.radiosity()[in.patch];
-        const Vec3 shown = ambient_ ? b + m.kd * solver_.ambient() : b;
+        const Patch& p = scene().patches[in.patch];
+        const Material& m = scene().materials[p.material];
+        const Vec3 b = solver_->radiosity()[in.patch];
+        const Vec3 shown = ambient_ ? b + m.kd * solver_->ambient() : b;
         // Below the main panel (its height depends on the font; 330 px holds it at the default).
         ImGui::SetNextWindowPos(ImVec2(8, 330), ImGuiCond_FirstUseEver);
         ImGui::Begin("patch", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
-        ImGui::Text("patch %u of %s (%s), area %.4g", in.patch, scene_.objects[p.object].c_str(), m.name.c_str(), p.area);
+        ImGui::Text("patch %u of %s (%s), area %.4g", in.patch, scene().objects[p.object].c_str(), m.name.c_str(), p.area);
         ImGui::Text("B  %.4g %.4g %.4g", b.r, b.g, b.b);
         if (ambient_) ImGui::Text("B + rho*ambient  %.4g %.4g %.4g", shown.r, shown.g, shown.b);
         ImGui::Text("E  %.4g %.4g %.4g   rho %.3g %.3g %.3g", m.ke.r, m.ke.g, m.ke.b, m.kd.r, m.kd.g, m.kd.b);
         ImGui::Text("row: %zu form factors, sum %.5f", in.row.nnz(), in.row.sum());
         ImGui::Checkbox("row heat map (F_ij / A_j, log, 3 decades)", &row_mode_);
         const float w = 300.0f;
-        if (hemicube_) {
+        if (levels_.hemicube()) {
             // The atlas's row 0 is at the bottom: flip v.
             ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(in.image.texture.id())),
                          ImVec2(w, w * static_cast<float>(in.image.height) / static_cast<float>(in.image.width)),
@@ -471,17 +514,16 @@ private:
         HemicubeImage image;
     };
 
-    const Scene& scene_;
-    RowProvider& provider_;
-    HemicubeRowProvider* hemicube_;  // null when rows are not hemicubes (no item-buffer picture)
+    ViewerLevels& levels_;           // the scene, rows and hemicubes (null: not hemicubes) of the level shown
+    SolverOptions solver_options_;
     ViewerOptions options_;
-    ProgressiveSolver solver_;
+    std::unique_ptr<ProgressiveSolver> solver_;  // on the current level's scene and rows
     // GL objects below the window: destroyed first, while its context still exists.
     WindowContext window_;
     ImGuiSession imgui_;
     DisplayMesh mesh_;
     ObstructionMesh obstructions_;  // a .vs3's O surfaces (empty otherwise)
-    SceneRenderer renderer_;
+    std::optional<SceneRenderer> renderer_;  // refers to mesh_: rebuilt with it per level
     std::unique_ptr<Inspected> inspected_;
 
     OrbitCamera camera_;
@@ -501,6 +543,8 @@ private:
     std::uint64_t shots_while_shooting_ = 0;
     double draw_seconds_ = 0.0;  // the last frame's drawing, on this thread
     std::size_t start_patches_ = 0;  // patches of the adaptive start mesh; 0 when not adaptive
+    bool levels_done_ = false;       // the last level's solve has stopped (ViewerLevels::finish said so)
+    std::uint64_t earlier_shots_ = 0;  // shots of the levels before this one
 };
 
 }  // namespace
@@ -513,19 +557,19 @@ void validate(const ViewerOptions& o) {
     if (o.exposure && !std::isfinite(*o.exposure)) throw InputError("--exposure: must be a finite number of stops");
     parse_tone_map(o.tone_map);
     if (o.frames < 0) throw InputError(fmt::format("--frames {}: must be ≥ 0", o.frames));
-    if (o.frames == 0 && (o.pick || !o.screenshot.empty() || !o.exr.empty()))
-        throw InputError("--pick, --screenshot and --exr act after the last of --frames N: give --frames");
+    if (o.frames > 0 && o.until_done) throw InputError("--frames and --until-done: give one of them");
+    if (o.until_done && o.paused) throw InputError("--until-done with --paused: the solve would never end");
+    if (o.frames == 0 && !o.until_done && (o.pick || !o.screenshot.empty() || !o.exr.empty()))
+        throw InputError("--pick, --screenshot and --exr act after the last frame: give --frames N or --until-done");
     if (o.pick && (o.pick->first < 0 || o.pick->second < 0 || o.pick->first >= o.width || o.pick->second >= o.height))
         throw InputError(fmt::format("--pick {},{}: must lie inside the {}x{} window", o.pick->first, o.pick->second, o.width, o.height));
 }
 
-void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-                const ViewerOptions& options, std::span<const std::uint32_t> origin) {
+SolveResult run_viewer(ViewerLevels& levels, const SolverOptions& solver_options, const ViewerOptions& options) {
     validate(options);
-    if (!origin.empty() && origin.size() != scene.size())
-        throw InternalError(fmt::format("run_viewer: {} origins for {} patches", origin.size(), scene.size()));
-    Viewer viewer(scene, rows, hemicube, solver_options, options, origin);
+    Viewer viewer(levels, solver_options, options);
     viewer.run();
+    return viewer.result();
 }
 
 }  // namespace ffcube

@@ -8,6 +8,7 @@
 
 #include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/scene/refine.hpp"
+#include "ffcube/solver/progressive.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -141,6 +142,57 @@ TEST(Adaptive, KeptWorkersGiveTheSameBitsAsWorkersRestartedPerLevel) {
             }
         }
     }
+}
+
+// AdaptiveRun driven from outside, level by level, as the viewer drives it (its own progressive
+// solver in small steps, finish_level, next_level), gives what solve_adaptive gives with the
+// shooting solve: the same levels, elements and radiosity, bit for bit. Shooting is deterministic
+// however the shots are split into steps (solver/progressive.hpp), and solve_radiosity's shooting
+// runs the same ProgressiveSolver unless it switches to GMRES on a stiff scene, which ρ = 0.5
+// here does not need (checked on the last level's result: stiffness.action "none").
+TEST(Adaptive, RunDrivenLevelByLevelEqualsSolveAdaptive) {
+    const Scene s = shadow_scene();
+    SolverOptions shoot;
+    shoot.method = SolverMethod::Shoot;
+    shoot.tolerance = 1e-6;
+    AdaptiveOptions ao;
+    ao.target_error = 1e-3;
+    ao.max_levels = 2;
+    const AdaptiveResult whole = solve_adaptive(s, small_rows(2), shoot, ao);
+    ASSERT_GE(whole.levels.size(), 2u) << "the test needs a refined level";
+    EXPECT_EQ(whole.result.stiffness.action, "none");
+
+    AdaptiveRun run(s, small_rows(2), shoot, ao);
+    std::vector<std::size_t> sizes;
+    for (;;) {
+        EXPECT_EQ(run.level(), sizes.size());
+        sizes.push_back(run.scene().size());
+        ProgressiveSolver solver(run.scene(), run.provider(), shoot);
+        while (solver.step(StepBudget{.max_shots = 7}) == StopReason::Running) {
+        }
+        run.finish_level(solver.result());
+        // Until next_level the level's scene and rows stay as they were (a viewer still shows them).
+        EXPECT_EQ(run.scene().size(), sizes.back());
+        EXPECT_EQ(run.provider().size(), sizes.back());
+        if (run.done()) break;
+        run.next_level();
+    }
+    const AdaptiveResult stepped = run.take_result();
+    ASSERT_EQ(stepped.levels.size(), whole.levels.size());
+    for (std::size_t l = 0; l < whole.levels.size(); ++l) {
+        EXPECT_EQ(sizes[l], whole.levels[l].elements) << l;
+        EXPECT_EQ(stepped.levels[l].elements, whole.levels[l].elements) << l;
+        EXPECT_EQ(stepped.levels[l].refined, whole.levels[l].refined) << l;
+        EXPECT_EQ(stepped.levels[l].rows_computed, whole.levels[l].rows_computed) << l;
+        EXPECT_EQ(stepped.levels[l].rows_reused, whole.levels[l].rows_reused) << l;
+        EXPECT_EQ(stepped.levels[l].objects, whole.levels[l].objects) << l;
+    }
+    EXPECT_EQ(stepped.stop, whole.stop);
+    EXPECT_EQ(stepped.origin, whole.origin);
+    EXPECT_EQ(stepped.max_relative_error, whole.max_relative_error);
+    ASSERT_EQ(stepped.result.radiosity.size(), whole.result.radiosity.size());
+    for (std::size_t i = 0; i < whole.result.radiosity.size(); ++i)
+        EXPECT_EQ(stepped.result.radiosity[i], whole.result.radiosity[i]) << i;
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <regex>
 #include <vector>
 
 #include "cli/cli_util.hpp"
@@ -51,10 +52,10 @@ Image load_png(const std::string& path) {
 
 bool have_xvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
 
-// Runs `ffcube view` with the small test settings and ARGS inside a fresh Xvfb.
-RunResult view(const std::string& args) {
-    const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(FFCUBE_BINARY) +
-                            " view -q --patches 300 --resolution 64 --size 320x240 --hide-ui " + args + " 2>&1";
+// Runs `ffcube view` with the small test settings and ARGS inside a fresh Xvfb (quiet: -q, no log).
+RunResult view(const std::string& args, bool quiet = true) {
+    const std::string cmd = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(FFCUBE_BINARY) + " view " +
+                            (quiet ? "-q " : "") + "--patches 300 --resolution 64 --size 320x240 --hide-ui " + args + " 2>&1";
     RunResult r;
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
@@ -218,8 +219,9 @@ TEST(ViewCli, WireframeShowsTheElementsOfAdaptiveRefinement) {
     TempDir dir;
     // At most 420 elements from 300 patches: one refinement of up to 40 patches, then the budget
     // stops it (two solves of about 300 and 400 rows at 64 pixels: the run took 8.4 s on
-    // llvmpipe with the machine's 2 cores at load average 18).
-    const RunResult adaptive = view("--target-error 0.05 --max-elements 420 --wireframe --frames 3 --screenshot " + dir / "a.png");
+    // llvmpipe with the machine's 2 cores at load average 18). The levels are shown one after the
+    // other: --until-done waits for the refined one.
+    const RunResult adaptive = view("--target-error 0.05 --max-elements 420 --wireframe --until-done --screenshot " + dir / "a.png");
     const RunResult plain = view("--wireframe --frames 3 --screenshot " + dir / "p.png");
     ASSERT_EQ(adaptive.code, 0) << adaptive.output;
     ASSERT_EQ(plain.code, 0) << plain.output;
@@ -236,6 +238,43 @@ TEST(ViewCli, WireframeShowsTheElementsOfAdaptiveRefinement) {
     EXPECT_GT(count(a, kPatchEdge), 1000);
     EXPECT_EQ(count(p, kElementEdge), 0);
     EXPECT_GT(count(p, kPatchEdge), 1000);
+}
+
+// The first number after each match of `pattern` (one capture group) in the log.
+std::vector<std::size_t> numbers_after(const std::string& log, const std::string& pattern) {
+    std::vector<std::size_t> out;
+    const std::regex re(pattern);
+    for (auto it = std::sregex_iterator(log.begin(), log.end(), re); it != std::sregex_iterator(); ++it)
+        out.push_back(std::stoul((*it)[1].str()));
+    return out;
+}
+
+TEST(ViewCli, UntilDoneShowsTheAdaptiveLevelsAsTheyRunAndEndsWithSolvesObjects) {
+    REQUIRE_XVFB();
+    TempDir dir;
+    // The wireframe test's refinement: 300 patches, then one level of at most 420 elements.
+    const std::string adaptive = "--target-error 0.05 --max-elements 420 --tolerance 1e-4 ";
+    const RunResult v = view(adaptive + "--until-done --objects " + dir / "v.csv", false);
+    ASSERT_EQ(v.code, 0) << v.output;
+    // The window opens on level 0 and switches to each refined level when its solve converges.
+    const std::vector<std::size_t> start = numbers_after(v.output, R"(viewer: (\d+) patches, window)");
+    const std::vector<std::size_t> levels = numbers_after(v.output, R"(viewer: level \d+: (\d+) elements)");
+    ASSERT_EQ(start.size(), 1u) << v.output;
+    ASSERT_GE(levels.size(), 1u) << v.output;
+    EXPECT_GT(levels.front(), start.front());
+    for (std::size_t l = 1; l < levels.size(); ++l) EXPECT_GT(levels[l], levels[l - 1]);
+    EXPECT_EQ(numbers_after(v.output, R"(viewer: (\d+) adaptive levels shown)"), std::vector<std::size_t>{levels.size() + 1});
+    // The same options solved by `ffcube solve`: each level's solve is progressive shooting on the
+    // same rows in both (the viewer's ProgressiveSolver in frame-sized steps, solve's in windows of
+    // shots; shooting is deterministic however the shots are split, solver/progressive.hpp), and
+    // solve's switch to GMRES does not happen here (it is for stiff scenes: ρ near 1). So the same
+    // refinement and the same radiosity: the CSVs are equal byte for byte.
+    const RunResult s = test::run_ffcube("solve -q --patches 300 --resolution 64 --solver shoot " + adaptive + "--objects " +
+                                         dir / "s.csv");
+    ASSERT_EQ(s.code, 0) << s.output;
+    const std::string objects = test::read_text(dir / "v.csv");
+    EXPECT_NE(objects.find("tall_block,"), std::string::npos) << objects;
+    EXPECT_EQ(objects, test::read_text(dir / "s.csv"));
 }
 
 TEST(ViewCli, ExrHoldsTheLinearRadiance) {
@@ -264,7 +303,8 @@ TEST(ViewCli, BadOptionsAreRefusedBeforeAnyWindow) {
     // No display needed: validation comes first, exit code 2 (bad input).
     for (const char* args : {"--screenshot x.png", "--frames 2 --pick 5", "--size 320x240 --frames 2 --pick 999,5", "--size 10x10",
                              "--budget-ms 0", "--frames 2 --screenshot /nonexistent-dir/x.png", "--target-error 0",
-                             "--max-elements 10"}) {  // the last: fewer than the ~500 patches of the adaptive start
+                             "--max-elements 10",  // fewer than the ~500 patches of the adaptive start
+                             "--frames 2 --until-done", "--until-done --paused", "--frames 2 --objects /nonexistent-dir/o.csv"}) {
         const RunResult r = test::run_ffcube(std::string("view -q ") + args);
         EXPECT_EQ(r.code, 2) << args << "\n" << r.output;
         EXPECT_NE(r.output.find("error"), std::string::npos) << args;

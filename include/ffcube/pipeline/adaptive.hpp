@@ -94,6 +94,48 @@ struct AdaptiveResult {
 AdaptiveResult solve_adaptive(const Scene& start, const RowOptions& rows, const SolverOptions& solver,
                               const AdaptiveOptions& options, const std::function<void(const std::string&)>& progress = {});
 
+// An adaptive solve held between levels, for a caller that runs each level's solve itself (the
+// viewer, docs/viewer.md) or lets it run solve_radiosity (step_level; solve_adaptive is a loop of it).
+// A level is: scene() and provider() (its rows, reused from the previous level where unsplit), solved
+// by the caller; finish_level(result) then estimates the errors and chooses the refinement, or ends
+// the run (done()); next_level() installs the refined scene and its provider (the same forked
+// hemicube workers, re-pointed at the new elements, unless keep_workers is off). Until next_level the
+// current scene and provider stay as they were (a viewer keeps showing the last level's solve);
+// scene() is the same object for every level, its content replaced by next_level, and provider() a
+// new object: a solver on the old ones must be destroyed before next_level.
+class AdaptiveRun {
+public:
+    // Validates as solve_adaptive does and starts level 0 (its row source, so its workers fork now).
+    AdaptiveRun(const Scene& start, const RowOptions& rows, const SolverOptions& solver, const AdaptiveOptions& options,
+                std::function<void(const std::string&)> progress = {});
+    ~AdaptiveRun();
+    AdaptiveRun(const AdaptiveRun&) = delete;
+    AdaptiveRun& operator=(const AdaptiveRun&) = delete;
+
+    std::uint32_t level() const;
+    const Scene& scene() const;
+    RowProvider& provider();
+    HemicubeRowProvider* hemicube();  // the measuring hemicubes (null for ray-cast rows)
+    std::span<const std::uint32_t> origin() const;  // element → patch of the starting scene
+    const RowSource& rows() const;
+
+    // Solves the current level with solve_radiosity and the solver options given, finish_level,
+    // and next_level unless the run is done.
+    void step_level();
+    // Ends the current level with its solve (by any solver on scene() and provider()): records it,
+    // estimates, and either ends the run (done()) or chooses the next level's elements.
+    void finish_level(const SolveResult& result);
+    // After a finish_level that did not end the run: the refined scene and its provider.
+    void next_level();
+    bool done() const;
+    // The result as solve_adaptive returns it (after done(); the run is spent).
+    AdaptiveResult take_result();
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
 // Per-object errors from two levels' object radiosity. refined[o] is the share of object o's area
 // that the last refinement split. Under first-order convergence (docs/adaptive.md, "The estimated
 // error") splitting a share φ of an object, with its error spread evenly over its area, halves the

@@ -29,6 +29,9 @@ struct ViewerOptions {
     // Automation: frames > 0 runs that many frames, then picks (pick: window pixel x, y from the
     // top left), then writes the screenshot and/or EXR of the final frame, and returns.
     int frames = 0;
+    // Automation: run frames until the last level's solve has stopped (the adaptive levels one after
+    // the other), then act as after --frames.
+    bool until_done = false;
     std::optional<std::pair<int, int>> pick;
     std::string screenshot;  // PNG of the window (with the panel unless hidden)
     std::string exr;         // linear radiosity of the current view (no exposure, tone map or panel)
@@ -50,7 +53,29 @@ void validate(const ViewerOptions& options);
 // origin (empty, or one per patch): after adaptive meshing, the patch of the starting mesh each
 // patch of `scene` (an element) lies in (AdaptiveResult::origin); the wireframe then draws the
 // starting patches' outlines and the element edges inside them in two colours (display.hpp).
-void run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
-                const ViewerOptions& options, std::span<const std::uint32_t> origin = {});
+// Returns the solve shown last (the last level's, as it stands when the window closes).
+SolveResult run_viewer(const Scene& scene, RowProvider& rows, HemicubeRowProvider* hemicube, const SolverOptions& solver_options,
+                       const ViewerOptions& options, std::span<const std::uint32_t> origin = {});
+
+// What the viewer shows, level by level (adaptive meshing: cli/cmd_view.cpp drives AdaptiveRun
+// through it). The viewer solves each level on scene() and provider() by progressive shooting; when
+// that solve stops it calls finish(result). false: that was the last level, which stays on screen.
+// true: the viewer destroys its solver (it refers to this level's scene and rows), calls advance(),
+// and shows the new scene(), provider(), hemicube() and origin() with a new solver, mesh and buffers.
+class ViewerLevels {
+public:
+    virtual ~ViewerLevels() = default;
+    virtual const Scene& scene() const = 0;
+    virtual RowProvider& provider() = 0;
+    virtual HemicubeRowProvider* hemicube() = 0;  // null when the rows are not hemicubes
+    // Empty, or per patch of scene() its patch of the starting mesh (see run_viewer's origin).
+    virtual std::span<const std::uint32_t> origin() const = 0;
+    virtual std::uint32_t level() const = 0;
+    virtual bool finish(const SolveResult& result) = 0;
+    virtual void advance() = 0;
+};
+
+// As above, the levels one after the other (until_done waits for the last).
+SolveResult run_viewer(ViewerLevels& levels, const SolverOptions& solver_options, const ViewerOptions& options);
 
 }  // namespace ffcube
