@@ -114,39 +114,15 @@ struct RaycastRowProvider::Impl {
             const Vec3 d = rad * std::cos(phi) * tu + rad * std::sin(phi) * tv + std::sqrt(std::max(0.0, 1.0 - r1)) * nrm;
             const Vec3 o = (x - mesh.center) * mesh.scale + offset * nrm;
 
-            RTCRayHit rh;
-            rh.ray.org_x = static_cast<float>(o.x);
-            rh.ray.org_y = static_cast<float>(o.y);
-            rh.ray.org_z = static_cast<float>(o.z);
-            rh.ray.dir_x = static_cast<float>(d.x);
-            rh.ray.dir_y = static_cast<float>(d.y);
-            rh.ray.dir_z = static_cast<float>(d.z);
-            rh.ray.tnear = 0.0f;
-            rh.ray.time = 0.0f;
-            rh.ray.mask = 0xFFFFFFFFu;
-            rh.ray.id = 0;
-            rh.ray.flags = 0;
             // A hit on the ray's own patch (or its plane) can only be float rounding: trace on past
             // it, a few times at most (then the ray is dropped, as if absorbed).
-            for (int attempt = 0; attempt < 4; ++attempt) {
-                rh.ray.tfar = std::numeric_limits<float>::infinity();
-                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-                rtcIntersect1(mesh.embree.scene, &ctx, &rh);
-                ++traced_here;
-                if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;  // left the scene
-                const std::uint32_t j = mesh.tri_patch[rh.hit.primID];
-                if (pass_through(i, j)) {
-                    rh.ray.tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
-                    continue;
-                }
-                // A front face receives; so does either side of an obstruction-only patch, whose
-                // factor is measured only to be left out (Scene::drawn), so that it is not sky.
-                if (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first) {
-                    if (acc[j] == 0.0) touched.push_back(j);
-                    acc[j] += w;
-                }
-                break;  // front or back, the ray ends here
+            const std::uint32_t j =
+                first_patch(mesh, ctx, o, d, [&](std::uint32_t q) { return pass_through(i, q); }, traced_here);
+            // A front face receives; so does either side of an obstruction-only patch, whose
+            // factor is measured only to be left out (Scene::drawn), so that it is not sky.
+            if (j != kNoPatch && (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first)) {
+                if (acc[j] == 0.0) touched.push_back(j);
+                acc[j] += w;
             }
         }
         traced.fetch_add(traced_here, std::memory_order_relaxed);
