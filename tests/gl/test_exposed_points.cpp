@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <numbers>
 #include <vector>
 
 #include "ffcube/geometry/analytic.hpp"
@@ -98,9 +100,10 @@ TEST(ExposedPoints, PointsOutsideTheBoxWeightsExactForQuadratics) {
 //    and a degree-2 rule there errs by about the cells' share of the region times the factor's
 //    spread, (1/32) × ½ × ¼ ≈ 4e-3, halved by the weights' sum ½: 2e-3.
 //  - the hemicube at each point (half of 128: n = 64) against the exact point factor: a pixel on
-//    the wall's outline is wrongly in or out, at most ΔF_max = 4/(π n²) each, and the outline
-//    crosses at most 4n pixels of the atlas, so |error| ≤ 16/(π n) · Σ|w| (half the pixels on
-//    the outline go each way on average; this bound does not even count on that).
+//    the wall's outline is wrongly in or out by a fraction of it uniform in (−½, ½), at most
+//    ΔF_max = 4/(π n²) each, and the outline crosses at most 4n pixels of the atlas: σ ≤
+//    √(4n) ΔF_max / √12 per point, σ √(Σ w²) for the rule (the points' outlines fall on
+//    different pixels); asserted within 4σ.
 TEST(ExposedPoints, RowFromTheExposedHalfMatchesTheClosedForm) {
     const HalfInBox h;
     const double closed = 0.5 * ff_perpendicular_rectangles_common_edge(2, 1, 1);
@@ -109,10 +112,10 @@ TEST(ExposedPoints, RowFromTheExposedHalfMatchesTheClosedForm) {
     std::vector<double> weights;
     ASSERT_TRUE(e.rule(h.ground, points, weights));
     const auto wall = h.scene.patch_vertices(h.west);
-    double exact_points = 0, abs_w = 0;
+    double exact_points = 0, w2 = 0;
     for (std::size_t q = 0; q < points.size(); ++q) {
         exact_points += weights[q] * ff_point_polygon(points[q], Vec3(0, 0, 1), std::span<const Vec3>(wall.data(), 4));
-        abs_w += std::abs(weights[q]);
+        w2 += weights[q] * weights[q];
     }
     EXPECT_NEAR(exact_points, closed, 2e-3);
 
@@ -130,11 +133,12 @@ TEST(ExposedPoints, RowFromTheExposedHalfMatchesTheClosedForm) {
             sum += r.val[k];
         }
     });
-    const double n = 64;
-    EXPECT_NEAR(f, exact_points, 16 / (3.14159265358979 * n) * abs_w);
+    const double n = 64, sigma = std::sqrt(4 * n) * 4 / (std::numbers::pi * n * n) / std::sqrt(12.0) * std::sqrt(w2);
+    EXPECT_NEAR(f, exact_points, 4 * sigma);
     EXPECT_NEAR(sum, f, 1e-12) << "the exposed half sees nothing but the wall's front";
     EXPECT_EQ(provider.stats().partly_enclosed_rows, 1u);
-    std::printf("closed %.6f rule on exact point factors %.6f hemicube %.6f\n", closed, exact_points, f);
+    std::printf("closed %.6f, rule on exact point factors %.6f, hemicube %.6f (4 sigma %.1e)\n", closed, exact_points,
+                f, 4 * sigma);
 }
 
 }  // namespace
