@@ -173,11 +173,16 @@ bool ExposedPoints::cut(std::uint32_t i) const {
             if (d[k] * d[l] < 0) meet.push_back(poly.v[k] + (poly.v[l] - poly.v[k]) * (d[k] / (d[k] - d[l])));
         }
         if (meet.size() < 2) continue;
-        const auto far = std::max_element(meet.begin(), meet.end(), [&](const Vec3& a, const Vec3& b) {
-            return glm::length(a - meet[0]) < glm::length(b - meet[0]);
-        });
+        // The points lie on one line: its ends are the point farthest from any of them, and the
+        // point farthest from that one.
+        const auto farthest = [&](const Vec3& from) {
+            return *std::max_element(meet.begin(), meet.end(), [&](const Vec3& a, const Vec3& b) {
+                return glm::length(a - from) < glm::length(b - from);
+            });
+        };
+        const Vec3 a = farthest(meet[0]), b = farthest(a);
         // Margin: 1e-6 of i's size, far above the rounding of the plane test, far below a cell.
-        if (segment_inside(outline, f.local(meet[0]), f.local(*far), 1e-6)) return true;
+        if (segment_inside(outline, f.local(a), f.local(b), 1e-6)) return true;
     }
     return false;
 }
