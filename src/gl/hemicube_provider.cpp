@@ -34,6 +34,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.skipped_rows += b.skipped_rows;
     a.fine_rows_refined += b.fine_rows_refined;
     a.fine_rows_stopped += b.fine_rows_stopped;
+    a.partly_enclosed_rows += b.partly_enclosed_rows;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;

@@ -242,6 +242,10 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
 // quadrature uses; 4 × 4 for a sender with an occluder touching it), each with its own visibility.
 void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
     if (test_fail_ != 0) fail_for_test(test_fail_, p);
+    if (sub_points >= 2 && sample_exposed(p, st)) {
+        take_row(out, st);
+        return;
+    }
     if (sub_points >= 4 && opt_.adaptive_sampling) {
         if (sample_adaptive(p, out, st)) {
             ++st.fine_rows_stopped;
@@ -281,6 +285,20 @@ void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
         render(p, points_[q], true, st);
         accumulate(p, weights_[q], true, st);
     }
+}
+
+bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
+    if (!exposed_) exposed_ = std::make_unique<ExposedPoints>(scene_);
+    if (!exposed_->rule(p, points_, weights_)) return false;
+    ++epoch_;
+    touched_.clear();
+    for (std::size_t q = 0; q < points_.size(); ++q) {
+        render(p, points_[q], true, st);
+        accumulate(p, weights_[q], true, st);
+    }
+    ++st.sampled_rows;
+    ++st.partly_enclosed_rows;
+    return true;
 }
 
 // The row made in acc_ over touched_, sorted by column.

@@ -15,6 +15,7 @@
 #include "ffcube/hemicube/pieces.hpp"
 #include "ffcube/scene/scene.hpp"
 #include "gl/engine.hpp"
+#include "gl/exposed_points.hpp"
 #include "gl/objects.hpp"
 
 namespace ffcube {
@@ -57,6 +58,9 @@ private:
     // Adaptive sampling of a 4 × 4 row: the 2 × 2 samples and the centre, each its own row, then judge_samples;
     // true (out made) when they agree.
     bool sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st);
+    // The sub-hemicubes of a sender cut by a facet and partly enclosed, at points on its exposed
+    // part (gl/exposed_points.hpp); false (nothing done) for any other sender.
+    bool sample_exposed(std::uint32_t p, HemicubeStats& st);
     void take_row(SparseRow& out, HemicubeStats& st);
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
@@ -105,6 +109,7 @@ private:
     std::vector<double> weights_;
     std::vector<SparseRow> sample_rows_;  // sample_adaptive's per-sample rows
     SparseRow centre_row_;                // and its half-resolution hemicube at the centroid
+    std::unique_ptr<ExposedPoints> exposed_;  // made at the first row of sub-hemicubes
 };
 
 // A worker in this process: the context is made current on the worker thread (start).

@@ -207,6 +207,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     // Adaptive sender sampling of the rows planned at 4 × 4 (docs/accuracy.md).
     r.set("sub_hemicube_rows_refined_4x4", st.fine_rows_refined);
     r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
+    // Senders cut by a facet and partly inside it (a ground triangle under a building).
+    r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 

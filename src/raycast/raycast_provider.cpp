@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
+#include "raycast/embree_mesh.hpp"
 
 namespace ffcube {
 namespace {
@@ -38,26 +39,13 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
     return r;
 }
 
-
-struct EmbreeHandles {
-    RTCDevice device = nullptr;
-    RTCScene scene = nullptr;
-    ~EmbreeHandles() {
-        if (scene) rtcReleaseScene(scene);
-        if (device) rtcReleaseDevice(device);
-    }
-};
-
 }  // namespace
 
 struct RaycastRowProvider::Impl {
     const Scene& scene;
     RaycastOptions opt;
     unsigned threads = 1;
-    EmbreeHandles embree;
-    std::vector<std::uint32_t> tri_patch;  // Embree primID → patch index
-    Vec3 center{0.0};                      // scene → Embree coordinates: (p − center) · scale
-    double scale = 1.0;
+    EmbreeMesh mesh;                          // the scene in Embree coordinates
     std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
     std::atomic<std::uint64_t> traced{0};
 
@@ -65,53 +53,14 @@ struct RaycastRowProvider::Impl {
         if (opt.rays == 0) throw InputError("raycast: the number of rays per row must be at least 1");
         threads = opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency());
         if (scene.size() == 0) return;
-        // Centre and scale the scene to unit size before converting to float: a scene offset by
-        // 1e5 or scaled by 1e-4 then keeps float's full relative precision.
-        center = 0.5 * (scene.bbox_min + scene.bbox_max);
-        const double ext = scene.extent();
-        scale = ext > 0 ? 1.0 / ext : 1.0;
-
-        embree.device = rtcNewDevice(nullptr);
-        if (!embree.device)
-            throw InternalError(fmt::format("raycast: Embree device could not be created (error {})",
-                                            static_cast<int>(rtcGetDeviceError(nullptr))));
-        embree.scene = rtcNewScene(embree.device);
-        rtcSetSceneFlags(embree.scene, RTC_SCENE_FLAG_ROBUST);
-        rtcSetSceneBuildQuality(embree.scene, RTC_BUILD_QUALITY_HIGH);
-        RTCGeometry geom = rtcNewGeometry(embree.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                               3 * sizeof(float), scene.positions.size()));
-        for (std::size_t k = 0; k < scene.positions.size(); ++k) {
-            const Vec3 p = (scene.positions[k] - center) * scale;
-            vb[3 * k + 0] = static_cast<float>(p.x);
-            vb[3 * k + 1] = static_cast<float>(p.y);
-            vb[3 * k + 2] = static_cast<float>(p.z);
-        }
-        std::size_t ntri = 0;
-        for (const Patch& p : scene.patches) ntri += p.count == 4 ? 2 : 1;
-        auto* ib = static_cast<unsigned*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), ntri));
-        tri_patch.reserve(ntri);
+        build_embree_mesh(scene, mesh, "raycast");
         parallelogram.resize(scene.size());
-        std::size_t t = 0;
         for (std::uint32_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
-            ib[3 * t + 0] = p.v[0], ib[3 * t + 1] = p.v[1], ib[3 * t + 2] = p.v[2], ++t;
-            tri_patch.push_back(i);
-            if (p.count == 4) {
-                ib[3 * t + 0] = p.v[0], ib[3 * t + 1] = p.v[2], ib[3 * t + 2] = p.v[3], ++t;
-                tri_patch.push_back(i);
-                const auto c = scene.patch_vertices(i);
-                parallelogram[i] = glm::length(c[0] + c[2] - c[1] - c[3]) <= 1e-12 * p.size;
-            }
+            if (p.count != 4) continue;
+            const auto c = scene.patch_vertices(i);
+            parallelogram[i] = glm::length(c[0] + c[2] - c[1] - c[3]) <= 1e-12 * p.size;
         }
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(embree.scene, geom);
-        rtcReleaseGeometry(geom);
-        rtcCommitScene(embree.scene);
-        const RTCError err = rtcGetDeviceError(embree.device);
-        if (err != RTC_ERROR_NONE)
-            throw InternalError(fmt::format("raycast: Embree scene build failed (error {})", static_cast<int>(err)));
     }
 
     // Whether a hit on patch j, for a ray leaving patch i, is a float artefact to pass through:
@@ -136,7 +85,7 @@ struct RaycastRowProvider::Impl {
         const std::uint64_t strata = m * m;
         Vec3 tu, tv;
         orthonormal_basis(p.normal, tu, tv);
-        const double offset = std::max(kOriginOffset * p.size * scale, kMinOffset);
+        const double offset = std::max(kOriginOffset * p.size * mesh.scale, kMinOffset);
         const Vec3 nrm = p.normal;
         double wsum = 0.0;
         std::uint64_t traced_here = 0;
@@ -163,41 +112,17 @@ struct RaycastRowProvider::Impl {
             const double r1 = rng.uniform(), r2 = rng.uniform();
             const double rad = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
             const Vec3 d = rad * std::cos(phi) * tu + rad * std::sin(phi) * tv + std::sqrt(std::max(0.0, 1.0 - r1)) * nrm;
-            const Vec3 o = (x - center) * scale + offset * nrm;
+            const Vec3 o = (x - mesh.center) * mesh.scale + offset * nrm;
 
-            RTCRayHit rh;
-            rh.ray.org_x = static_cast<float>(o.x);
-            rh.ray.org_y = static_cast<float>(o.y);
-            rh.ray.org_z = static_cast<float>(o.z);
-            rh.ray.dir_x = static_cast<float>(d.x);
-            rh.ray.dir_y = static_cast<float>(d.y);
-            rh.ray.dir_z = static_cast<float>(d.z);
-            rh.ray.tnear = 0.0f;
-            rh.ray.time = 0.0f;
-            rh.ray.mask = 0xFFFFFFFFu;
-            rh.ray.id = 0;
-            rh.ray.flags = 0;
             // A hit on the ray's own patch (or its plane) can only be float rounding: trace on past
             // it, a few times at most (then the ray is dropped, as if absorbed).
-            for (int attempt = 0; attempt < 4; ++attempt) {
-                rh.ray.tfar = std::numeric_limits<float>::infinity();
-                rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-                rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-                rtcIntersect1(embree.scene, &ctx, &rh);
-                ++traced_here;
-                if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;  // left the scene
-                const std::uint32_t j = tri_patch[rh.hit.primID];
-                if (pass_through(i, j)) {
-                    rh.ray.tnear = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity());
-                    continue;
-                }
-                // A front face receives; so does either side of an obstruction-only patch, whose
-                // factor is measured only to be left out (Scene::drawn), so that it is not sky.
-                if (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first) {
-                    if (acc[j] == 0.0) touched.push_back(j);
-                    acc[j] += w;
-                }
-                break;  // front or back, the ray ends here
+            const std::uint32_t j =
+                first_patch(mesh, ctx, o, d, [&](std::uint32_t q) { return pass_through(i, q); }, traced_here);
+            // A front face receives; so does either side of an obstruction-only patch, whose
+            // factor is measured only to be left out (Scene::drawn), so that it is not sky.
+            if (j != kNoPatch && (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first)) {
+                if (acc[j] == 0.0) touched.push_back(j);
+                acc[j] += w;
             }
         }
         traced.fetch_add(traced_here, std::memory_order_relaxed);

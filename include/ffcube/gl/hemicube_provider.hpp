@@ -66,6 +66,9 @@ struct HemicubeStats {
     // (the 2 × 2 samples disagreed) or stopped at 2 × 2 (they agreed).
     std::uint64_t fine_rows_refined = 0;
     std::uint64_t fine_rows_stopped = 0;
+    // Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at
+    // points on its exposed part only (gl/exposed_points.hpp).
+    std::uint64_t partly_enclosed_rows = 0;
 };
 
 class HemicubeRowProvider final : public RowProvider {
