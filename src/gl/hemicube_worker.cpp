@@ -279,8 +279,13 @@ void Worker::hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow&
 void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
     const auto v = scene_.patch_vertices(p);
     patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
-    // At half the resolution: four of them cost about one full hemicube, and their
-    // average has about the pixel noise of one (each has twice the relative noise).
+    accumulate_points(p, st);
+}
+
+// The weighted sum of half-resolution hemicubes at points_ (weights_) into acc_: four of them cost
+// about one full hemicube, and their average has about the pixel noise of one (each has twice the
+// relative noise).
+void Worker::accumulate_points(std::uint32_t p, HemicubeStats& st) {
     for (std::size_t q = 0; q < points_.size(); ++q) {
         render(p, points_[q], true, st);
         accumulate(p, weights_[q], true, st);
@@ -290,12 +295,8 @@ void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
 bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
     if (!exposed_) exposed_ = std::make_unique<ExposedPoints>(scene_);
     if (!exposed_->rule(p, points_, weights_)) return false;
-    ++epoch_;
-    touched_.clear();
-    for (std::size_t q = 0; q < points_.size(); ++q) {
-        render(p, points_[q], true, st);
-        accumulate(p, weights_[q], true, st);
-    }
+    begin_row();
+    accumulate_points(p, st);
     ++st.sampled_rows;
     ++st.partly_enclosed_rows;
     return true;

@@ -64,6 +64,7 @@ private:
     void take_row(SparseRow& out, HemicubeStats& st);
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
+    void accumulate_points(std::uint32_t p, HemicubeStats& st);
     // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
     void hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
