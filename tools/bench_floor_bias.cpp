@@ -44,25 +44,28 @@ using namespace ffcube;
 
 double luminance(const Vec3& b) { return 0.2126 * b.r + 0.7152 * b.g + 0.0722 * b.b; }
 
+double escaped_share(const SolveResult& r) { return luminance(r.energy.escaped) / luminance(r.energy.emitted); }
+
 // A run on a refinement of the coarse scene: per coarse patch, the area and the Σ A B of its elements.
 struct PerCoarse {
     std::vector<double> area, power;
+    double escaped = 0;  // the luminance of the power escaped (the open front) over the emitted
     double mean(std::size_t i) const { return power[i] / area[i]; }
 };
 
-PerCoarse per_coarse(const Scene& scene, const std::vector<Vec3>& radiosity, const std::vector<std::uint32_t>& origin,
+PerCoarse per_coarse(const Scene& scene, const SolveResult& solved, const std::vector<std::uint32_t>& origin,
                      std::size_t coarse_patches) {
-    PerCoarse p{std::vector<double>(coarse_patches, 0.0), std::vector<double>(coarse_patches, 0.0)};
+    PerCoarse p{std::vector<double>(coarse_patches, 0.0), std::vector<double>(coarse_patches, 0.0), escaped_share(solved)};
     for (std::size_t e = 0; e < scene.size(); ++e) {
         p.area[origin[e]] += scene.patches[e].area;
-        p.power[origin[e]] += scene.patches[e].area * luminance(radiosity[e]);
+        p.power[origin[e]] += scene.patches[e].area * luminance(solved.radiosity[e]);
     }
     return p;
 }
 
-std::vector<Vec3> solve(const Scene& scene, const RowOptions& rows) {
+SolveResult solve(const Scene& scene, const RowOptions& rows) {
     RowSource source = make_row_source(scene, rows);
-    return solve_radiosity(scene, source.provider(), SolverOptions{}).radiosity;
+    return solve_radiosity(scene, source.provider(), SolverOptions{});
 }
 
 // The coarse scene with patch i split split[i] × split[i], solved, per coarse patch.
@@ -147,7 +150,7 @@ int main(int argc, char** argv) try {
     ao.max_elements = budget;
     ao.max_levels = 1;
     const AdaptiveResult ad = solve_adaptive(coarse, rows, SolverOptions{}, ao);
-    const PerCoarse a = per_coarse(*ad.scene, ad.result.radiosity, ad.origin, n);
+    const PerCoarse a = per_coarse(*ad.scene, ad.result, ad.origin, n);
     std::vector<bool> split(n, false);
     std::vector<std::uint32_t> on_object;
     std::vector<std::size_t> children(n, 0);
@@ -218,16 +221,16 @@ int main(int argc, char** argv) try {
     for (std::uint32_t o = 0; o < coarse.objects.size(); ++o) std::printf(" %s %zu", coarse.objects[o].c_str(), split_per_object[o]);
     std::printf("\n\n| run, mean luminance against the reference |");
     for (const std::string& o : coarse.objects) std::printf(" %s |", o.c_str());
-    std::printf("\n|---|");
-    for (std::size_t o = 0; o < coarse.objects.size(); ++o) std::printf("---|");
+    std::printf(" escaped / emitted |\n|---|");
+    for (std::size_t o = 0; o <= coarse.objects.size(); ++o) std::printf("---|");
     std::printf("\n");
     const auto object_row = [&](const std::string& name, const PerCoarse& run) {
         std::printf("| %s |", name.c_str());
         for (std::uint32_t o = 0; o < coarse.objects.size(); ++o)
             std::printf(" %+.3f%% |", 100 * (object_mean(coarse, o, run) / object_mean(coarse, o, f) - 1));
-        std::printf("\n");
+        std::printf(" %.4f%% |\n", 100 * run.escaped);
     };
-    if (!localise) object_row("coarse", c);
+    object_row("coarse", c);
     object_row("adaptive", a);
     for (const Run& r : runs) object_row(r.name, r.result);
     std::printf("\n| on %s, sum of A_i (x_i - y_i) / sum A B_ref | on the patches split | on the rest | total |\n|---|---|---|---|\n",
