@@ -230,6 +230,7 @@ int main(int argc, char** argv) try {
             std::printf(" %+.3f%% |", 100 * (object_mean(coarse, o, run) / object_mean(coarse, o, f) - 1));
         std::printf(" %.4f%% |\n", 100 * run.escaped);
     };
+    if (!localise) object_row(fmt::format("fine {} x {} (the reference)", fine_split, fine_split), f);
     object_row("coarse", c);
     object_row("adaptive", a);
     for (const Run& r : runs) object_row(r.name, r.result);
