@@ -23,7 +23,7 @@ namespace {
 // the seconds, which are timings).
 // Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
 // its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 29 * 8, "add the new NearFieldStats field to add_row_stats");
+static_assert(sizeof(NearFieldStats) == 32 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
@@ -49,6 +49,9 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.exact_visibility += b.exact_visibility;
     a.exact_visibility_points += b.exact_visibility_points;
     a.exact_visibility_unconverged += b.exact_visibility_unconverged;
+    a.exact_visibility_over_budget += b.exact_visibility_over_budget;
+    a.exact_visibility_rows += b.exact_visibility_rows;
+    a.exact_visibility_cost += b.exact_visibility_cost;
     a.closed_scale_max_change = std::max(a.closed_scale_max_change, b.closed_scale_max_change);
     a.seconds += b.seconds;
     a.near_seconds += b.near_seconds;

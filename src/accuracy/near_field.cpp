@@ -47,7 +47,15 @@ struct NearFieldCorrector::Impl {
     bool needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const;
     void add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
     void add_far_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
-    bool exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    enum class Exact { made, refused, over_budget };
+    // budget: what is left of the row's (auto mode), or nullptr: no bound.
+    Exact exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out, NearFieldScratch::Buffers& b,
+                           double* budget = nullptr) const;
+    // Whether pair (i, j) may be tried (its shaft's blockers, convexity, the sender's front part in
+    // b.blockers and b.sender), and its least cost in evaluations × occluders.
+    bool exact_visibility_eligible(std::uint32_t i, std::uint32_t j, NearFieldScratch::Buffers& b, double& least) const;
+    void resolve_deferred(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    bool automatic() const { return options.exact_visibility_budget > 0 && options.exact_visibility_occluders > 0; }
 };
 
 // A refused pair whose shaft holds at most exact_visibility_occluders possible blockers (every
@@ -55,8 +63,8 @@ struct NearFieldCorrector::Impl {
 // all convex: F_ij is the point factor to j's visible part past them, integrated over the part of i
 // in front of j's plane (the rest sends nothing to j) and divided by A_i. Made into out.exact when
 // the adaptive rule reaches its tolerance (its estimate joins the row's error as far_error).
-bool NearFieldCorrector::Impl::exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out,
-                                                NearFieldScratch::Buffers& b) const {
+bool NearFieldCorrector::Impl::exact_visibility_eligible(std::uint32_t i, std::uint32_t j, NearFieldScratch::Buffers& b,
+                                                         double& least) const {
     const std::size_t k = options.exact_visibility_occluders;
     if (k == 0) return false;
     if (!shaft_blockers(patches, grid, i, j, b.shaft, b.blockers, k)) return false;
@@ -70,19 +78,88 @@ bool NearFieldCorrector::Impl::exact_visibility(std::uint32_t i, std::uint32_t j
     const Patch& pj = patches.scene.patches[j];
     clip_front(patches.polys[i].span(), pj.centroid, pj.normal, b.sender);
     if (b.sender.size() < 3) return false;
+    least = static_cast<double>(visible_ff_min_points(b.sender.size())) *
+            static_cast<double>(std::max<std::size_t>(1, b.blockers.size()));
+    return true;
+}
+
+NearFieldCorrector::Impl::Exact NearFieldCorrector::Impl::exact_visibility(std::uint32_t i, std::uint32_t j,
+                                                                           NearAnalysis& out,
+                                                                           NearFieldScratch::Buffers& b,
+                                                                           double* budget) const {
+    double least = 0;
+    if (!exact_visibility_eligible(i, j, b, least)) return Exact::refused;
     VisibleFFOptions vo;
     vo.tolerance = options.exact_visibility_tolerance;
+    // The kernel's cost grows about linearly with the occluders it cuts the receiver by.
+    const double per_point = static_cast<double>(std::max<std::size_t>(1, b.blockers.size()));
+    bool capped = false;
+    if (budget) {
+        if (least > *budget) return Exact::over_budget;
+        const auto cap = static_cast<std::uint64_t>(*budget / per_point);
+        capped = cap < vo.max_points;
+        vo.max_points = std::min(vo.max_points, cap);
+    }
     const VisibleFFResult r = ff_polygon_visible_polygon(b.sender, patches.polys[j].span(), b.occluders, vo);
     out.exact_visibility_points += r.points;
+    out.exact_visibility_cost += static_cast<double>(r.points) * per_point;
+    if (budget) *budget -= static_cast<double>(r.points) * per_point;
     if (!r.converged) {
+        if (capped) return Exact::over_budget;
         ++out.exact_visibility_unconverged;
-        return false;
+        return Exact::refused;
     }
     const double scale = polygon_area(b.sender) / patches.scene.patches[i].area;
     out.exact.emplace_back(j, r.f * scale);
     out.far_error += r.error * scale;
     ++out.exact_visibility;
-    return true;
+    return Exact::made;
+}
+
+// Auto mode: the row's refused pairs that ask for sub-hemicubes (b.deferred, j increasing, all
+// counted refused by add_near_pairs) are tried only where making all of them exact spares the row
+// its sub-hemicubes: the row would become complete (not measured at all), or nothing else would
+// sample it (an occluder beside the sender, a far pair not proven: plan_row). Elsewhere the
+// sub-hemicubes are drawn anyway and measure those pairs to about 5e-4. All must be eligible and
+// their least costs must fit the budget together; then they are made in order, each capped at
+// what is left, and the first that does not fit stops the row.
+void NearFieldCorrector::Impl::resolve_deferred(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const {
+    const std::size_t n = b.deferred.size();
+    if (n == 0) return;
+    const bool unproven = options.sample_unproven_rows && out.far && out.far_unproven > 0;
+    const bool would_complete = options.skip_complete_rows && out.far && out.far_unproven == 0 &&
+                                !out.faces_obstruction && out.refused == n;
+    const int level = options.sample_beside_occluders ? visibility.occluder_level(i, b.near) : 0;
+    const bool would_centre = !unproven && level == 0;
+    if (!would_complete && !would_centre) return;
+    // The hemicubes spared: plan_row's 4 × 4 sub-hemicubes where an occluder touches the sender
+    // (level 2), 2 × 2 otherwise, against none (complete: skipped) or the centre's one.
+    const double spared = (level == 2 ? 16.0 : 4.0) - (would_complete ? 0.0 : 1.0);
+    double least_sum = 0;
+    for (const std::uint32_t j : b.deferred) {
+        double least = 0;
+        if (!exact_visibility_eligible(i, j, b, least)) return;  // the row is sampled whatever is done
+        least_sum += least;
+    }
+    double budget = options.exact_visibility_budget * spared;
+    if (least_sum > budget) {
+        out.exact_visibility_over_budget += n;
+        return;
+    }
+    const std::size_t first = out.exact.size();
+    for (std::size_t q = 0; q < n; ++q) {
+        const Exact e = exact_visibility(i, b.deferred[q], out, b, &budget);
+        if (e != Exact::made) {
+            if (e == Exact::over_budget) out.exact_visibility_over_budget += n - q;
+            break;
+        }
+        --out.refused;
+        --out.refused_sampled;
+    }
+    if (out.exact.size() == first) return;
+    std::sort(out.exact.begin(), out.exact.end(),
+              [](const auto& a, const auto& c) { return a.first < c.first; });
+    if (out.far) out.complete = out.refused == 0 && out.far_unproven == 0 && !out.faces_obstruction;
 }
 
 // Whether a refused pair's centre value may be off by more than e = (1/k)²/20 (k =
@@ -117,6 +194,7 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
     const double k = options.k;
     const double reach = k * std::max(pi.size, patches.max_size);
     grid.query(Box{pi.centroid - Vec3(reach), pi.centroid + Vec3(reach)}, b.near);
+    b.deferred.clear();
     for (std::uint32_t j : b.near) {
         if (j == i) continue;
         const Patch& pj = scene.patches[j];
@@ -129,7 +207,13 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
         }
         ++out.near_pairs;
         if (!shaft_unoccluded(patches, grid, i, j, b.shaft)) {
-            if (needs_sub_hemicubes(i, j) && exact_visibility(i, j, out, b)) continue;
+            if (needs_sub_hemicubes(i, j)) {
+                if (automatic()) {
+                    b.deferred.push_back(j);  // tried after the far field: resolve_deferred
+                } else if (exact_visibility(i, j, out, b) == Exact::made) {
+                    continue;
+                }
+            }
             ++out.refused;
             out.refused_sampled += needs_sub_hemicubes(i, j);
             continue;
@@ -203,8 +287,36 @@ NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
     return o;
 }
 
+// `--exact-visibility auto`'s budget, in point-kernel evaluations × possible occluders per
+// hemicube the exact values spare (resolve_deferred multiplies it by the row's: 15 or 16 for a
+// row of 4 × 4 sub-hemicubes, 3 or 4 for one of 2 × 2, as it becomes one hemicube or none).
+// - A hemicube row: 3N² pixels at 5 ns (far_field_row_ns; 0.98 ms at N = 256). Measured here:
+//   the unsubdivided L-room without exact visibility, 132 hemicubes at N = 256 plus start-up,
+//   0.09 CPU-s, so ≤ 0.7 ms each: the model does not understate it.
+// - One evaluation × occluder: 650 ns (the L-room with `--exact-visibility 8 --threads 1`: near
+//   analysis 0.23 s for 180,480 points × 2 occluders on average = 360,960; docs/benchmarks.md).
+// - kSpentPerSpared = 4: the exact values may cost up to 4 times the hemicubes they spare. At 1
+//   only 13 of the L-room's 28 pairs fit (its rows take 45,000 evaluations × occluders on
+//   average against 24,000 for 16 hemicubes), at 4 all do; the exact value replaces an entry
+//   that sub-hemicubes leave off by up to 6.6e-3 there (a 3 × 3 wall's 4 × 4 points cannot
+//   follow where a corner starts to hide), against 1e-6. What it costs at worst: a row that
+//   exhausts its budget and still needs its sub-hemicubes spends 4 × their cost on top; rows
+//   are tried only where the least costs fit, so on the Cornell box (14 rows made exact, 5
+//   pairs over budget) the run's CPU is unchanged (docs/benchmarks.md).
+double exact_visibility_budget_for_hemicube(int resolution) {
+    constexpr double kSpentPerSpared = 4;
+    constexpr double kEvaluationNs = 650;
+    const double n = resolution;
+    return kSpentPerSpared * 3.0 * n * n * 5.0 / kEvaluationNs;
+}
+
 bool NearFieldCorrector::far_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->far.unoccluded(i, j); }
 std::size_t NearFieldCorrector::far_field_planes() const { return impl_->far.planes(); }
+std::string NearFieldCorrector::exact_visibility_mode() const {
+    if (impl_->options.exact_visibility_occluders == 0) return "off";
+    if (impl_->automatic()) return "auto";
+    return std::to_string(impl_->options.exact_visibility_occluders);
+}
 const std::string& NearFieldCorrector::far_field_status() const { return impl_->far.status(); }
 double NearFieldCorrector::far_field_cost_ns() const { return impl_->far.cost_ns(); }
 
@@ -228,6 +340,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
     NearFieldScratch::Buffers& b = scratch.buffers();
     impl_->add_near_pairs(i, out, b);
     if (impl_->far.on()) impl_->add_far_pairs(i, out, b);
+    if (impl_->automatic()) impl_->resolve_deferred(i, out, b);
     out.seconds = watch.seconds();
     out.done = true;
 }
@@ -274,6 +387,9 @@ void add_analysis_stats(const NearAnalysis& a, NearFieldStats& stats) {
     stats.exact_visibility += a.exact_visibility;
     stats.exact_visibility_points += a.exact_visibility_points;
     stats.exact_visibility_unconverged += a.exact_visibility_unconverged;
+    stats.exact_visibility_over_budget += a.exact_visibility_over_budget;
+    stats.exact_visibility_rows += a.exact_visibility > 0;
+    stats.exact_visibility_cost += a.exact_visibility_cost;
     stats.near_seconds += a.seconds;
 }
 

@@ -21,6 +21,7 @@ struct NearFieldScratch::Buffers {
     accuracy::NearValueScratch values;                      // separated near values'
     std::vector<std::pair<std::uint32_t, double>> far;      // far entries, j increasing
     std::vector<std::pair<std::uint32_t, double>> near_exact;  // the near entries while merging
+    std::vector<std::uint32_t> deferred;                    // auto exact visibility: refused pairs to try
     std::vector<std::uint32_t> blockers;                    // exact visibility: the shaft's candidates
     std::vector<std::vector<Vec3>> occluders;               // … their polygons
     std::vector<Vec3> sender;                               // … the sender clipped to j's front

@@ -107,12 +107,13 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                    "K x the sender's size (docs/accuracy.md); 0: every such pair")
         ->check(CLI::NonNegativeNumber)
         ->default_val(10.0);
-    app.add_option("--exact-visibility", o.exact_visibility_occluders,
-                   "--correct near: a possibly occluded near pair with at most K possible occluders in its shaft gets "
-                   "the exact factor past them instead of sub-hemicubes (docs/accuracy.md; for large patches, e.g. "
-                   "--no-subdivide); 0: off, at most 64")
-        ->check(CLI::NonNegativeNumber)  // (a size_t would take -1 as 2^64 - 1); the range: validate(RowOptions)
-        ->default_val(0);
+    app.add_option_function<std::string>(
+           "--exact-visibility", [&o](const std::string& word) { parse_exact_visibility(word, o); },
+           "--correct near: a possibly occluded near pair with at most K possible occluders in its shaft gets "
+           "the exact factor past them instead of sub-hemicubes (docs/accuracy.md). auto (default, hemicube): K = 8 "
+           "where it spares a row its sub-hemicubes, within a per-row cost bound; K (at most 64): every such pair, "
+           "no bound; 0 or off: never")
+        ->default_str("auto");
     app.add_flag_function(
         "--adaptive-sampling", [&o](std::int64_t) { o.adaptive_sampling = true; },
         "--correct near: rows planned at 4 x 4 sub-hemicubes are measured at 2 x 2 and the centre first, and "

@@ -175,6 +175,13 @@ struct AreaIntegrator {
 
 }  // namespace
 
+std::uint64_t visible_ff_min_points(std::size_t sender_vertices, const VisibleFFOptions& options) {
+    if (sender_vertices < 3) return 0;
+    std::uint64_t cells = sender_vertices - 2;
+    for (int d = 0; d < options.min_depth; ++d) cells *= 4;
+    return cells * 5 * 16;
+}
+
 VisibleFFResult ff_polygon_visible_polygon(std::span<const Vec3> sender, std::span<const Vec3> receiver,
                                            std::span<const std::vector<Vec3>> occluders, const VisibleFFOptions& options) {
     VisibleFFResult r;

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <charconv>
 #include <cmath>
 
 #include "ffcube/core/error.hpp"
@@ -26,6 +27,24 @@ FarFieldMode parse_far_field(std::string_view text) {
     if (text == "on") return FarFieldMode::on;
     if (text == "off") return FarFieldMode::off;
     throw InputError(fmt::format("--far-field {}: must be auto, on or off", text));
+}
+
+void parse_exact_visibility(std::string_view text, RowOptions& o) {
+    if (text == "auto") {
+        o.exact_visibility_auto = true;
+        return;
+    }
+    o.exact_visibility_auto = false;
+    if (text == "off") {
+        o.exact_visibility_occluders = 0;
+        return;
+    }
+    std::size_t k = 0;
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), k);
+    if (text.empty() || ec != std::errc{} || end != text.data() + text.size())
+        throw InputError(fmt::format("--exact-visibility {}: must be auto, off or a number of occluders 0..{}", text,
+                                     kMaxExactVisibilityOccluders));
+    o.exact_visibility_occluders = k;  // its range: validate(RowOptions)
 }
 
 ContactCuts parse_contact_cuts(std::string_view text) {
@@ -127,13 +146,17 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         nf.k = o.near_k;
         nf.rays = static_cast<double>(o.rays);
         nf.obstruction_receivers = false;  // it credits either side of an obstruction (raycast_provider.cpp)
-        nf.exact_visibility_occluders = o.exact_visibility_occluders;
+        nf.exact_visibility_occluders = o.exact_visibility_auto ? 0 : o.exact_visibility_occluders;
         return nf;
     }
     NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);
     nf.far_field = o.far_field;
     nf.sub_hemicube_k = o.sub_hemicube_k;
     nf.exact_visibility_occluders = o.exact_visibility_occluders;
+    if (o.exact_visibility_auto) {
+        nf.exact_visibility_occluders = kAutoExactVisibilityOccluders;
+        nf.exact_visibility_budget = exact_visibility_budget_for_hemicube(o.resolution);
+    }
     return nf;
 }
 

@@ -99,7 +99,11 @@ FfmMetadata row_metadata(const RowOptions& o) {
         if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
-        if (o.exact_visibility_occluders > 0) meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
+        // auto is the hemicube's default (and off the ray caster's): written only when not.
+        if (!o.exact_visibility_auto && o.exact_visibility_occluders > 0)
+            meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
+        else if (!o.exact_visibility_auto && o.method == RowMethod::Hemicube)
+            meta.settings += " exact_visibility=off";
         if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
     }
     return meta;
@@ -127,6 +131,10 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.pairs_exact_visibility", c.exact_visibility);
     r.set("corrections.exact_visibility_points", c.exact_visibility_points);
     r.set("corrections.exact_visibility_unconverged", c.exact_visibility_unconverged);
+    r.set("corrections.exact_visibility_over_budget", c.exact_visibility_over_budget);
+    r.set("corrections.exact_visibility_rows", c.exact_visibility_rows);
+    r.set("corrections.exact_visibility_cost", c.exact_visibility_cost);
+    r.set("corrections.exact_visibility_mode", corrected.corrector().exact_visibility_mode());
     r.set("corrections.rows_sub_hemicubes_occluder", c.rows_sampled_occluder);
     r.set("corrections.rows_sub_hemicubes_4x4", c.rows_sampled_fine);
     r.set("corrections.rows_sub_hemicubes_unproven", c.rows_sampled_unproven);
@@ -219,6 +227,11 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("time.setup", rows.setup_seconds());
     if (const CorrectedRowProvider* c = rows.corrected()) {
         report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size());
+        const NearFieldStats& s = c->stats();
+        if (c->corrector().exact_visibility_mode() == "auto" && (s.exact_visibility > 0 || s.exact_visibility_over_budget > 0))
+            info("exact visibility (auto; off: --exact-visibility off): {} near pairs exact past their occluders in {} rows "
+                 "({} point evaluations), {} left to sub-hemicubes by the per-row budget",
+                 s.exact_visibility, s.exact_visibility_rows, s.exact_visibility_points, s.exact_visibility_over_budget);
         // The analytic kernels' work (geometry/analytic.hpp), summed over this process: every
         // call has a budget, and a fallback is a panel accepted at its fixed rule's value when
         // the budget was spent (its error is within the call's stated bound).

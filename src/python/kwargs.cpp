@@ -165,8 +165,14 @@ void Kwargs::read_row_options(RowOptions& o, bool enforce) {
     if (py::object v = take("rays"); !v.is_none()) o.rays = integer("rays", v, 0, std::numeric_limits<std::uint64_t>::max());
     if (py::object v = take("correct"); !v.is_none()) o.correct = parse_correction(word("correct", v));
     if (py::object v = take("near_k"); !v.is_none()) o.near_k = number("near_k", v);
-    if (py::object v = take("exact_visibility"); !v.is_none())  // its range: validate(RowOptions)
-        o.exact_visibility_occluders = integer("exact_visibility", v, 0, std::numeric_limits<std::size_t>::max());
+    if (py::object v = take("exact_visibility"); !v.is_none()) {  // its range: validate(RowOptions)
+        if (py::isinstance<py::str>(v)) {
+            parse_exact_visibility(word("exact_visibility", v), o);  // "auto" | "off" | a number, as the CLI
+        } else {
+            o.exact_visibility_occluders = integer("exact_visibility", v, 0, std::numeric_limits<std::size_t>::max());
+            o.exact_visibility_auto = false;
+        }
+    }
     if (py::object v = take("far_field"); !v.is_none()) o.far_field = parse_far_field(word("far_field", v));
     if (enforce)
         if (py::object v = take("enforce"); !v.is_none()) o.enforce = parse_enforce_request(word("enforce", v));

@@ -141,5 +141,38 @@ TEST(AccuracyCli, EnforceClosureOnAClosedSceneAndRefusedOnAnOpenOne) {
     EXPECT_FALSE(std::filesystem::exists(dir / "G.ffm"));
 }
 
+// `--exact-visibility auto` (the default) on the built-in Cornell box meshed at 100 (414
+// patches) and N = 128: it makes some refused pairs exact and leaves others to sub-hemicubes by
+// the per-row budget (both counted), and the matrix is the same, byte for byte, at 1 and 2
+// threads (the budget counts point evaluations, not time; rows are planned from geometry only).
+TEST(AccuracyCli, ExactVisibilityAutoIsTheSameForAnyThreadCount) {
+    TempDir dir;
+    nlohmann::json c[2];
+    for (const int threads : {1, 2}) {
+        const std::string name = "t" + std::to_string(threads);
+        const auto r = run_ffcube("formfactors --max-patch-edge 100 --resolution 128 -q --threads " +
+                                  std::to_string(threads) + " -o " + (dir / (name + ".mtx")) + " --report " +
+                                  (dir / (name + ".json")));
+        ASSERT_EQ(r.code, 0) << r.output;
+        c[threads - 1] = nlohmann::json::parse(test::read_text(dir / (name + ".json")))["corrections"];
+    }
+    EXPECT_EQ(c[0]["exact_visibility_mode"], "auto");
+    EXPECT_GT(c[0]["pairs_exact_visibility"].get<int>(), 0);
+    EXPECT_GT(c[0]["exact_visibility_over_budget"].get<int>(), 0);
+    EXPECT_GT(c[0]["rows_sub_hemicubes"].get<int>(), 0);
+    for (const char* key : {"pairs_exact_visibility", "exact_visibility_points", "exact_visibility_over_budget",
+                            "exact_visibility_rows", "rows_sub_hemicubes", "pairs_refused_sub_hemicubes"})
+        EXPECT_EQ(c[0][key], c[1][key]) << key;
+    EXPECT_EQ(test::read_text(dir / "t1.mtx"), test::read_text(dir / "t2.mtx"));
+    // off: nothing tried, recorded in the report.
+    const auto r = run_ffcube("formfactors --max-patch-edge 100 --resolution 128 -q --exact-visibility off -o " +
+                              (dir / "off.mtx") + " --report " + (dir / "off.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto off = nlohmann::json::parse(test::read_text(dir / "off.json"))["corrections"];
+    EXPECT_EQ(off["exact_visibility_mode"], "off");
+    EXPECT_EQ(off["pairs_exact_visibility"].get<int>(), 0);
+    EXPECT_NE(test::read_text(dir / "t1.mtx"), test::read_text(dir / "off.mtx"));
+}
+
 }  // namespace
 }  // namespace ffcube

@@ -145,5 +145,38 @@ TEST(LRoomCli, NoSubdivideWithExactVisibilityWithin2e5OfTheReference) {
     EXPECT_EQ(c["rows_analytic"].get<int>(), 12);
 }
 
+// The same at the defaults (issue 14's target: 2e-5 without options): `--exact-visibility auto`
+// makes every partly hidden pair exact within the per-row budget (each of the 8 rows it tries
+// would otherwise draw 4 x 4 sub-hemicubes; its pairs take at most 4 times their cost,
+// exact_visibility_budget_for_hemicube), so the values are those of `--exact-visibility 8` and the
+// bound derived above holds as it is.
+TEST(LRoomCli, NoSubdivideAtTheDefaultsWithin2e5OfTheReference) {
+    TempDir dir;
+    const auto r = run_ffcube("formfactors " + kRoom + " --no-subdivide -q --view3d " + (dir / "vf.txt") +
+                              " --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    double worst = 0.0;
+    view3d_file_error(dir / "vf.txt", 2e-5, worst);
+    std::printf("L-shaped room, --no-subdivide at the defaults: max |F - reference| = %.2e\n", worst);
+    const auto c = nlohmann::json::parse(read_text(dir / "r.json"))["corrections"];
+    EXPECT_EQ(c["exact_visibility_mode"], "auto");
+    EXPECT_EQ(c["pairs_exact_visibility"].get<int>(), 28);
+    EXPECT_EQ(c["exact_visibility_over_budget"].get<int>(), 0);
+    EXPECT_EQ(c["rows_analytic"].get<int>(), 12);
+    // The same file as with the explicit K (no budget).
+    const auto k = run_ffcube("formfactors " + kRoom + " --no-subdivide --exact-visibility 8 -q --view3d " + (dir / "k.txt"));
+    ASSERT_EQ(k.code, 0) << k.output;
+    EXPECT_EQ(read_text(dir / "vf.txt"), read_text(dir / "k.txt"));
+    // Off, it is what it was: the corner's pairs measured by sub-hemicubes, off by up to 7e-3.
+    const auto o = run_ffcube("formfactors " + kRoom + " --no-subdivide --exact-visibility off -q --view3d " + (dir / "o.txt"));
+    ASSERT_EQ(o.code, 0) << o.output;
+    double worst_off = 0.0;
+    const test::View3dText f = test::read_view3d(read_text(dir / "o.txt"));
+    const auto ref = combined(test::l_room_reference(16));
+    for (std::size_t g = 0; g < f.n; ++g)
+        for (std::size_t h = 0; h < f.n; ++h) worst_off = std::max(worst_off, std::abs(f.F[g][h] - ref[g][h]));
+    EXPECT_GT(worst_off, 1e-3);
+}
+
 }  // namespace
 }  // namespace ffcube

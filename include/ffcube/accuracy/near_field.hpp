@@ -107,10 +107,22 @@ struct NearFieldOptions {
     // a refused near pair that asks for sub-hemicubes (sub_hemicube_k) and whose shaft holds at
     // most this many possible blockers, all convex (as are i and j), gets the exact factor past
     // them (geometry/visible_ff.hpp: the point factor to the visible part, integrated adaptively
-    // over i) instead of being refused. 0: off (the default: on finely meshed scenes such pairs
-    // are many and sub-hemicubes measure them well; `--exact-visibility 8` for unsubdivided ones).
+    // over i) instead of being refused. 0: off (the struct's default; the command line's is
+    // auto: K = 8 within exact_visibility_budget, below; an explicit `--exact-visibility K`: no budget).
     std::size_t exact_visibility_occluders = 0;
     double exact_visibility_tolerance = 1e-6;  // the adaptive rule's tolerance on F_ij
+    // Automatic exact visibility (`--exact-visibility auto`, the hemicube's default): > 0 bounds
+    // the work per row, in point-kernel evaluations × possible occluders (the kernel's cost is
+    // about linear in the occluders) per hemicube the exact values spare the row (16 or 4 sub-
+    // hemicubes against one or none; exact_visibility_budget_for_hemicube derives it from a
+    // hemicube row's cost). Then a row's refused pairs that ask for sub-hemicubes are tried only
+    // where resolving all of them spares the row its sub-hemicubes (no occluder beside the
+    // sender, no unproven far pair, or the row becomes complete), in patch order, each only if
+    // its least cost (visible_ff_min_points) fits what is left of the budget, its adaptive rule
+    // capped at the rest; the first that does not fit or does not converge stops the row (the
+    // rest stay refused: NearAnalysis::exact_visibility_over_budget). Deterministic: the budget
+    // counts evaluations, not time. 0: no bound, every eligible pair tried (an explicit K).
+    double exact_visibility_budget = 0;
     // (New fields go last: tests initialise the first ones by position, {k, sender_quadrature}.)
 };
 
@@ -118,6 +130,11 @@ struct NearFieldOptions {
 // pixel noise, and the far field in automatic mode with a budget of 30% of a hemicube row's
 // cost on llvmpipe (3N² pixels at about 5 ns each, docs/benchmarks.md).
 NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0);
+
+// `--exact-visibility auto` on rows of a hemicube at resolution N: the per-row budget of
+// NearFieldOptions::exact_visibility_budget (derivation beside its definition) and the K it uses.
+double exact_visibility_budget_for_hemicube(int resolution);
+inline constexpr std::size_t kAutoExactVisibilityOccluders = 8;
 
 struct NearFieldStats {
     std::uint64_t rows = 0;          // rows passed through
@@ -149,6 +166,11 @@ struct NearFieldStats {
     std::uint64_t exact_visibility = 0;        // refused near pairs given the exact value past their occluders
     std::uint64_t exact_visibility_points = 0;  // point-kernel evaluations they took
     std::uint64_t exact_visibility_unconverged = 0;  // tried, tolerance not reached: left refused
+    // Automatic mode (exact_visibility_budget > 0): refused pairs not tried or stopped because the
+    // row's budget would be exceeded, and rows where some pair was made exact.
+    std::uint64_t exact_visibility_over_budget = 0;
+    std::uint64_t exact_visibility_rows = 0;
+    double exact_visibility_cost = 0;  // Σ points × possible occluders (what the budget counts)
     double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
     double seconds = 0;              // seconds spent correcting, summed over threads (inner provider excluded)
     double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
@@ -170,6 +192,8 @@ struct NearAnalysis {
     std::uint64_t exact_visibility = 0;                   // near pairs exact past their occluders
     std::uint64_t exact_visibility_points = 0;
     std::uint64_t exact_visibility_unconverged = 0;
+    std::uint64_t exact_visibility_over_budget = 0;        // left refused by the row's budget
+    double exact_visibility_cost = 0;  // Σ points × possible occluders: what the budget counts
     bool far = false;                                     // the far field was computed
     // Every facing pair of the row has its value here (far field on, nothing refused or
     // unproven): the row is known without measuring it.
@@ -246,6 +270,8 @@ public:
     std::size_t far_field_planes() const;
     // Whether the far field is on and why, in words, for the run's report and log.
     const std::string& far_field_status() const;
+    // "auto" (a per-row budget), "off", or K (every eligible pair, no budget).
+    std::string exact_visibility_mode() const;
     // Estimated far-field cost of a row (ns on one core of these machines; NAN when not estimated).
     double far_field_cost_ns() const;
 

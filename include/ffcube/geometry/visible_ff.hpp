@@ -53,6 +53,11 @@ struct VisibleFFResult {
     bool converged = false;  // error ≤ tolerance within max_points
 };
 
+// The point-kernel evaluations ff_polygon_visible_polygon makes at least on a sender of this many
+// vertices, before any adaptive split: (vertices − 2) fan triangles, each split min_depth times,
+// each cell's rule and its 4 children's (5 × 16 points). Each split adds 4 × 16.
+std::uint64_t visible_ff_min_points(std::size_t sender_vertices, const VisibleFFOptions& options = {});
+
 // F(S → R past the occluders) = 1/A_S ∫_S F_point(p) dA. The sender's normal is its Newell
 // normal; its area A_S is the whole polygon's (pass the part of S in front of R's plane if the rest
 // should count 0 without adding a kink: it does count 0 either way).

@@ -63,9 +63,14 @@ struct RowOptions {
     Correction correct = Correction::Near;
     double near_k = 3.0;
     double sub_hemicube_k = 10.0;  // NearFieldOptions::sub_hemicube_k (0: every refused near pair)
-    std::size_t exact_visibility_occluders = 0;  // NearFieldOptions::exact_visibility_occluders (0: off)
+    // NearFieldOptions::exact_visibility_occluders (0: off). With exact_visibility_auto (the
+    // default, `--exact-visibility auto`) the hemicube uses kAutoExactVisibilityOccluders within
+    // the per-row budget exact_visibility_budget_for_hemicube; the ray caster none (its rows are
+    // not sampled by sub-hemicubes, so there is no cost to spare). An explicit K: no budget.
+    std::size_t exact_visibility_occluders = 0;
     bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
+    bool exact_visibility_auto = true;  // `--exact-visibility auto` (above); a number or `off` clears it
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
 };
@@ -76,6 +81,8 @@ RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
+// --exact-visibility: auto | off | K (a number; its range is checked by validate(RowOptions)).
+void parse_exact_visibility(std::string_view text, RowOptions& o);
 ContactCuts parse_contact_cuts(std::string_view text);    // auto | on | off
 // Whether load_and_mesh cuts contacts: On, or Auto with subdivision (a cut face is not one patch).
 bool cuts_contacts(const SceneOptions& o);
