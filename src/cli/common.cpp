@@ -108,7 +108,14 @@ void add_row_options(CLI::App& app, RowOptions& o) {
         ->check(CLI::NonNegativeNumber)
         ->default_val(10.0);
     app.add_option_function<std::string>(
-           "--exact-visibility", [&o](const std::string& word) { parse_exact_visibility(word, o); },
+           "--exact-visibility",
+           [&o](const std::string& word) {
+               try {
+                   parse_exact_visibility(word, o);
+               } catch (const InputError& e) {  // a parse error, as CLI11 reports them (exit 2)
+                   throw CLI::ValidationError(e.what());
+               }
+           },
            "--correct near: a possibly occluded near pair with at most K possible occluders in its shaft gets "
            "the exact factor past them instead of sub-hemicubes (docs/accuracy.md). auto (default, hemicube): K = 8 "
            "where it spares a row its sub-hemicubes, within a per-row cost bound; K (at most 64): every such pair, "

@@ -131,10 +131,15 @@ class FormFactors(unittest.TestCase):
         # --exact-visibility changes F on the unsubdivided L-room (its refused near pairs get the
         # exact factor past their occluders, tests/cli/test_view3d_l_room_cli.cpp), so a dropped
         # keyword would differ from the command line's matrix.
+        # Its default is "auto" (which makes those pairs exact here too); "off" and 0 turn it off.
         F = self.assert_same_as_cli(L_ROOM, ["--no-subdivide", "--exact-visibility", 8],
                                     no_subdivide=True, exact_visibility=8)
-        F0 = ffcube.form_factors(L_ROOM, no_subdivide=True, quiet=True)
+        F0 = self.assert_same_as_cli(L_ROOM, ["--no-subdivide", "--exact-visibility", "off"],
+                                     no_subdivide=True, exact_visibility="off")
         self.assertNotEqual((F != F0).nnz, 0)
+        self.assertEqual((F0 != ffcube.form_factors(L_ROOM, no_subdivide=True, exact_visibility=0, quiet=True)).nnz, 0)
+        Fa = self.assert_same_as_cli(L_ROOM, ["--no-subdivide"], no_subdivide=True, exact_visibility="auto")
+        self.assertEqual((Fa != ffcube.form_factors(L_ROOM, no_subdivide=True, quiet=True)).nnz, 0)
 
     def test_same_rows_for_any_thread_count(self):
         s = ffcube.load_scene(CUBE, max_patch_edge=0.5, quiet=True)
@@ -315,6 +320,15 @@ class Errors(unittest.TestCase):
             ffcube.form_factors(CUBE, exact_visibility=-1, quiet=True)
         self.assertIn("--exact-visibility -1", str(e.exception))
         self.assertNotEqual(run_cli("formfactors", CUBE, "--exact-visibility", -1, "-q").returncode, 0)
+        # A word that is neither auto, off nor a number: the same rule (parse_exact_visibility);
+        # the command line reports it as CLI11 reports a bad value (exit 2).
+        with self.assertRaises(ffcube.InputError) as e:
+            ffcube.form_factors(CUBE, exact_visibility="sometimes", quiet=True)
+        rule = "--exact-visibility sometimes: must be auto, off or a number of occluders 0..64"
+        self.assertEqual(str(e.exception), rule)
+        r = run_cli("formfactors", CUBE, "--exact-visibility", "sometimes", "-q")
+        self.assertEqual(r.returncode, 2)
+        self.assertIn(rule, r.stderr)
         with self.assertRaises(ValueError) as e:
             ffcube.form_factors(CUBE, method="radiance", quiet=True)
         self.assertIn("--method radiance", str(e.exception))
