@@ -5,7 +5,7 @@
 // digits, so that runs on different meshes and methods can be compared to 1e-5.
 //
 //   ./build/tools/bench_reference_raycast [--max-patch-edge L] [--split S] [--method hemicube|raycast]
-//        [--rays N] [--light-rays M] [--seeds "K1 K2 ..."] [--threads T] [--resolution R]
+//        [--rays N] [--light-rays M] [--seeds "K1 K2 ..."] [--threads T] [--resolution R] [--correct near|none]
 //
 //   --max-patch-edge L  the mesh: 0 (the default: --patches 2000, L = 43.02), or L as ffcube's option;
 //   --split S           then every patch split S × S (refine_patches): the nested mesh of
@@ -19,6 +19,7 @@
 //                       spread is printed: s = the sample standard deviation over the seeds of one
 //                       run's value (two seeds: |a − b| / √2), and s / √k that of their mean.
 //
+// Each solve also prints the luminance of the power escaped (the box's open front) over the emitted.
 // Everything else is ffcube solve's default (near-field correction on, shooting to 1e-4); one
 // thread unless --threads (rows do not depend on it).
 #include <cmath>
@@ -106,6 +107,7 @@ int main(int argc, char** argv) try {
         else if (k == "--light-rays") light_rays = std::strtoull(v.c_str(), nullptr, 10);
         else if (k == "--threads") rows.threads = static_cast<unsigned>(std::atoi(v.c_str()));
         else if (k == "--resolution") rows.resolution = std::atoi(v.c_str());
+        else if (k == "--correct") rows.correct = parse_correction(v);
         else if (k == "--seeds") {
             seeds.clear();
             std::istringstream in(v);
@@ -154,8 +156,9 @@ int main(int argc, char** argv) try {
         SplitRowProvider both(own_light ? light.provider() : rest.provider(), rest.provider(), emits);
         const SolveResult r = solve_radiosity(scene, both, SolverOptions{});
         values.push_back(object_means(scene, r));
-        std::printf("seed %llu: %llu shots, unshot %.2e\n", static_cast<unsigned long long>(seed),
-                    static_cast<unsigned long long>(r.shots), r.unshot_fraction);
+        std::printf("seed %llu: %llu shots, unshot %.2e, escaped / emitted %.4f%%\n", static_cast<unsigned long long>(seed),
+                    static_cast<unsigned long long>(r.shots), r.unshot_fraction,
+                    100 * luminance(r.energy.escaped) / luminance(r.energy.emitted));
         if (!f_light.empty()) continue;
         // The direct term, from the emitting rows: F_L,o = Σ_l A_l Σ_{j ∈ o} F_lj / Σ_l A_l, and the
         // direct luminance lum(ρ_o ⊙ Σ_l E_l A_l Σ_{j ∈ o} F_lj) / A_o (what B_o would be after the
