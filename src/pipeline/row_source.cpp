@@ -80,6 +80,10 @@ std::vector<std::string> describe(const RowSource& rows) {
         const NearFieldOptions nf = near_field_options(rows.options());
         lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
                                     nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
+        if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
+            lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (a scene of 1000 "
+                                        "pieces or more; --sub-hemicube-range off draws everything)",
+                                        rows.options().sub_hemicube_range_k));
     }
     return lines;
 }
@@ -101,6 +105,12 @@ FfmMetadata row_metadata(const RowOptions& o) {
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
         if (o.exact_visibility_occluders > 0) meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
         if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
+        // Range-limited sub-hemicubes: recorded when not the default (auto leaves small scenes'
+        // rows as they were; off and another k change a city's rows).
+        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::off)
+            meta.settings += " sub_hemicube_range=off";
+        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range_k != 24.0)
+            meta.settings += fmt::format(" sub_hemicube_range_k={}", o.sub_hemicube_range_k);
     }
     return meta;
 }
@@ -209,6 +219,9 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
     // Senders cut by a facet and partly inside it (a ground triangle under a building).
     r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
+    // Range-limited sub-hemicubes (--sub-hemicube-range auto, on scenes of many pieces).
+    r.set("sub_hemicube_rows_range_limited", st.range_limited_rows);
+    r.set("left_out.pieces_out_of_range", st.pieces_out_of_range);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 

@@ -39,6 +39,7 @@ struct SceneOptions {
 enum class RowMethod { Hemicube, Raycast };
 enum class Correction { None, Near };
 using FarFieldMode = NearFieldOptions::FarField;
+using SubHemicubeRange = HemicubeOptions::SubHemicubeRange;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
@@ -66,6 +67,9 @@ struct RowOptions {
     std::size_t exact_visibility_occluders = 0;  // NearFieldOptions::exact_visibility_occluders (0: off)
     bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
+    // HemicubeOptions::sub_hemicube_range, _k (--sub-hemicube-range auto|off, --sub-hemicube-range-k).
+    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::automatic;
+    double sub_hemicube_range_k = 24.0;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
 };
@@ -75,6 +79,7 @@ struct RowOptions {
 RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
+SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 ContactCuts parse_contact_cuts(std::string_view text);    // auto | on | off
 // Whether load_and_mesh cuts contacts: On, or Auto with subdivision (a cut face is not one patch).
