@@ -467,7 +467,17 @@ bool Worker::range_applies(std::uint32_t p) {
     if (!(range_near_ > 0)) return false;
     // The whole scene near: every sub-hemicube would draw everything anyway.
     const Vec3 d = glm::max(glm::abs(scene_lo_ - range_centre_), glm::abs(scene_hi_ - range_centre_));
-    return glm::length(d) > range_near_;
+    if (!(glm::length(d) > range_near_)) return false;
+    // Only where it pays: the sub-hemicubes draw the pieces within R + r of the centroid (a box
+    // test, the same for every thread), the extra full hemicube about all the others; a row
+    // whose range holds more than sub_hemicube_range_max_share of the pieces stays plain.
+    std::size_t within = 0;
+    const double reach = range_r_ + r;
+    for (std::size_t g = 0; g < box_lo_.size(); ++g) {
+        const Vec3 q = glm::clamp(range_centre_, box_lo_[g], box_hi_[g]);
+        within += glm::length(q - range_centre_) <= reach;
+    }
+    return static_cast<double>(within) <= opt_.sub_hemicube_range_max_share * static_cast<double>(box_lo_.size());
 }
 
 void Worker::sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats& st) {

@@ -83,6 +83,7 @@ TEST(RangeLimitedSubHemicubes, FarReceiverBehindANearOccluderGetsTheShadowedValu
     o.resolution = 128;
     o.threads = 1;
     o.sub_hemicube_range_min_pieces = 1;  // three pieces: the rule asked for explicitly
+    o.sub_hemicube_range_max_share = 1;
     HemicubeStats st;
     const std::vector<std::uint32_t> rows{s.sender};
     const std::vector<Plan> plans{Plan::sampled_fine};
@@ -139,25 +140,25 @@ struct BoxGrid {
     std::vector<Aabb> object_box;
     static constexpr double kDiameter = 4.2;  // the largest piece: a 1 × 4 wall, √17 = 4.12
     BoxGrid() {
-        std::vector<NamedPolygon> polys;
+        std::vector<NamedPolygon> all;
         auto box_at = [](int x) { return x >= -22 && x <= 20 && (x + 22) % 3 == 0; };
         for (int x = -25; x < 25; ++x)
             for (int y = -25; y < 25; ++y) {
                 if (box_at(x) && box_at(y)) continue;  // under a box
-                polys.push_back({"cell" + std::to_string(x) + "_" + std::to_string(y),
+                all.push_back({"cell" + std::to_string(x) + "_" + std::to_string(y),
                                  {{x, y, 0.0}, {x + 1.0, y, 0.0}, {x + 1.0, y + 1.0, 0.0}, {x, y + 1.0, 0.0}}});
             }
         for (int a = 0; a < 15; ++a)
             for (int b = 0; b < 15; ++b) {
                 const std::string name = "box" + std::to_string(a) + "_" + std::to_string(b);
                 const double x0 = -22 + 3 * a, y0 = -22 + 3 * b, x1 = x0 + 1, y1 = y0 + 1, z1 = 1 + (a * 7 + b * 3) % 4;
-                polys.push_back({name + "w", {{x0, y0, 0}, {x0, y0, z1}, {x0, y1, z1}, {x0, y1, 0}}});
-                polys.push_back({name + "e", {{x1, y0, 0}, {x1, y1, 0}, {x1, y1, z1}, {x1, y0, z1}}});
-                polys.push_back({name + "s", {{x0, y0, 0}, {x1, y0, 0}, {x1, y0, z1}, {x0, y0, z1}}});
-                polys.push_back({name + "n", {{x0, y1, 0}, {x0, y1, z1}, {x1, y1, z1}, {x1, y1, 0}}});
-                polys.push_back({name + "t", {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}}});
+                all.push_back({name + "w", {{x0, y0, 0}, {x0, y0, z1}, {x0, y1, z1}, {x0, y1, 0}}});
+                all.push_back({name + "e", {{x1, y0, 0}, {x1, y1, 0}, {x1, y1, z1}, {x1, y0, z1}}});
+                all.push_back({name + "s", {{x0, y0, 0}, {x1, y0, 0}, {x1, y0, z1}, {x0, y0, z1}}});
+                all.push_back({name + "n", {{x0, y1, 0}, {x0, y1, z1}, {x1, y1, z1}, {x1, y1, 0}}});
+                all.push_back({name + "t", {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}}});
             }
-        for (const auto& p : polys) {
+        for (const auto& p : all) {
             Aabb b{p.vertices[0], p.vertices[0]};
             for (const Vec3& v : p.vertices) {
                 b.lo = glm::min(b.lo, v);
@@ -165,8 +166,8 @@ struct BoxGrid {
             }
             object_box.push_back(b);
         }
-        scene = test::make_scene(polys, 1.5);
-        this->polys = polys;
+        scene = test::make_scene(all, 1.5);
+        polys = all;
     }
     std::vector<NamedPolygon> polys;
 };
@@ -184,6 +185,7 @@ TEST(RangeLimitedSubHemicubes, NearEntriesExactFarSumWithinTheSkyLineBound) {
     o.resolution = 128;
     o.threads = 2;
     o.rotate = false;  // the centroid's view of what is not near (below) is drawn in another scene
+    o.sub_hemicube_range_max_share = 1;  // every row, though most of the grid lies within range
     HemicubeStats st;
     const auto on = rows_of(g.scene, o, rows, plans, &st);
     o.sub_hemicube_range = HemicubeOptions::SubHemicubeRange::off;
@@ -232,8 +234,8 @@ TEST(RangeLimitedSubHemicubes, NearEntriesExactFarSumWithinTheSkyLineBound) {
         for (std::size_t k = 0; k < g.polys.size(); ++k) {
             bool keep = k == pa.object;
             if (!keep) {
-                const Aabb& b = g.object_box[k];
-                keep = !(glm::length(glm::max(glm::abs(b.lo - pa.centroid), glm::abs(b.hi - pa.centroid))) <= near_range);
+                const Aabb& bk = g.object_box[k];
+                keep = !(glm::length(glm::max(glm::abs(bk.lo - pa.centroid), glm::abs(bk.hi - pa.centroid))) <= near_range);
             }
             if (keep) far_polys.push_back(g.polys[k]);
         }

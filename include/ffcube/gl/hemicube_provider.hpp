@@ -48,6 +48,10 @@ struct HemicubeOptions {
     SubHemicubeRange sub_hemicube_range = SubHemicubeRange::automatic;
     double sub_hemicube_range_k = 24.0;
     std::size_t sub_hemicube_range_min_pieces = 1000;
+    // ... and only for rows whose range (R plus the sender's radius, around its centroid) meets
+    // at most this share of the scene's pieces: elsewhere the extra full hemicube costs more than
+    // the sub-hemicubes save (docs/benchmarks.md, "Range-limited sub-hemicubes").
+    double sub_hemicube_range_max_share = 0.25;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
