@@ -120,8 +120,9 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     add_word_option(app, "--sub-hemicube-range", o.sub_hemicube_range, parse_sub_hemicube_range, {"auto", "off"},
                     "--correct near: rows of sub-hemicubes on scenes of 1000 pieces or more draw at their points "
                     "only the pieces within K x the sender's size, plus one hemicube at the centroid of the rest "
-                    "(docs/accuracy.md). auto (default): on such scenes; off: sub-hemicubes draw the whole scene",
-                    "auto");
+                    "(docs/accuracy.md). auto: on such scenes, for rows whose range holds at most a quarter of the "
+                    "pieces; off (default): sub-hemicubes draw the whole scene",
+                    "off");
     app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
                    "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
         ->default_val(24.0);

@@ -81,8 +81,8 @@ std::vector<std::string> describe(const RowSource& rows) {
         lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
                                     nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
         if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
-            lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (a scene of 1000 "
-                                        "pieces or more; --sub-hemicube-range off draws everything)",
+            lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (rows whose range holds "
+                                        "at most a quarter of the pieces; --sub-hemicube-range off draws everything)",
                                         rows.options().sub_hemicube_range_k));
     }
     return lines;
@@ -105,12 +105,9 @@ FfmMetadata row_metadata(const RowOptions& o) {
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
         if (o.exact_visibility_occluders > 0) meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
         if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
-        // Range-limited sub-hemicubes: recorded when not the default (auto leaves small scenes'
-        // rows as they were; off and another k change a city's rows).
-        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::off)
-            meta.settings += " sub_hemicube_range=off";
-        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range_k != 24.0)
-            meta.settings += fmt::format(" sub_hemicube_range_k={}", o.sub_hemicube_range_k);
+        // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
+        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
+            meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);
     }
     return meta;
 }

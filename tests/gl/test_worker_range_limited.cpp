@@ -82,6 +82,7 @@ TEST(RangeLimitedSubHemicubes, FarReceiverBehindANearOccluderGetsTheShadowedValu
     HemicubeOptions o;
     o.resolution = 128;
     o.threads = 1;
+    o.sub_hemicube_range = HemicubeOptions::SubHemicubeRange::automatic;
     o.sub_hemicube_range_min_pieces = 1;  // three pieces: the rule asked for explicitly
     o.sub_hemicube_range_max_share = 1;
     HemicubeStats st;
@@ -184,6 +185,7 @@ TEST(RangeLimitedSubHemicubes, NearEntriesExactFarSumWithinTheSkyLineBound) {
     HemicubeOptions o;
     o.resolution = 128;
     o.threads = 2;
+    o.sub_hemicube_range = HemicubeOptions::SubHemicubeRange::automatic;
     o.rotate = false;  // the centroid's view of what is not near (below) is drawn in another scene
     o.sub_hemicube_range_max_share = 1;  // every row, though most of the grid lies within range
     HemicubeStats st;
@@ -291,6 +293,7 @@ TEST(RangeLimitedSubHemicubes, OffAndBelowTheThresholdArePlainRows) {
     o.threads = 1;
     const std::vector<std::uint32_t> rows{s.sender, s.occluder};
     const std::vector<Plan> plans{Plan::sampled_fine, Plan::sampled};
+    o.sub_hemicube_range = HemicubeOptions::SubHemicubeRange::automatic;
     HemicubeStats st;
     const auto below = rows_of(s.scene, o, rows, plans, &st);  // 3 pieces < 1,000
     EXPECT_EQ(st.range_limited_rows, 0u);

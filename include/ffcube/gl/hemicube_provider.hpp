@@ -45,7 +45,7 @@ struct HemicubeOptions {
     // sub-hemicube average, the rest the centroid's pixels times the share of sub-hemicubes that
     // see past the near pieces in that direction. off: every sub-hemicube draws the whole scene.
     enum class SubHemicubeRange { off, automatic };
-    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::automatic;
+    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;  // off by default: measured, it does not pay yet
     double sub_hemicube_range_k = 24.0;
     std::size_t sub_hemicube_range_min_pieces = 1000;
     // ... and only for rows whose range (R plus the sender's radius, around its centroid) meets

@@ -68,7 +68,7 @@ struct RowOptions {
     bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
     // HemicubeOptions::sub_hemicube_range, _k (--sub-hemicube-range auto|off, --sub-hemicube-range-k).
-    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::automatic;
+    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;
     double sub_hemicube_range_k = 24.0;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
