@@ -125,6 +125,15 @@ void add_row_options(CLI::App& app, RowOptions& o) {
         "--adaptive-sampling", [&o](std::int64_t) { o.adaptive_sampling = true; },
         "--correct near: rows planned at 4 x 4 sub-hemicubes are measured at 2 x 2 and the centre first, and "
         "refined to 4 x 4 only where the 2 x 2 rule's estimated error exceeds 5e-4 (docs/accuracy.md)");
+    add_word_option(app, "--sub-hemicube-range", o.sub_hemicube_range, parse_sub_hemicube_range, {"auto", "off"},
+                    "--correct near: rows of sub-hemicubes on scenes of 1000 pieces or more draw at their points "
+                    "only the pieces within K x the sender's size, plus one hemicube at the centroid of the rest "
+                    "(docs/accuracy.md). auto: on such scenes, for rows whose range holds at most a quarter of the "
+                    "pieces; off (default): sub-hemicubes draw the whole scene",
+                    "off");
+    app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
+                   "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
+        ->default_val(24.0);
     add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
                     "--correct near: analytic values for every pair beyond the near range that a plane test proves "
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "

@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <exception>
 #include <mutex>
@@ -35,6 +36,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.fine_rows_refined += b.fine_rows_refined;
     a.fine_rows_stopped += b.fine_rows_stopped;
     a.partly_enclosed_rows += b.partly_enclosed_rows;
+    a.range_limited_rows += b.range_limited_rows;
+    a.pieces_out_of_range += b.pieces_out_of_range;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;
@@ -94,6 +97,9 @@ struct HemicubeRowProvider::Impl {
 
 HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options) {
     check_row_resolution(options.resolution);
+    if (!(options.sub_hemicube_range_k >= 1) || !std::isfinite(options.sub_hemicube_range_k))
+        throw InputError(fmt::format("--sub-hemicube-range-k {}: must be a finite number >= 1 (sender sizes)",
+                                     options.sub_hemicube_range_k));
     if (scene.patches.size() >= kBackFace - 1) throw InputError("the scene has too many patches for 32-bit item IDs");
     unsigned n = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
     n = static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(1, scene.patches.size())));
@@ -192,6 +198,12 @@ std::string HemicubeRowProvider::backend() const { return impl_->backend; }
 std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
 unsigned HemicubeRowProvider::threads() const { return impl_->pool->size(); }
 std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
+bool HemicubeRowProvider::range_limited_sub_hemicubes() const {
+    const int n = impl_->opt.resolution;
+    return impl_->opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
+           impl_->scene->grids.size() >= impl_->opt.sub_hemicube_range_min_pieces && 2 * half_resolution(n) == n;
+}
+
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
 
 }  // namespace ffcube

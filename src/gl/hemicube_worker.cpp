@@ -153,6 +153,24 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     seen_.assign(scene.grids.size(), 0u);
     depth_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
     stamp_.assign(scene.patches.size(), 0);
+    // Piece boxes (every vertex slot: corners and T-vertices) for range-limited rows.
+    box_lo_.assign(scene.grids.size(), Vec3(0.0));
+    box_hi_.assign(scene.grids.size(), Vec3(0.0));
+    for (std::size_t g = 0; g < scene.grids.size(); ++g) {
+        Vec3 lo(INFINITY), hi(-INFINITY);
+        for (std::size_t s = pieces.first[g]; s < pieces.first[g + 1]; ++s) {
+            lo = glm::min(lo, pieces.pos[s]);
+            hi = glm::max(hi, pieces.pos[s]);
+        }
+        box_lo_[g] = lo;
+        box_hi_[g] = hi;
+        scene_lo_ = g == 0 ? lo : glm::min(scene_lo_, lo);
+        scene_hi_ = g == 0 ? hi : glm::max(scene_hi_, hi);
+    }
+    range_on_ = opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
+                scene.grids.size() >= opt.sub_hemicube_range_min_pieces &&
+                2 * half_layout_.resolution() == layout.resolution();
+    if (range_on_) vis_.resize(half_ids_.size());
     if (const char* fail = std::getenv("FFCUBE_TEST_WORKER_FAIL"); fail && *fail) {
         const std::string f = fail;
         test_fail_ = f == "input" ? 1 : f == "io" ? 2 : f == "internal" ? 3 : f == "gl" ? 4 : -1;
@@ -198,9 +216,26 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     }
     const std::size_t in_front = pieces_.bvh.mark_in_front(eye, fr.normal, visit_, visit_stamp_);
     st.pieces_behind += scene_.grids.size() - in_front;
+    range_eye_ = eye;
     const Vec3* pos = pieces_.pos.data();
     for (std::size_t g = 0; g < scene_.grids.size(); ++g) {
         if (visit_[g] != visit_stamp_) continue;
+        // Range-limited rows (sample_range_limited): a sub-hemicube draws the pieces whose box
+        // comes within range_r_ of its eye, the centroid's hemicube those not wholly near.
+        if (range_mode_ != 0) {
+            bool out;
+            if (range_mode_ == 1) {
+                const Vec3 q = glm::clamp(eye, box_lo_[g], box_hi_[g]);
+                out = glm::length(q - eye) > range_r_;
+            } else {
+                out = piece_near(static_cast<std::uint32_t>(g));
+            }
+            if (out) {
+                visit_[g] = 0;  // never equal to visit_stamp_ (≥ 1)
+                ++st.pieces_out_of_range;
+                continue;
+            }
+        }
         for (std::size_t s = pieces_.first[g]; s < pieces_.first[g + 1]; ++s) {
             const Vec3 d = pos[s] - eye;
             float* out = &local_[s * 3];
@@ -259,7 +294,12 @@ void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_poi
         return;
     }
     begin_row();
-    sample(p, sub_points, st);
+    if (range_applies(p)) {
+        sample_range_limited(p, sub_points, st);
+        ++st.range_limited_rows;
+    } else {
+        sample(p, sub_points, st);
+    }
     ++st.sampled_rows;
     take_row(out, st);
 }
@@ -369,15 +409,171 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
             acc_[j] = a;
         }
     }
-    // The pieces this hemicube showed are the next one's occluders (occlude()).
+    end_seen();
+    st.back_face_weight += weight * back;
+    st.miss_weight += weight * miss;
+    st.accumulate_seconds += watch.seconds();
+}
+
+// The pieces this hemicube showed are the next one's occluders (occlude()).
+void Worker::end_seen() {
     last_stamp_ = seen_stamp_;
     if (++seen_stamp_ == 0) {
         std::fill(seen_.begin(), seen_.end(), 0u);
         last_stamp_ = 0;  // no occluders for the next hemicube
         seen_stamp_ = 1;
     }
+}
+
+// Range-limited sub-hemicubes (HemicubeOptions::sub_hemicube_range; docs/accuracy.md). At city
+// scale a sub-hemicube is geometry-bound: sixteen of them draw the visible city sixteen times
+// though each has few pixels. Here the row is split at a range R = sub_hemicube_range_k × size
+// around the sender's centroid c (r: the largest distance from c to an eye, the sender's radius
+// plus the eye offset):
+//  - a piece is near when its box lies wholly within R − r of c, so within R of every eye;
+//  - each sub-hemicube draws only the pieces whose box comes within R of its eye. Every near
+//    piece is drawn, and so is everything in front of a point of it (nearer than that point,
+//    so within R): a near entry's pixels are what the full sub-hemicube shows, and near entries
+//    take the sub-hemicube average exactly as a plain row;
+//  - one full-resolution hemicube at c draws every piece that is not near (what lies beyond the
+//    near pieces, their occlusion among themselves as c sees it); a far entry j gets
+//    Σ over its pixels of ΔF × v, v the weight of the sub-hemicubes whose pixel in that
+//    direction (the half-resolution pixel at half the coordinates: same frame, same rotation,
+//    hemicube/layout.hpp's atlas scales by exactly 2) shows nothing or a piece that is not near,
+//    i.e. that sees past the near pieces.
+// What v misses is the parallax of what is not near between the eyes: a far piece at distance
+// d ≥ R − r shifts by at most r/(R − r) radians (about 1/(2k) at k = R/size, since r ≈ size/√2
+// on a square sender: 0.03 rad at k = 24, about one half-resolution pixel of N = 128 at the top
+// face's centre, 2/64 rad). Straddling pieces (near part within R, far part beyond) are drawn
+// by both and counted by the centroid's hemicube, with their larger parallax: measured in
+// docs/benchmarks.md ("Range-limited sub-hemicubes").
+bool Worker::piece_near(std::uint32_t g) const {
+    const Vec3 d = glm::max(glm::abs(box_lo_[g] - range_centre_), glm::abs(box_hi_[g] - range_centre_));
+    return glm::length(d) <= range_near_;
+}
+
+bool Worker::range_applies(std::uint32_t p) {
+    if (!range_on_) return false;
+    const Patch& pa = scene_.patches[p];
+    const auto v = scene_.patch_vertices(p);
+    double r = 0;
+    for (std::size_t k = 0; k < pa.count; ++k) r = std::max(r, glm::length(v[k] - pa.centroid));
+    // |eye − c| ≤ |point − c| + eye offset (the offset is along the normal).
+    r += HemicubeRowProvider::kEyeOffset * pa.size;
+    range_centre_ = pa.centroid;
+    range_r_ = opt_.sub_hemicube_range_k * pa.size;
+    // A relative margin against rounding: a piece called near is drawn by every sub-hemicube.
+    range_near_ = range_r_ * (1 - 1e-9) - r;
+    if (!(range_near_ > 0)) return false;
+    // The whole scene near: every sub-hemicube would draw everything anyway.
+    const Vec3 d = glm::max(glm::abs(scene_lo_ - range_centre_), glm::abs(scene_hi_ - range_centre_));
+    if (!(glm::length(d) > range_near_)) return false;
+    // Only where it pays: the sub-hemicubes draw the pieces within R + r of the centroid (a box
+    // test, the same for every thread), the extra full hemicube about all the others; a row
+    // whose range holds more than sub_hemicube_range_max_share of the pieces stays plain.
+    std::size_t within = 0;
+    const double reach = range_r_ + r;
+    for (std::size_t g = 0; g < box_lo_.size(); ++g) {
+        const Vec3 q = glm::clamp(range_centre_, box_lo_[g], box_hi_[g]);
+        within += glm::length(q - range_centre_) <= reach;
+    }
+    return static_cast<double>(within) <= opt_.sub_hemicube_range_max_share * static_cast<double>(box_lo_.size());
+}
+
+void Worker::sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats& st) {
+    struct Reset {
+        int& mode;
+        ~Reset() { mode = 0; }
+    } reset{range_mode_};
+    const auto v = scene_.patch_vertices(p);
+    patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
+    std::fill(vis_.begin(), vis_.end(), 0.0);
+    range_mode_ = 1;
+    for (std::size_t q = 0; q < points_.size(); ++q) {
+        render(p, points_[q], true, st);
+        accumulate_range_near(p, weights_[q], st);
+    }
+    range_mode_ = 2;
+    render(p, scene_.patches[p].centroid, false, st);
+    accumulate_range_far(p, st);
+}
+
+// A range-limited sub-hemicube: near entries as accumulate() adds them; a pixel that shows nothing
+// or a piece that is not near adds the weight to vis_ (it sees past the near pieces); a back face
+// blocks.
+void Worker::accumulate_range_near(std::uint32_t p, double weight, HemicubeStats& st) {
+    Stopwatch watch;
+    const std::vector<double>& w = half_layout_.delta_ff();
+    const std::uint32_t self = p + 1;
+    double back = 0.0;
+    const std::size_t npix = half_ids_.size();
+    for (std::size_t k = 0; k < npix; ++k) {
+        const std::uint32_t id = half_ids_[k];
+        if (id == 0) {
+            vis_[k] += weight;
+        } else if (id == kBackFace) {
+            back += w[k];
+        } else if (id == self) {
+            ++st.self_hits;
+        } else {
+            const std::uint32_t j = id - 1;
+            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
+                                                            p, k, id, stamp_.size()));
+            const std::uint32_t g = piece_of_[j];
+            seen_[g] = seen_stamp_;
+            if (!piece_near(g)) {
+                vis_[k] += weight;
+                continue;
+            }
+            if (stamp_[j] != epoch_) {
+                stamp_[j] = epoch_;
+                acc_[j] = 0.0;
+                touched_.push_back(j);
+            }
+            acc_[j] += weight * w[k];
+        }
+    }
+    end_seen();
     st.back_face_weight += weight * back;
-    st.miss_weight += weight * miss;
+    st.accumulate_seconds += watch.seconds();
+}
+
+// The centroid's hemicube of what is not near: each pixel's ΔF times v of the half-resolution
+// pixel in the same direction.
+void Worker::accumulate_range_far(std::uint32_t p, HemicubeStats& st) {
+    Stopwatch watch;
+    const std::vector<double>& w = layout_.delta_ff();
+    const std::uint32_t self = p + 1;
+    double back = 0.0, miss = 0.0;
+    const std::size_t width = static_cast<std::size_t>(layout_.atlas_width());
+    const std::size_t half_width = static_cast<std::size_t>(half_layout_.atlas_width());
+    const std::size_t npix = ids_.size();
+    for (std::size_t k = 0; k < npix; ++k) {
+        const std::uint32_t id = ids_[k];
+        const double vk = vis_[(k / width / 2) * half_width + (k % width) / 2];
+        if (id == 0) {
+            miss += w[k] * vk;
+        } else if (id == kBackFace) {
+            back += w[k] * vk;
+        } else if (id == self) {
+            ++st.self_hits;
+        } else {
+            const std::uint32_t j = id - 1;
+            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
+                                                            p, k, id, stamp_.size()));
+            seen_[piece_of_[j]] = seen_stamp_;
+            if (!(vk > 0)) continue;
+            if (stamp_[j] != epoch_) {
+                stamp_[j] = epoch_;
+                acc_[j] = 0.0;
+                touched_.push_back(j);
+            }
+            acc_[j] += w[k] * vk;
+        }
+    }
+    end_seen();
+    st.back_face_weight += back;
+    st.miss_weight += miss;
     st.accumulate_seconds += watch.seconds();
 }
 

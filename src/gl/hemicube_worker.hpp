@@ -65,6 +65,15 @@ private:
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
     void accumulate_points(std::uint32_t p, HemicubeStats& st);
+    // Range-limited sub-hemicubes (HemicubeOptions::sub_hemicube_range): whether row p uses them,
+    // the row into acc_/touched_, and its two accumulations (near entries and the far visibility
+    // from a sub-hemicube; far entries from the centroid's hemicube).
+    bool range_applies(std::uint32_t p);
+    void sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats& st);
+    void accumulate_range_near(std::uint32_t p, double weight, HemicubeStats& st);
+    void accumulate_range_far(std::uint32_t p, HemicubeStats& st);
+    bool piece_near(std::uint32_t g) const;  // wholly within range_near_ of range_centre_
+    void end_seen();  // the pieces the last hemicube showed become the next one's occluders
     // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
     void hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
@@ -111,6 +120,18 @@ private:
     std::vector<SparseRow> sample_rows_;  // sample_adaptive's per-sample rows
     SparseRow centre_row_;                // and its half-resolution hemicube at the centroid
     std::unique_ptr<ExposedPoints> exposed_;  // made at the first row of sub-hemicubes
+    // Range-limited rows: per piece its bounding box, the scene's box, whether rows may use the
+    // rule (enough pieces, half resolution exactly half); during such a row, what render() draws
+    // (range_mode_ 1: pieces whose box comes within range_r_ of the eye; 2: pieces not wholly
+    // within range_near_ of range_centre_; 0: all), and per half-resolution pixel the weight of
+    // the sub-hemicubes that see past the near pieces there.
+    std::vector<Vec3> box_lo_, box_hi_;
+    Vec3 scene_lo_{0.0}, scene_hi_{0.0};
+    bool range_on_ = false;
+    int range_mode_ = 0;
+    double range_r_ = 0, range_near_ = 0;
+    Vec3 range_centre_{0.0}, range_eye_{0.0};
+    std::vector<double> vis_;
 };
 
 // A worker in this process: the context is made current on the worker thread (start).

@@ -47,6 +47,12 @@ void parse_exact_visibility(std::string_view text, RowOptions& o) {
     o.exact_visibility_occluders = k;  // its range: validate(RowOptions)
 }
 
+SubHemicubeRange parse_sub_hemicube_range(std::string_view text) {
+    if (text == "auto") return SubHemicubeRange::automatic;
+    if (text == "off") return SubHemicubeRange::off;
+    throw InputError(fmt::format("--sub-hemicube-range {}: must be auto or off", text));
+}
+
 ContactCuts parse_contact_cuts(std::string_view text) {
     if (text == "auto") return ContactCuts::Auto;
     if (text == "on") return ContactCuts::On;
@@ -113,6 +119,9 @@ void validate(const RowOptions& o) {
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
     if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))
         throw InputError(fmt::format("--sub-hemicube-k {}: must be a finite number >= 0", o.sub_hemicube_k));
+    if (!(o.sub_hemicube_range_k >= 1) || !std::isfinite(o.sub_hemicube_range_k))
+        throw InputError(fmt::format("--sub-hemicube-range-k {}: must be a finite number >= 1 (sender sizes)",
+                                     o.sub_hemicube_range_k));
     if (o.exact_visibility_occluders > kMaxExactVisibilityOccluders)
         throw InputError(fmt::format("--exact-visibility {}: must be within 0..{} (possible occluders in a near pair's shaft; 0: off)",
                                      o.exact_visibility_occluders, kMaxExactVisibilityOccluders));
@@ -127,6 +136,8 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.seed = o.seed;
     h.worker_processes = o.worker_processes;
     h.adaptive_sampling = o.adaptive_sampling;
+    h.sub_hemicube_range = o.sub_hemicube_range;
+    h.sub_hemicube_range_k = o.sub_hemicube_range_k;
     return h;
 }
 

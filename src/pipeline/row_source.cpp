@@ -80,6 +80,10 @@ std::vector<std::string> describe(const RowSource& rows) {
         const NearFieldOptions nf = near_field_options(rows.options());
         lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
                                     nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
+        if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
+            lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (rows whose range holds "
+                                        "at most a quarter of the pieces; --sub-hemicube-range off draws everything)",
+                                        rows.options().sub_hemicube_range_k));
     }
     return lines;
 }
@@ -105,6 +109,9 @@ FfmMetadata row_metadata(const RowOptions& o) {
         else if (!o.exact_visibility_auto && o.method == RowMethod::Hemicube)
             meta.settings += " exact_visibility=off";
         if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
+        // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
+        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
+            meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);
     }
     return meta;
 }
@@ -217,6 +224,9 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
     // Senders cut by a facet and partly inside it (a ground triangle under a building).
     r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
+    // Range-limited sub-hemicubes (--sub-hemicube-range auto, on scenes of many pieces).
+    r.set("sub_hemicube_rows_range_limited", st.range_limited_rows);
+    r.set("left_out.pieces_out_of_range", st.pieces_out_of_range);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 

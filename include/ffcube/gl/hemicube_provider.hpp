@@ -38,6 +38,20 @@ struct HemicubeOptions {
     // where the 2 × 2 rule's estimated error exceeds 5e-4 (gl/sample_agreement.hpp). Off by
     // default: on a city it stops rows whose error it underestimates (docs/benchmarks.md).
     bool adaptive_sampling = false;
+    // Range-limited sub-hemicubes (docs/accuracy.md, "Range-limited sub-hemicubes"): on a scene
+    // of at least sub_hemicube_range_min_pieces pieces, a row of sub-hemicubes draws at its
+    // quadrature points only the pieces within R = sub_hemicube_range_k × the sender's size, plus
+    // one full-resolution hemicube at the centroid of everything else; entries within R take the
+    // sub-hemicube average, the rest the centroid's pixels times the share of sub-hemicubes that
+    // see past the near pieces in that direction. off: every sub-hemicube draws the whole scene.
+    enum class SubHemicubeRange { off, automatic };
+    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;  // off by default: measured, it does not pay yet
+    double sub_hemicube_range_k = 24.0;
+    std::size_t sub_hemicube_range_min_pieces = 1000;
+    // ... and only for rows whose range (R plus the sender's radius, around its centroid) meets
+    // at most this share of the scene's pieces: elsewhere the extra full hemicube costs more than
+    // the sub-hemicubes save (docs/benchmarks.md, "Range-limited sub-hemicubes").
+    double sub_hemicube_range_max_share = 0.25;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -69,6 +83,10 @@ struct HemicubeStats {
     // Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at
     // points on its exposed part only (gl/exposed_points.hpp).
     std::uint64_t partly_enclosed_rows = 0;
+    // Rows of sub-hemicubes made range-limited (HemicubeOptions::sub_hemicube_range), and the
+    // pieces × hemicubes their range left out (in front of the plane, but out of range).
+    std::uint64_t range_limited_rows = 0;
+    std::uint64_t pieces_out_of_range = 0;
 };
 
 class HemicubeRowProvider final : public RowProvider {
@@ -115,6 +133,9 @@ public:
     // or when forking is unsafe: this process already made a GL context or runs other threads).
     std::string workers() const;
     int resolution() const;
+    // Whether rows of sub-hemicubes are range-limited on this scene (HemicubeOptions::
+    // sub_hemicube_range automatic, enough pieces, a half resolution of exactly N/2).
+    bool range_limited_sub_hemicubes() const;
 
     // Where the eye sits above the patch and where the near plane lies, as fractions of the
     // patch's longest edge (relative, never absolute units).

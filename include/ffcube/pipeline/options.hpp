@@ -39,6 +39,7 @@ struct SceneOptions {
 enum class RowMethod { Hemicube, Raycast };
 enum class Correction { None, Near };
 using FarFieldMode = NearFieldOptions::FarField;
+using SubHemicubeRange = HemicubeOptions::SubHemicubeRange;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
@@ -71,6 +72,9 @@ struct RowOptions {
     bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
     bool exact_visibility_auto = true;  // `--exact-visibility auto` (above); a number or `off` clears it
+    // HemicubeOptions::sub_hemicube_range, _k (--sub-hemicube-range auto|off, --sub-hemicube-range-k).
+    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;
+    double sub_hemicube_range_k = 24.0;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
 };
@@ -80,6 +84,7 @@ struct RowOptions {
 RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
+SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 // --exact-visibility: auto | off | K (a number; its range is checked by validate(RowOptions)).
 void parse_exact_visibility(std::string_view text, RowOptions& o);
