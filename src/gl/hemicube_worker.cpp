@@ -371,6 +371,24 @@ bool Worker::sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st)
     return !a.refine;
 }
 
+// The column of a pixel's id (id − 1). An id past the last patch means a broken patch lookup
+// (shader or pieces): a bug, stopped here instead of writing past the row's arrays.
+std::uint32_t Worker::column_of(std::uint32_t p, std::size_t k, std::uint32_t id) const {
+    const std::uint32_t j = id - 1;
+    FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
+                                                    p, k, id, stamp_.size()));
+    return j;
+}
+
+// Starts column j of the row being made (epoch_) at 0 the first time a pixel shows it.
+void Worker::touch(std::uint32_t j) {
+    if (stamp_[j] != epoch_) {
+        stamp_[j] = epoch_;
+        acc_[j] = 0.0;
+        touched_.push_back(j);
+    }
+}
+
 // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
 void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st) {
     Stopwatch watch;
@@ -391,17 +409,9 @@ void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats
             ++st.self_hits;
             ++k;
         } else {
-            const std::uint32_t j = id - 1;
-            // An id past the last patch means a broken patch lookup (shader or pieces): a bug,
-            // stopped here instead of writing past the row's arrays.
-            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
-                                                            p, k, id, stamp_.size()));
+            const std::uint32_t j = column_of(p, k, id);
             seen_[piece_of_[j]] = seen_stamp_;
-            if (stamp_[j] != epoch_) {
-                stamp_[j] = epoch_;
-                acc_[j] = 0.0;
-                touched_.push_back(j);
-            }
+            touch(j);
             double a = acc_[j];
             do {
                 a += weight * w[k++];
@@ -516,20 +526,14 @@ void Worker::accumulate_range_near(std::uint32_t p, double weight, HemicubeStats
         } else if (id == self) {
             ++st.self_hits;
         } else {
-            const std::uint32_t j = id - 1;
-            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
-                                                            p, k, id, stamp_.size()));
+            const std::uint32_t j = column_of(p, k, id);
             const std::uint32_t g = piece_of_[j];
             seen_[g] = seen_stamp_;
             if (!piece_near(g)) {
                 vis_[k] += weight;
                 continue;
             }
-            if (stamp_[j] != epoch_) {
-                stamp_[j] = epoch_;
-                acc_[j] = 0.0;
-                touched_.push_back(j);
-            }
+            touch(j);
             acc_[j] += weight * w[k];
         }
     }
@@ -558,16 +562,10 @@ void Worker::accumulate_range_far(std::uint32_t p, HemicubeStats& st) {
         } else if (id == self) {
             ++st.self_hits;
         } else {
-            const std::uint32_t j = id - 1;
-            FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
-                                                            p, k, id, stamp_.size()));
+            const std::uint32_t j = column_of(p, k, id);
             seen_[piece_of_[j]] = seen_stamp_;
             if (!(vk > 0)) continue;
-            if (stamp_[j] != epoch_) {
-                stamp_[j] = epoch_;
-                acc_[j] = 0.0;
-                touched_.push_back(j);
-            }
+            touch(j);
             acc_[j] += w[k] * vk;
         }
     }
