@@ -27,6 +27,16 @@
 
 namespace ffcube {
 
+namespace {
+
+// Every facing pair of the row has its value (with the far field on): nothing refused or unproven,
+// no obstruction in sight.
+bool known_without_measuring(const NearAnalysis& a) {
+    return a.refused == 0 && a.far_unproven == 0 && !a.faces_obstruction;
+}
+
+}  // namespace
+
 using namespace accuracy;
 
 NearFieldScratch::NearFieldScratch() : buffers_(std::make_unique<Buffers>()) {}
@@ -163,7 +173,7 @@ void NearFieldCorrector::Impl::resolve_deferred(std::uint32_t i, NearAnalysis& o
     if (out.exact.size() == first) return;
     std::sort(out.exact.begin(), out.exact.end(),
               [](const auto& a, const auto& c) { return a.first < c.first; });
-    if (out.far) out.complete = out.refused == 0 && out.far_unproven == 0 && !out.faces_obstruction;
+    if (out.far) out.complete = known_without_measuring(out);
 }
 
 // Whether a refused pair's centre value may be off by more than e = (1/k)²/20 (k =
@@ -260,7 +270,7 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
         out.far_error += error;
     }
     out.far_entries = b.far.size();
-    out.complete = out.refused == 0 && out.far_unproven == 0 && !out.faces_obstruction;
+    out.complete = known_without_measuring(out);
     b.near_exact.assign(out.exact.begin(), out.exact.end());
     out.exact.resize(b.near_exact.size() + b.far.size());
     std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());

@@ -199,9 +199,7 @@ std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
 unsigned HemicubeRowProvider::threads() const { return impl_->pool->size(); }
 std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
 bool HemicubeRowProvider::range_limited_sub_hemicubes() const {
-    const int n = impl_->opt.resolution;
-    return impl_->opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
-           impl_->scene->grids.size() >= impl_->opt.sub_hemicube_range_min_pieces && 2 * half_resolution(n) == n;
+    return range_limits_sub_hemicubes(impl_->opt, impl_->scene->grids.size(), impl_->opt.resolution);
 }
 
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }

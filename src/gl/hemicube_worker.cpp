@@ -61,6 +61,10 @@ constexpr std::size_t kOccluderCount = 32;
 
 int half_resolution(int n) { return n / 2 >= 8 && (n / 2) % 2 == 0 ? n / 2 : n; }
 
+bool range_limits_sub_hemicubes(const HemicubeOptions& opt, std::size_t pieces, int n) {
+    return opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
+           pieces >= opt.sub_hemicube_range_min_pieces && 2 * half_resolution(n) == n;
+}
 
 Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
        const HemicubeOptions& opt)
@@ -153,24 +157,24 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     seen_.assign(scene.grids.size(), 0u);
     depth_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
     stamp_.assign(scene.patches.size(), 0);
-    // Piece boxes (every vertex slot: corners and T-vertices) for range-limited rows.
-    box_lo_.assign(scene.grids.size(), Vec3(0.0));
-    box_hi_.assign(scene.grids.size(), Vec3(0.0));
-    for (std::size_t g = 0; g < scene.grids.size(); ++g) {
-        Vec3 lo(INFINITY), hi(-INFINITY);
-        for (std::size_t s = pieces.first[g]; s < pieces.first[g + 1]; ++s) {
-            lo = glm::min(lo, pieces.pos[s]);
-            hi = glm::max(hi, pieces.pos[s]);
+    // Range-limited rows only: the piece boxes (every vertex slot: corners and T-vertices).
+    range_on_ = range_limits_sub_hemicubes(opt, scene.grids.size(), layout.resolution());
+    if (range_on_) {
+        vis_.resize(half_ids_.size());
+        box_lo_.assign(scene.grids.size(), Vec3(0.0));
+        box_hi_.assign(scene.grids.size(), Vec3(0.0));
+        for (std::size_t g = 0; g < scene.grids.size(); ++g) {
+            Vec3 lo(INFINITY), hi(-INFINITY);
+            for (std::size_t s = pieces.first[g]; s < pieces.first[g + 1]; ++s) {
+                lo = glm::min(lo, pieces.pos[s]);
+                hi = glm::max(hi, pieces.pos[s]);
+            }
+            box_lo_[g] = lo;
+            box_hi_[g] = hi;
+            scene_lo_ = g == 0 ? lo : glm::min(scene_lo_, lo);
+            scene_hi_ = g == 0 ? hi : glm::max(scene_hi_, hi);
         }
-        box_lo_[g] = lo;
-        box_hi_[g] = hi;
-        scene_lo_ = g == 0 ? lo : glm::min(scene_lo_, lo);
-        scene_hi_ = g == 0 ? hi : glm::max(scene_hi_, hi);
     }
-    range_on_ = opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
-                scene.grids.size() >= opt.sub_hemicube_range_min_pieces &&
-                2 * half_layout_.resolution() == layout.resolution();
-    if (range_on_) vis_.resize(half_ids_.size());
     if (const char* fail = std::getenv("FFCUBE_TEST_WORKER_FAIL"); fail && *fail) {
         const std::string f = fail;
         test_fail_ = f == "input" ? 1 : f == "io" ? 2 : f == "internal" ? 3 : f == "gl" ? 4 : -1;
@@ -216,15 +220,14 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     }
     const std::size_t in_front = pieces_.bvh.mark_in_front(eye, fr.normal, visit_, visit_stamp_);
     st.pieces_behind += scene_.grids.size() - in_front;
-    range_eye_ = eye;
     const Vec3* pos = pieces_.pos.data();
     for (std::size_t g = 0; g < scene_.grids.size(); ++g) {
         if (visit_[g] != visit_stamp_) continue;
         // Range-limited rows (sample_range_limited): a sub-hemicube draws the pieces whose box
         // comes within range_r_ of its eye, the centroid's hemicube those not wholly near.
-        if (range_mode_ != 0) {
+        if (range_mode_ != RangeDraw::all) {
             bool out;
-            if (range_mode_ == 1) {
+            if (range_mode_ == RangeDraw::within_eye) {
                 const Vec3 q = glm::clamp(eye, box_lo_[g], box_hi_[g]);
                 out = glm::length(q - eye) > range_r_;
             } else {
@@ -492,18 +495,18 @@ bool Worker::range_applies(std::uint32_t p) {
 
 void Worker::sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats& st) {
     struct Reset {
-        int& mode;
-        ~Reset() { mode = 0; }
+        RangeDraw& mode;
+        ~Reset() { mode = RangeDraw::all; }
     } reset{range_mode_};
     const auto v = scene_.patch_vertices(p);
     patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
     std::fill(vis_.begin(), vis_.end(), 0.0);
-    range_mode_ = 1;
+    range_mode_ = RangeDraw::within_eye;
     for (std::size_t q = 0; q < points_.size(); ++q) {
         render(p, points_[q], true, st);
         accumulate_range_near(p, weights_[q], st);
     }
-    range_mode_ = 2;
+    range_mode_ = RangeDraw::not_near;
     render(p, scene_.patches[p].centroid, false, st);
     accumulate_range_far(p, st);
 }

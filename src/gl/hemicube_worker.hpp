@@ -26,6 +26,11 @@ inline constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
 // Resolution of sub-hemicubes: half the row's, when that is still a valid resolution (even, ≥ 8).
 int half_resolution(int n);
 
+// Whether rows of sub-hemicubes may be range-limited on a scene of `pieces` pieces at the row
+// resolution n (HemicubeOptions::sub_hemicube_range automatic, enough pieces, a half resolution
+// of exactly n/2): the worker's rule and the provider's report line share it.
+bool range_limits_sub_hemicubes(const HemicubeOptions& opt, std::size_t pieces, int n);
+
 class Worker {
 public:
     // ctx must be current on this thread, now and for every call. Everything referenced must
@@ -124,15 +129,16 @@ private:
     std::unique_ptr<ExposedPoints> exposed_;  // made at the first row of sub-hemicubes
     // Range-limited rows: per piece its bounding box, the scene's box, whether rows may use the
     // rule (enough pieces, half resolution exactly half); during such a row, what render() draws
-    // (range_mode_ 1: pieces whose box comes within range_r_ of the eye; 2: pieces not wholly
-    // within range_near_ of range_centre_; 0: all), and per half-resolution pixel the weight of
+    // (within_eye: pieces whose box comes within range_r_ of the eye; not_near: pieces not wholly
+    // within range_near_ of range_centre_), and per half-resolution pixel the weight of
     // the sub-hemicubes that see past the near pieces there.
     std::vector<Vec3> box_lo_, box_hi_;
     Vec3 scene_lo_{0.0}, scene_hi_{0.0};
     bool range_on_ = false;
-    int range_mode_ = 0;
+    enum class RangeDraw { all, within_eye, not_near };
+    RangeDraw range_mode_ = RangeDraw::all;
     double range_r_ = 0, range_near_ = 0;
-    Vec3 range_centre_{0.0}, range_eye_{0.0};
+    Vec3 range_centre_{0.0};
     std::vector<double> vis_;
 };
 

@@ -10,14 +10,13 @@
 #include "ffcube/geometry/visible_ff.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/polygons.hpp"
+#include "support/scenes.hpp"
 
 namespace ffcube {
 namespace {
 
 Scene make(const std::vector<NamedPolygon>& polys) {
-    MeshOptions mo;
-    mo.max_patch_edge = 1e9;  // one patch per polygon
-    return build_scene(model_from_polygons(polys, "<exact visibility auto test>"), mo);
+    return test::make_scene(polys, 1e9);  // one patch per polygon
 }
 
 // A sender 0.1 wide on the ground, a low kerb 0.3 in front of it (faces −x, 0.3 tall, 0.2 wide,
