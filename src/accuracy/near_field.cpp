@@ -287,16 +287,18 @@ NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOption
 
 NearFieldCorrector::~NearFieldCorrector() = default;
 
-NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
+NearFieldOptions near_field_options_for_hemicube(int resolution, double k, double pixel_ns, double cpu_scale) {
     NearFieldOptions o;
     o.k = k;
     o.sender_quadrature = true;
     const double n = resolution;
     o.pixel_delta_ff = 4.0 / (std::numbers::pi * n * n);
     // 30% of a hemicube row: 3N² pixels at about 5 ns each on one core of llvmpipe
-    // (tools/bench_far_field prints both per row; docs/benchmarks.md).
+    // (tools/bench_far_field prints both per row; docs/benchmarks.md), or pixel_ns as measured by
+    // `ffcube calibrate`; in the development machine's CPU nanoseconds (÷ cpu_scale), which the
+    // far field's cost model counts.
     o.far_field = NearFieldOptions::FarField::automatic;
-    o.far_field_row_ns = 3.0 * n * n * 5.0;
+    o.far_field_row_ns = 3.0 * n * n * pixel_ns / cpu_scale;
     o.far_field_budget_ns = 0.3 * o.far_field_row_ns;
     return o;
 }
@@ -317,11 +319,13 @@ NearFieldOptions near_field_options_for_hemicube(int resolution, double k) {
 //   exhausts its budget and still needs its sub-hemicubes spends 4 × their cost on top; rows
 //   are tried only where the least costs fit, so on the Cornell box (14 rows made exact, 5
 //   pairs over budget) the run's CPU is unchanged (docs/benchmarks.md).
-double exact_visibility_budget_for_hemicube(int resolution) {
+// - pixel_ns and cpu_scale (`ffcube calibrate`, pipeline/cost_model.hpp): another device's pixel and
+//   another CPU's evaluation; 5 and 1 are this machine's.
+double exact_visibility_budget_for_hemicube(int resolution, double pixel_ns, double cpu_scale) {
     constexpr double kSpentPerSpared = 4;
     constexpr double kEvaluationNs = 650;
     const double n = resolution;
-    return kSpentPerSpared * 3.0 * n * n * 5.0 / kEvaluationNs;
+    return kSpentPerSpared * 3.0 * n * n * pixel_ns / (kEvaluationNs * cpu_scale);
 }
 
 bool NearFieldCorrector::far_unoccluded(std::uint32_t i, std::uint32_t j) const { return impl_->far.unoccluded(i, j); }

@@ -11,5 +11,6 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action);
 void add_view_command(CLI::App& app, std::function<int()>& action);
 void add_solve_command(CLI::App& app, std::function<int()>& action);
 void add_bench_command(CLI::App& app, std::function<int()>& action);
+void add_calibrate_command(CLI::App& app, std::function<int()>& action);
 
 }  // namespace ffcube::cli

@@ -139,6 +139,19 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "
                     "row's; on: wherever the scene has at most 256 planes; off",
                     "auto");
+    app.add_option_function<std::string>(
+           "--cost-model",
+           [&o](const std::string& path) {
+               try {
+                   o.cost_model = read_cost_model(path);
+               } catch (const InputError& e) {  // reported as CLI11 reports a bad option (exit 2)
+                   throw CLI::ValidationError(e.what());
+               }
+           },
+           "--correct near, hemicube: the costs --far-field auto and --exact-visibility auto weigh, from a file "
+           "`ffcube calibrate` wrote on this machine (docs/accuracy.md, \"Cost model\"); default: llvmpipe's, measured "
+           "on the development machines")
+        ->type_name("FILE");
 }
 
 void add_enforce_option(CLI::App& app, RowOptions& o) {

@@ -125,6 +125,7 @@ void validate(const RowOptions& o) {
     if (o.exact_visibility_occluders > kMaxExactVisibilityOccluders)
         throw InputError(fmt::format("--exact-visibility {}: must be within 0..{} (possible occluders in a near pair's shaft; 0: off)",
                                      o.exact_visibility_occluders, kMaxExactVisibilityOccluders));
+    check_cost_model(o.cost_model, o.cost_model.builtin() ? "the built-in cost model" : "--cost-model " + o.cost_model.source);
 }
 
 HemicubeOptions hemicube_options(const RowOptions& o) {
@@ -160,13 +161,15 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         nf.exact_visibility_occluders = o.exact_visibility_auto ? 0 : o.exact_visibility_occluders;
         return nf;
     }
-    NearFieldOptions nf = near_field_options_for_hemicube(o.resolution, o.near_k);
+    NearFieldOptions nf =
+        near_field_options_for_hemicube(o.resolution, o.near_k, o.cost_model.pixel_ns, o.cost_model.cpu_scale);
     nf.far_field = o.far_field;
     nf.sub_hemicube_k = o.sub_hemicube_k;
     nf.exact_visibility_occluders = o.exact_visibility_occluders;
     if (o.exact_visibility_auto) {
         nf.exact_visibility_occluders = kAutoExactVisibilityOccluders;
-        nf.exact_visibility_budget = exact_visibility_budget_for_hemicube(o.resolution);
+        nf.exact_visibility_budget =
+            exact_visibility_budget_for_hemicube(o.resolution, o.cost_model.pixel_ns, o.cost_model.cpu_scale);
     }
     return nf;
 }

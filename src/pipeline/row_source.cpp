@@ -80,6 +80,9 @@ std::vector<std::string> describe(const RowSource& rows) {
         const NearFieldOptions nf = near_field_options(rows.options());
         lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
                                     nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
+        if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
+            lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
+                                        m.source, m.pixel_ns, m.cpu_scale));
         if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
             lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (rows whose range holds "
                                         "at most a quarter of the pieces; --sub-hemicube-range off draws everything)",
@@ -112,6 +115,10 @@ FfmMetadata row_metadata(const RowOptions& o) {
         // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
             meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);
+        // A cost model moves the automatic choices (far field, exact visibility): recorded when
+        // it is not the built-in one.
+        if (o.method == RowMethod::Hemicube && !o.cost_model.builtin())
+            meta.settings += fmt::format(" cost_model={}/{}", o.cost_model.pixel_ns, o.cost_model.cpu_scale);
     }
     return meta;
 }
@@ -236,6 +243,12 @@ void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     r.set("time.setup", rows.setup_seconds());
     if (const CorrectedRowProvider* c = rows.corrected()) {
+        if (rows.hemicube()) {
+            const CostModel& m = rows.options().cost_model;
+            r.set("cost_model.source", m.builtin() ? std::string("built-in") : m.source);
+            r.set("cost_model.pixel_ns", m.pixel_ns);
+            r.set("cost_model.cpu_scale", m.cpu_scale);
+        }
         report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size());
         const NearFieldStats& s = c->stats();
         if (c->corrector().exact_visibility_mode() == "auto" && (s.exact_visibility > 0 || s.exact_visibility_over_budget > 0))

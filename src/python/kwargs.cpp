@@ -174,6 +174,8 @@ void Kwargs::read_row_options(RowOptions& o, bool enforce) {
         }
     }
     if (py::object v = take("far_field"); !v.is_none()) o.far_field = parse_far_field(word("far_field", v));
+    // A file `ffcube calibrate` wrote (pipeline/cost_model.hpp), as --cost-model.
+    if (py::object v = take("cost_model"); !v.is_none()) o.cost_model = read_cost_model(word("cost_model", v));
     if (enforce)
         if (py::object v = take("enforce"); !v.is_none()) o.enforce = parse_enforce_request(word("enforce", v));
 }

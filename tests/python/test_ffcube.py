@@ -141,6 +141,21 @@ class FormFactors(unittest.TestCase):
         Fa = self.assert_same_as_cli(L_ROOM, ["--no-subdivide"], no_subdivide=True, exact_visibility="auto")
         self.assertEqual((Fa != ffcube.form_factors(L_ROOM, no_subdivide=True, quiet=True)).nnz, 0)
 
+    def test_cost_model_is_the_command_lines(self):
+        # A fast device's model (pixel_ns 0.001) turns the far field off on the parallel squares
+        # (on with the built-in model: tests/cli/test_cost_model_cli.cpp), so the matrices differ
+        # and a dropped keyword would give the built-in one.
+        with tempfile.TemporaryDirectory() as d:
+            model = os.path.join(d, "fast.json")
+            with open(model, "w") as f:
+                f.write('{"pixel_ns": 0.001, "cpu_scale": 1}')
+            F = self.assert_same_as_cli(SQUARES, ["--resolution", 64, "--cost-model", model], resolution=64,
+                                        cost_model=model)
+            F0 = ffcube.form_factors(SQUARES, resolution=64, quiet=True)
+            self.assertNotEqual((F != F0).nnz, 0)
+            with self.assertRaises(ffcube.InputError):
+                ffcube.form_factors(SQUARES, resolution=64, quiet=True, cost_model=os.path.join(d, "none.json"))
+
     def test_same_rows_for_any_thread_count(self):
         s = ffcube.load_scene(CUBE, max_patch_edge=0.5, quiet=True)
         F1 = ffcube.form_factors(s, resolution=32, threads=1, quiet=True)

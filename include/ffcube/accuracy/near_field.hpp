@@ -128,12 +128,16 @@ struct NearFieldOptions {
 
 // The options `--correct near` uses on rows of a hemicube at resolution N: sender quadrature,
 // pixel noise, and the far field in automatic mode with a budget of 30% of a hemicube row's
-// cost on llvmpipe (3N² pixels at about 5 ns each, docs/benchmarks.md).
-NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0);
+// cost (3N² pixels at pixel_ns each: about 5 ns on llvmpipe here, docs/benchmarks.md). cpu_scale:
+// the CPU's time at the analytic work against the development machine's, whose nanoseconds the
+// far field's cost model counts (pipeline/cost_model.hpp; `ffcube calibrate` measures both).
+NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0, double pixel_ns = 5.0,
+                                                 double cpu_scale = 1.0);
 
 // `--exact-visibility auto` on rows of a hemicube at resolution N: the per-row budget of
 // NearFieldOptions::exact_visibility_budget (derivation beside its definition) and the K it uses.
-double exact_visibility_budget_for_hemicube(int resolution);
+// pixel_ns and cpu_scale as for near_field_options_for_hemicube.
+double exact_visibility_budget_for_hemicube(int resolution, double pixel_ns = 5.0, double cpu_scale = 1.0);
 inline constexpr std::size_t kAutoExactVisibilityOccluders = 8;
 
 struct NearFieldStats {

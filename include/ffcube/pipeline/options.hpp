@@ -13,6 +13,7 @@
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/gl/context.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/pipeline/cost_model.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 #include "ffcube/scene/load_model.hpp"
@@ -77,6 +78,9 @@ struct RowOptions {
     double sub_hemicube_range_k = 24.0;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
+    // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
+    // llvmpipe on the development machines).
+    CostModel cost_model;
 };
 
 // Parsers of the command line's words; each throws InputError naming the option and the words

@@ -1,0 +1,148 @@
+// ffcube calibrate: measures the cost model (pipeline/cost_model.hpp) on this machine and writes
+// it for `--cost-model FILE`: the wall time of a hemicube pixel on one worker of this machine's GL
+// device, and the CPU's time at the near-field correction's analytic work against the development
+// machine's. Timing happens here only; runs that read the file are deterministic in it.
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ctime>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "cli/commands.hpp"
+#include "cli/common.hpp"
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/cost_model.hpp"
+#include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
+
+namespace ffcube::cli {
+namespace {
+
+// The CPU workload's time on the development machine (2-core VM, `ffcube calibrate`'s own
+// workload below, the least of five runs measured with three other jobs on the machine;
+// docs/accuracy.md, "Cost model"). cpu_scale = this machine's time / this.
+constexpr double kReferenceWorkloadSeconds = 0.94;
+
+struct Options {
+    SceneFlags scene;
+    int resolution = 256;
+    std::string backend = "auto";
+    std::uint32_t rows = 256;
+    std::string output;
+};
+
+double thread_cpu_seconds() {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+// The analytic work `--far-field auto` and `--exact-visibility auto` budget: the near-field
+// analysis of every row of the built-in Cornell box at its default mesh, with exact visibility
+// past up to 8 occluders and no budget (shaft tests, Gauss rules, clipping, point evaluations).
+// Thread CPU seconds, the least of `repeats` runs (others' load inflates, never deflates).
+double cpu_workload_seconds(const Scene& scene, int repeats) {
+    NearFieldOptions nf = near_field_options_for_hemicube(256);
+    nf.far_field = NearFieldOptions::FarField::off;
+    nf.exact_visibility_occluders = kAutoExactVisibilityOccluders;
+    double best = 0;
+    for (int r = 0; r < repeats; ++r) {
+        const double t0 = thread_cpu_seconds();
+        const NearFieldCorrector corrector(scene, nf);
+        NearFieldScratch scratch;
+        NearAnalysis analysis;
+        for (std::uint32_t i = 0; i < static_cast<std::uint32_t>(scene.size()); ++i) corrector.plan_row(i, analysis, scratch);
+        const double t = thread_cpu_seconds() - t0;
+        best = r == 0 ? t : std::min(best, t);
+    }
+    return best;
+}
+
+int run(const Options& o) {
+    if (o.output.empty()) throw InputError("calibrate: -o FILE is required (the cost model to write)");
+    check_output_path("--output", o.output);
+    if (o.rows == 0) throw InputError("--rows 0: at least 1 row to time");
+    RowOptions ro;
+    ro.resolution = o.resolution;
+    ro.backend = parse_backend(o.backend);
+    ro.threads = 1;  // one worker: the cost of a row on one of them
+    ro.correct = Correction::None;
+    validate(ro);
+
+    // The CPU workload's scene (the built-in box at its default mesh), and the scene to time
+    // hemicubes on: the same unless the command line names another.
+    Report report;
+    const Scene builtin = load_and_mesh(SceneOptions{}, report);
+    const SceneOptions& so = o.scene.scene;
+    const bool default_scene = so.path.empty() && so.max_patch_edge == 0 && so.patches == 0 && so.materials.empty() &&
+                               so.subdivide && so.contact_cuts == ContactCuts::Auto;
+    std::optional<Scene> named;
+    if (!default_scene) named = load_and_mesh(so, report);
+    const Scene& scene = named ? *named : builtin;
+    RowSource source = make_row_source(scene, ro);
+    std::string device;
+    if (const HemicubeRowProvider* h = source.hemicube()) device = fmt::format("{} ({})", h->backend(), h->renderer());
+    const auto n = static_cast<std::uint32_t>(scene.size());
+    const std::uint32_t count = std::min(o.rows, n);
+    std::vector<std::uint32_t> rows(count);
+    for (std::uint32_t k = 0; k < count; ++k) rows[k] = static_cast<std::uint32_t>(std::uint64_t{k} * n / count);
+    // Warm-up (shader compilation, first uploads), then the rows in four batches, each timed:
+    // the fastest batch's time per row (other jobs on the machine only ever add wall time).
+    const std::vector<std::uint32_t> warm(rows.begin(), rows.begin() + std::min<std::uint32_t>(count, 4));
+    source.provider().compute_rows(warm, [](std::uint32_t, const SparseRow&) {});
+    constexpr std::uint32_t kBatches = 4;
+    double per_row = 0;
+    for (std::uint32_t b = 0; b < kBatches; ++b) {
+        const std::span<const std::uint32_t> batch(rows.data() + std::uint64_t{b} * count / kBatches,
+                                                   rows.data() + std::uint64_t{b + 1} * count / kBatches);
+        if (batch.empty()) continue;
+        const auto t0 = std::chrono::steady_clock::now();
+        source.provider().compute_rows(batch, [](std::uint32_t, const SparseRow&) {});
+        const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() /
+                         static_cast<double>(batch.size());
+        per_row = per_row == 0 ? t : std::min(per_row, t);
+    }
+    const double pixels = 3.0 * o.resolution * o.resolution;
+    CostModel m;
+    m.pixel_ns = per_row * 1e9 / pixels;
+    info("hemicube on {}: {} rows at N = {} on one worker, the fastest of {} batches {:.3f} ms a row: {:.3g} ns a "
+         "pixel (built-in: {} ns)",
+         device, count, o.resolution, kBatches, 1e3 * per_row, m.pixel_ns, CostModel{}.pixel_ns);
+    const double cpu = cpu_workload_seconds(builtin, 3);
+    m.cpu_scale = cpu / kReferenceWorkloadSeconds;
+    info("CPU: the near-field workload in {:.3f} s against {:.3f} s on the development machine: cpu_scale {:.3g}", cpu,
+         kReferenceWorkloadSeconds, m.cpu_scale);
+    check_cost_model(m, "calibrate");
+    write_cost_model(o.output, m, device, o.resolution, cpu, kReferenceWorkloadSeconds);
+    info("wrote {}: use it with --cost-model {}", o.output, o.output);
+    return 0;
+}
+
+}  // namespace
+
+void add_calibrate_command(CLI::App& app, std::function<int()>& action) {
+    auto opts = std::make_shared<Options>();
+    CLI::App* sub = app.add_subcommand(
+        "calibrate", "measure this machine's cost model (hemicube pixel, CPU) for --cost-model (docs/accuracy.md)");
+    add_scene_options(*sub, opts->scene);
+    sub->add_option("--resolution", opts->resolution, "hemicube top-face resolution to time (even, 8..8192)")
+        ->default_val(256);
+    sub->add_option("--backend", opts->backend, "OpenGL context: auto (EGL, then OSMesa), egl or osmesa")
+        ->default_val("auto");
+    sub->add_option("--rows", opts->rows, "rows to time, spread over the scene")->default_val(256);
+    sub->add_option("-o,--output", opts->output, "the cost model to write (JSON)")->required();
+    sub->callback([opts, &action] {
+        action = [opts] {
+            if (opts->scene.quiet) set_log_level(LogLevel::Quiet);
+            return run(*opts);
+        };
+    });
+}
+
+}  // namespace ffcube::cli

@@ -1,0 +1,58 @@
+#include "ffcube/pipeline/cost_model.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/io/atomic_file.hpp"
+
+namespace ffcube {
+
+void check_cost_model(const CostModel& m, const std::string& where) {
+    if (!std::isfinite(m.pixel_ns) || m.pixel_ns < 1e-4 || m.pixel_ns > 1e4)
+        throw InputError(fmt::format("{}: pixel_ns {} is outside 1e-4..1e4 (ns per hemicube pixel)", where, m.pixel_ns));
+    if (!std::isfinite(m.cpu_scale) || m.cpu_scale < 1e-3 || m.cpu_scale > 1e3)
+        throw InputError(fmt::format("{}: cpu_scale {} is outside 1e-3..1e3 (the CPU's time against the "
+                                     "development machine's)",
+                                     where, m.cpu_scale));
+}
+
+CostModel read_cost_model(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(fmt::format("--cost-model {}: cannot open the file", path));
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+        throw InputError(fmt::format("--cost-model {}: not JSON (byte {}): {}", path, e.byte, e.what()));
+    }
+    if (!j.is_object()) throw InputError(fmt::format("--cost-model {}: not a JSON object", path));
+    CostModel m;
+    for (auto [key, value] : {std::pair<const char*, double*>{"pixel_ns", &m.pixel_ns}, {"cpu_scale", &m.cpu_scale}}) {
+        const auto it = j.find(key);
+        if (it == j.end()) throw InputError(fmt::format("--cost-model {}: the key \"{}\" is missing", path, key));
+        if (!it->is_number()) throw InputError(fmt::format("--cost-model {}: \"{}\" is not a number", path, key));
+        *value = it->get<double>();
+    }
+    m.source = path;
+    check_cost_model(m, fmt::format("--cost-model {}", path));
+    return m;
+}
+
+void write_cost_model(const std::string& path, const CostModel& m, const std::string& measured_on, int resolution,
+                      double cpu_seconds, double reference_cpu_seconds) {
+    nlohmann::json j;
+    j["pixel_ns"] = m.pixel_ns;
+    j["cpu_scale"] = m.cpu_scale;
+    j["measured_on"] = measured_on;
+    j["resolution"] = resolution;
+    j["cpu_workload_seconds"] = cpu_seconds;
+    j["cpu_workload_reference_seconds"] = reference_cpu_seconds;
+    j["built_in"] = {{"pixel_ns", CostModel{}.pixel_ns}, {"cpu_scale", CostModel{}.cpu_scale}};
+    write_file_atomically(path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
+}
+
+}  // namespace ffcube
