@@ -353,7 +353,7 @@ bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
 void Worker::take_row(SparseRow& out, HemicubeStats& st) {
     Stopwatch watch;
     const std::size_t m = touched_.size(), n = stamp_.size();
-    if (m > 64 && m * static_cast<std::size_t>(std::bit_width(m)) > n) {
+    if (m * static_cast<std::size_t>(std::bit_width(m)) > n) {
         std::size_t k = 0;
         for (std::uint32_t j = 0; j < n; ++j)
             if (stamp_[j] == epoch_) touched_[k++] = j;
