@@ -61,6 +61,13 @@ struct NearFieldCorrector::Impl {
     // budget: what is left of the row's (auto mode), or nullptr: no bound.
     Exact exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out, NearFieldScratch::Buffers& b,
                            double* budget = nullptr) const;
+    // The exact value of an eligible pair from its clipped sender and occluders (what
+    // exact_visibility_eligible left in b.sender, b.occluders) and its least cost.
+    Exact evaluate_visible(std::uint32_t i, std::uint32_t j, NearAnalysis& out, const std::vector<Vec3>& sender,
+                           const std::vector<std::vector<Vec3>>& occluders, double least, double* budget) const;
+    // The row's occluder level (plan_row), computed once per analysis from b.near as the near-pair
+    // search left it.
+    int occluder_level(std::uint32_t i, NearFieldScratch::Buffers& b) const;
     // Whether pair (i, j) may be tried (its shaft's blockers, convexity, the sender's front part in
     // b.blockers and b.sender), and its least cost in evaluations × occluders.
     bool exact_visibility_eligible(std::uint32_t i, std::uint32_t j, NearFieldScratch::Buffers& b, double& least) const;
@@ -99,10 +106,21 @@ NearFieldCorrector::Impl::Exact NearFieldCorrector::Impl::exact_visibility(std::
                                                                            double* budget) const {
     double least = 0;
     if (!exact_visibility_eligible(i, j, b, least)) return Exact::refused;
+    return evaluate_visible(i, j, out, b.sender, b.occluders, least, budget);
+}
+
+int NearFieldCorrector::Impl::occluder_level(std::uint32_t i, NearFieldScratch::Buffers& b) const {
+    if (b.occluder_level < 0) b.occluder_level = visibility.occluder_level_of_candidates(i, b.near);
+    return b.occluder_level;
+}
+
+NearFieldCorrector::Impl::Exact NearFieldCorrector::Impl::evaluate_visible(
+    std::uint32_t i, std::uint32_t j, NearAnalysis& out, const std::vector<Vec3>& sender,
+    const std::vector<std::vector<Vec3>>& occluders, double least, double* budget) const {
     VisibleFFOptions vo;
     vo.tolerance = options.exact_visibility_tolerance;
     // The kernel's cost grows about linearly with the occluders it cuts the receiver by.
-    const double per_point = static_cast<double>(std::max<std::size_t>(1, b.blockers.size()));
+    const double per_point = static_cast<double>(std::max<std::size_t>(1, occluders.size()));
     bool capped = false;
     if (budget) {
         if (least > *budget) return Exact::over_budget;
@@ -110,7 +128,7 @@ NearFieldCorrector::Impl::Exact NearFieldCorrector::Impl::exact_visibility(std::
         capped = cap < vo.max_points;
         vo.max_points = std::min(vo.max_points, cap);
     }
-    const VisibleFFResult r = ff_polygon_visible_polygon(b.sender, patches.polys[j].span(), b.occluders, vo);
+    const VisibleFFResult r = ff_polygon_visible_polygon(sender, patches.polys[j].span(), occluders, vo);
     out.exact_visibility_points += r.points;
     out.exact_visibility_cost += static_cast<double>(r.points) * per_point;
     if (budget) *budget -= static_cast<double>(r.points) * per_point;
@@ -119,7 +137,7 @@ NearFieldCorrector::Impl::Exact NearFieldCorrector::Impl::exact_visibility(std::
         ++out.exact_visibility_unconverged;
         return Exact::refused;
     }
-    const double scale = polygon_area(b.sender) / patches.scene.patches[i].area;
+    const double scale = polygon_area(sender) / patches.scene.patches[i].area;
     // Where the occluders hide j wholly the pieces' clipping leaves rounding (1e-20 under a plate
     // between two squares): a value below 1e-12, a millionth of the rule's tolerance, is 0 (no
     // entry), moved by less than 1e-12.
@@ -143,16 +161,25 @@ void NearFieldCorrector::Impl::resolve_deferred(std::uint32_t i, NearAnalysis& o
     const bool unproven = options.sample_unproven_rows && out.far && out.far_unproven > 0;
     const bool would_complete = options.skip_complete_rows && out.far && out.far_unproven == 0 &&
                                 !out.faces_obstruction && out.refused == n;
-    const int level = options.sample_beside_occluders ? visibility.occluder_level(i, b.near) : 0;
+    const int level = options.sample_beside_occluders ? occluder_level(i, b) : 0;
     const bool would_centre = !unproven && level == 0;
     if (!would_complete && !would_centre) return;
     // The hemicubes spared: plan_row's 4 × 4 sub-hemicubes where an occluder touches the sender
     // (level 2), 2 × 2 otherwise, against none (complete: skipped) or the centre's one.
     const double spared = (level == 2 ? 16.0 : 4.0) - (would_complete ? 0.0 : 1.0);
+    // Each pair's shaft search and clipping once: kept for the evaluation below.
+    if (b.deferred_sender.size() < n) {
+        b.deferred_sender.resize(n);
+        b.deferred_occluders.resize(n);
+    }
+    b.deferred_least.resize(n);
     double least_sum = 0;
-    for (const std::uint32_t j : b.deferred) {
+    for (std::size_t q = 0; q < n; ++q) {
         double least = 0;
-        if (!exact_visibility_eligible(i, j, b, least)) return;  // the row is sampled whatever is done
+        if (!exact_visibility_eligible(i, b.deferred[q], b, least)) return;  // the row is sampled whatever is done
+        std::swap(b.deferred_sender[q], b.sender);
+        std::swap(b.deferred_occluders[q], b.occluders);
+        b.deferred_least[q] = least;
         least_sum += least;
     }
     double budget = options.exact_visibility_budget * spared;
@@ -162,7 +189,8 @@ void NearFieldCorrector::Impl::resolve_deferred(std::uint32_t i, NearAnalysis& o
     }
     const std::size_t first = out.exact.size();
     for (std::size_t q = 0; q < n; ++q) {
-        const Exact e = exact_visibility(i, b.deferred[q], out, b, &budget);
+        const Exact e = evaluate_visible(i, b.deferred[q], out, b.deferred_sender[q], b.deferred_occluders[q],
+                                         b.deferred_least[q], &budget);
         if (e != Exact::made) {
             if (e == Exact::over_budget) out.exact_visibility_over_budget += n - q;
             break;
@@ -356,6 +384,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
     out.exact = std::move(exact);
     Stopwatch watch;
     NearFieldScratch::Buffers& b = scratch.buffers();
+    b.occluder_level = -1;
     impl_->add_near_pairs(i, out, b);
     if (impl_->far.on()) impl_->add_far_pairs(i, out, b);
     if (impl_->automatic()) impl_->resolve_deferred(i, out, b);
@@ -374,7 +403,7 @@ RowProvider::RowPlan NearFieldCorrector::plan_row(std::uint32_t i, NearAnalysis&
     // points when the occluder touches the sender (refused near pairs included: the wall that
     // hides them is usually that occluder).
     if (impl_->options.sample_beside_occluders)
-        out.occluder = static_cast<std::uint8_t>(impl_->visibility.occluder_level(i, scratch.buffers().near));
+        out.occluder = static_cast<std::uint8_t>(impl_->occluder_level(i, scratch.buffers()));
     if (out.refused_sampled > 0 || out.occluder > 0) {
         out.sampled = true;
         return out.occluder == 2 ? RowProvider::RowPlan::sampled_fine : RowProvider::RowPlan::sampled;

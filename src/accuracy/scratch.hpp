@@ -25,6 +25,10 @@ struct NearFieldScratch::Buffers {
     std::vector<std::uint32_t> blockers;                    // exact visibility: the shaft's candidates
     std::vector<std::vector<Vec3>> occluders;               // … their polygons
     std::vector<Vec3> sender;                               // … the sender clipped to j's front
+    std::vector<std::vector<std::vector<Vec3>>> deferred_occluders;  // auto: each deferred pair's occluders
+    std::vector<std::vector<Vec3>> deferred_sender;                  // … and its clipped sender
+    std::vector<double> deferred_least;                              // … and its least cost
+    int occluder_level = -1;  // the row's SenderVisibility::occluder_level once known, else -1
     // correct
     NearAnalysis analysis;  // when the caller has none
     std::vector<Vec3> quadrature_points;

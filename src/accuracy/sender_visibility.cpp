@@ -32,6 +32,12 @@ int SenderVisibility::occluder_level(std::uint32_t i, std::vector<std::uint32_t>
     const Patch& pi = scene.patches[i];
     const double reach = k_ * std::max(pi.size, patches_.max_size);
     grid_.query(Box{pi.centroid - Vec3(reach), pi.centroid + Vec3(reach)}, near);
+    return occluder_level_of_candidates(i, near);
+}
+
+int SenderVisibility::occluder_level_of_candidates(std::uint32_t i, const std::vector<std::uint32_t>& near) const {
+    const Scene& scene = patches_.scene;
+    const Patch& pi = scene.patches[i];
     int level = 0;
     for (const std::uint32_t q : near) {
         if (q == i) continue;

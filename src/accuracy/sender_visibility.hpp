@@ -33,6 +33,9 @@ public:
     // to i's centroid than i's size (a wall rising from the sender's edge), whose silhouette
     // sweeps across the sender. near: the caller's scratch.
     int occluder_level(std::uint32_t i, std::vector<std::uint32_t>& near) const;
+    // The same from `near` already holding the grid's candidates for i's reach (k × the larger of
+    // i's size and the largest patch's, as the near-pair search queries it): no second query.
+    int occluder_level_of_candidates(std::uint32_t i, const std::vector<std::uint32_t>& near) const;
 
 private:
     const PatchSet& patches_;

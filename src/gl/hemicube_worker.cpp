@@ -4,6 +4,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <cstdlib>
 #include <cstring>
 #include <numbers>
@@ -345,10 +346,21 @@ bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
     return true;
 }
 
-// The row made in acc_ over touched_, sorted by column.
+// The row made in acc_ over touched_, sorted by column. A dense row (m touched of n columns, m
+// log2 m above n) is listed by one pass over stamp_ in column order instead of sorting touched_:
+// the same columns in the same order (each touched once), at n compares against m log m (at 5k
+// patches, N = 128, about 1,600 of 5,010 columns: sorting was 3% of a worker's CPU).
 void Worker::take_row(SparseRow& out, HemicubeStats& st) {
     Stopwatch watch;
-    std::sort(touched_.begin(), touched_.end());
+    const std::size_t m = touched_.size(), n = stamp_.size();
+    if (m * static_cast<std::size_t>(std::bit_width(m)) > n) {
+        std::size_t k = 0;
+        for (std::uint32_t j = 0; j < n; ++j)
+            if (stamp_[j] == epoch_) touched_[k++] = j;
+        FFCUBE_CHECK(k == m);
+    } else {
+        std::sort(touched_.begin(), touched_.end());
+    }
     out.clear();
     out.col.reserve(touched_.size());
     out.val.reserve(touched_.size());

@@ -15,6 +15,7 @@
 #include <algorithm>
 
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -458,6 +459,34 @@ TEST(HemicubeRows, ManyBricksShowNoBackFacesAndLeakNothing) {
     });
     EXPECT_EQ(provider.stats().miss_weight, 0.0);
     EXPECT_EQ(provider.stats().back_face_weight, 0.0);
+}
+
+// The worker lists a row's columns by sorting the ones it touched (a sparse row: m columns of n
+// with m·log2(m) ≤ n) or by one pass over all n columns (a dense row). A 4 × 4 floor in 1,024
+// patches under a 0.5 square in 16 facing it: the floor's rows see at most the square's 16 patches
+// (sorted), the square's rows most of the floor (the pass). Both kinds must list strictly
+// increasing columns, and both objects' factors must match the midpoint reference within the
+// pixel tolerance derived at the top (6σ).
+TEST(HemicubeRows, SparseAndDenseRowsListIncreasingColumns) {
+    const std::vector<NamedPolygon> polys = {test::square_z("floor", 0.0, true, 4.0),
+                                             test::square_z("square", 1.0, false, 0.5, Vec3(1.75, 1.75, 0.0))};
+    const Result r = run(polys, 0.125, options(64));
+    const std::size_t n = r.scene.size();
+    ASSERT_EQ(n, 1040u);
+    const std::size_t floor = object_index(r.scene, "floor"), square = object_index(r.scene, "square");
+    std::size_t sparse = 0, dense = 0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const RowView row = r.F.row(i);
+        const std::size_t m = row.col.size();
+        (m * static_cast<std::size_t>(std::bit_width(m)) > n ? dense : sparse) += 1;
+        for (std::size_t k = 1; k < m; ++k) ASSERT_LT(row.col[k - 1], row.col[k]) << "row " << i;
+    }
+    EXPECT_EQ(sparse, 1024u);  // the floor's rows (a row's touched columns include zero entries: at most 16)
+    EXPECT_EQ(dense, 16u);     // the square's
+    for (const auto& [a, b] : {std::pair{floor, square}, std::pair{square, floor}}) {
+        const double mid = midpoint_reference(r.scene, a, polys, r.scene.objects[b]);
+        EXPECT_NEAR(r.G[a][b], mid, 6.0 * r.sigma[a][b] + 1e-9) << r.scene.objects[a] << "->" << r.scene.objects[b];
+    }
 }
 
 TEST(HemicubeRows, SameRowsWithOneOrTwoThreads) {
