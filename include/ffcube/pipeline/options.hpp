@@ -77,6 +77,11 @@ struct RowOptions {
     double sub_hemicube_range_k = 24.0;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
+    // NearFieldOptions::far_field_emitters (hemicube, --correct near): the far field on the
+    // emitting rows only where automatic mode finds it over budget for every row. `ffcube solve`
+    // (--far-field-emitters on|off) and Python's solve() turn it on by default; formfactors keeps
+    // its rows as before (off).
+    bool far_field_emitters = false;
 };
 
 // Parsers of the command line's words; each throws InputError naming the option and the words
