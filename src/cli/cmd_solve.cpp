@@ -286,13 +286,7 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     CLI::App* sub = app.add_subcommand("solve", "solve the radiosity of a scene; write CSV, report, picture, mesh");
     add_scene_options(*sub, opts->scene);
     add_row_options(*sub, opts->rows);
-    opts->rows.far_field_emitters = true;
-    sub->add_option_function<std::string>(
-           "--far-field-emitters", [o = opts.get()](const std::string& w) { o->rows.far_field_emitters = w == "on"; },
-           "--correct near, --far-field auto: where the far field is over budget for every row, keep it for the "
-           "emitting patches' rows (they carry the direct term; docs/adaptive.md). on (default) or off")
-        ->check(CLI::IsMember({"on", "off"}))
-        ->default_str("on");
+    add_far_field_emitters_option(*sub, opts->rows);
     sub->add_option("--solver", opts->solver, "shoot (progressive refinement), jacobi, gauss-seidel or direct")
         ->check(CLI::IsMember({"shoot", "jacobi", "gauss-seidel", "direct"}))
         ->default_val("shoot");
