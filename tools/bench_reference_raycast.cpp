@@ -19,12 +19,24 @@
 //                       spread is printed: s = the sample standard deviation over the seeds of one
 //                       run's value (two seeds: |a − b| / √2), and s / √k that of their mean.
 //
+// Experiments of issue 16 part 2 (docs/adaptive.md, "The default within 0.1%"): some rows from a
+// second source with other settings, the rest as above:
+//   --light-resolution R, --light-far-field auto|on|off, --light-method hemicube|raycast
+//                       the second source's settings (any of them makes one); its rows are the
+//                       emitting patches' and
+//   --fine-share S      the rows that receive the largest first-bounce power from the emitting
+//                       rows, until they carry the share S of it;
+//   --fine-objects "a,b" every row of these objects;  --fine-rows "i j ..." these rows;
+//   DIFF_OBJECT=name    (environment) prints each row of that object from both sources: its sums
+//                       and the second minus the first per receiving object.
+//
 // Each solve also prints the luminance of the power escaped (the box's open front) over the emitted.
 // Everything else is ffcube solve's default (near-field correction on, shooting to 1e-4); one
 // thread unless --threads (rows do not depend on it).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <algorithm>
 #include <map>
 #include <sstream>
 #include <string>
@@ -92,6 +104,9 @@ int main(int argc, char** argv) try {
     RowOptions rows;
     rows.threads = 1;
     std::uint64_t light_rays = 0;
+    int light_resolution = 0;
+    std::string fine_objects, fine_rows, light_far_field, light_method;
+    double fine_share = 0;  // experiment: also the rows whose first shot covers this share of the first bounce's power
     std::uint32_t split = 1;
     std::vector<std::uint64_t> seeds{rows.seed};
     SceneOptions so;
@@ -107,6 +122,12 @@ int main(int argc, char** argv) try {
         else if (k == "--light-rays") light_rays = std::strtoull(v.c_str(), nullptr, 10);
         else if (k == "--threads") rows.threads = static_cast<unsigned>(std::atoi(v.c_str()));
         else if (k == "--resolution") rows.resolution = std::atoi(v.c_str());
+        else if (k == "--light-resolution") light_resolution = std::atoi(v.c_str());
+        else if (k == "--fine-share") fine_share = std::atof(v.c_str());
+        else if (k == "--fine-objects") fine_objects = v;
+        else if (k == "--fine-rows") fine_rows = v;
+        else if (k == "--light-far-field") light_far_field = v;
+        else if (k == "--light-method") light_method = v;
         else if (k == "--correct") rows.correct = parse_correction(v);
         else if (k == "--seeds") {
             seeds.clear();
@@ -150,10 +171,76 @@ int main(int argc, char** argv) try {
         RowSource rest = make_row_source(scene, rows);
         RowOptions lo = rows;
         lo.rays = light_rays;
+        if (light_resolution > 0) lo.resolution = light_resolution;
+        if (!light_far_field.empty()) lo.far_field = parse_far_field(light_far_field);
+        if (!light_method.empty()) lo.method = parse_row_method(light_method);
         RowSource light;
-        const bool own_light = rows.method == RowMethod::Raycast && light_rays != rows.rays;
+        const bool own_light = rows.method == RowMethod::Raycast ? light_rays != rows.rays
+                                                                 : (light_resolution > 0 && light_resolution != rows.resolution) || !light_far_field.empty() || !light_method.empty();
         if (own_light) light = make_row_source(scene, lo);
-        SplitRowProvider both(own_light ? light.provider() : rest.provider(), rest.provider(), emits);
+        std::vector<bool> fine = emits;
+        if (own_light && fine_share > 0) {
+            std::vector<std::uint32_t> lr;
+            for (std::uint32_t i = 0; i < scene.size(); ++i)
+                if (emits[i]) lr.push_back(i);
+            std::vector<double> pw(scene.size(), 0.0);
+            light.provider().compute_rows(lr, [&](std::uint32_t l, const SparseRow& row) {
+                const Patch& p = scene.patches[l];
+                for (std::size_t e = 0; e < row.col.size(); ++e) {
+                    const Patch& q = scene.patches[row.col[e]];
+                    pw[row.col[e]] += luminance(scene.materials[q.material].kd * scene.materials[p.material].ke) * p.area * row.val[e];
+                }
+            });
+            std::vector<std::uint32_t> order(scene.size());
+            for (std::uint32_t i = 0; i < scene.size(); ++i) order[i] = i;
+            std::sort(order.begin(), order.end(), [&](auto a, auto b) { return pw[a] > pw[b] || (pw[a] == pw[b] && a < b); });
+            double tot = 0, acc = 0;
+            for (double x : pw) tot += x;
+            std::size_t nf = 0;
+            for (std::uint32_t i : order) {
+                if (acc >= fine_share * tot) break;
+                acc += pw[i];
+                if (!fine[i]) ++nf;
+                fine[i] = true;
+            }
+            std::printf("fine rows: %zu emitting + %zu carrying %.1f%% of the first bounce\n", emitters, nf, 100 * acc / tot);
+        }
+        if (std::getenv("DIFF_OBJECT") && own_light) {
+            const std::string obj = std::getenv("DIFF_OBJECT");
+            std::vector<std::uint32_t> rr;
+            for (std::uint32_t i = 0; i < scene.size(); ++i)
+                if (scene.objects[scene.patches[i].object] == obj) rr.push_back(i);
+            std::vector<std::vector<double>> sa(rr.size(), std::vector<double>(scene.objects.size())), sb = sa;
+            std::size_t k = 0;
+            rest.provider().compute_rows(rr, [&](std::uint32_t, const SparseRow& row) {
+                for (std::size_t e = 0; e < row.col.size(); ++e) sa[k][scene.patches[row.col[e]].object] += row.val[e];
+                ++k;
+            });
+            k = 0;
+            light.provider().compute_rows(rr, [&](std::uint32_t, const SparseRow& row) {
+                for (std::size_t e = 0; e < row.col.size(); ++e) sb[k][scene.patches[row.col[e]].object] += row.val[e];
+                ++k;
+            });
+            for (std::size_t r = 0; r < rr.size(); ++r) {
+                const Vec3 c = scene.patches[rr[r]].centroid;
+                double ta = 0, tb = 0;
+                for (std::size_t o = 0; o < scene.objects.size(); ++o) ta += sa[r][o], tb += sb[r][o];
+                std::printf("row %u at %.0f %.0f %.0f sums %.4f %.4f:", rr[r], c.x, c.y, c.z, ta, tb);
+                for (std::size_t o = 0; o < scene.objects.size(); ++o) std::printf(" %+.2e", sb[r][o] - sa[r][o]);
+                std::printf("\n");
+            }
+        }
+        if (!fine_rows.empty()) {
+            std::istringstream in(fine_rows);
+            for (std::uint32_t r; in >> r;) fine[r] = true;
+        }
+        if (!fine_objects.empty()) {
+            std::size_t nf = 0;
+            for (std::uint32_t i = 0; i < scene.size(); ++i)
+                if ((fine_objects + ",").find(scene.objects[scene.patches[i].object] + ",") != std::string::npos) fine[i] = true, ++nf;
+            std::printf("fine rows: %zu of objects %s\n", nf, fine_objects.c_str());
+        }
+        SplitRowProvider both(own_light ? light.provider() : rest.provider(), rest.provider(), fine);
         const SolveResult r = solve_radiosity(scene, both, SolverOptions{});
         values.push_back(object_means(scene, r));
         std::printf("seed %llu: %llu shots, unshot %.2e, escaped / emitted %.4f%%\n", static_cast<unsigned long long>(seed),

@@ -55,6 +55,29 @@ FarField::FarField(const PatchSet& patches, const SpatialGrid& grid, const NearF
         // The budget, plus what rows made complete save: they are not measured at all.
         cost_ = estimate_cost(complete_);
         const double budget = options.far_field_budget_ns + complete_ * options.far_field_row_ns;
+        // Only the emitting rows (NearFieldOptions::far_field_emitters), when their cost fits
+        // what the budget allows the whole run: n_E × cost ≤ n × budget.
+        std::size_t emitting = 0;
+        if (cost_ > budget && options.far_field_emitters) {
+            only_.assign(n, 0);
+            for (std::size_t i = 0; i < n; ++i) {
+                const Vec3& e = scene.materials[scene.patches[i].material].ke;
+                only_[i] = e.r > 0 || e.g > 0 || e.b > 0;
+                emitting += only_[i];
+            }
+            if (emitting == 0 || static_cast<double>(emitting) * cost_ > static_cast<double>(n) * budget) {
+                only_.clear();
+                emitting = 0;
+            }
+        }
+        if (emitting > 0) {
+            only_rows_ = emitting;
+            make_rules();
+            status_ = fmt::format("on for the {} emitting rows only: estimated {:.3g} ms per row, over the budget of "
+                                  "{:.3g} ms for every row ({:.0f}% of rows complete)",
+                                  emitting, cost_ * 1e-6, budget * 1e-6, 100 * complete_);
+            return;
+        }
         if (cost_ > budget) {
             status_ = fmt::format("off: estimated {:.3g} ms per row, over the budget of {:.3g} ms ({:.0f}% of rows "
                                   "complete)",

@@ -45,6 +45,10 @@ public:
     FarField(const PatchSet& patches, const SpatialGrid& grid, const NearFieldOptions& options);
 
     bool on() const { return !planes_.empty(); }
+    // Whether row i gets far-field values: on, and i emits when only the emitting rows do
+    // (NearFieldOptions::far_field_emitters).
+    bool applies(std::uint32_t i) const { return on() && (only_.empty() || only_[i] != 0); }
+    std::size_t rows_only() const { return only_rows_; }  // emitting rows when only they do; 0: all
     std::size_t planes() const { return planes_.size(); }
     // Whether it is on and why, in words, for the run's report and log.
     const std::string& status() const { return status_; }
@@ -77,6 +81,8 @@ private:
         std::uint8_t n = 0;
     };
 
+    std::vector<std::uint8_t> only_;  // per patch, when only some rows get far-field values
+    std::size_t only_rows_ = 0;
     bool group_planes();  // false: more than kMaxPlanes
     void mark_sides();
     void make_rules();

@@ -386,7 +386,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
     NearFieldScratch::Buffers& b = scratch.buffers();
     b.occluder_level = -1;
     impl_->add_near_pairs(i, out, b);
-    if (impl_->far.on()) impl_->add_far_pairs(i, out, b);
+    if (impl_->far.applies(i)) impl_->add_far_pairs(i, out, b);
     if (impl_->automatic()) impl_->resolve_deferred(i, out, b);
     out.seconds = watch.seconds();
     out.done = true;

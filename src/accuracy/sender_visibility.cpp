@@ -4,6 +4,10 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "ffcube/geometry/polygon.hpp"
 
 namespace ffcube::accuracy {
 
@@ -25,7 +29,55 @@ double box_distance(const Box& b, const Vec3& p) {
     return glm::length(d);
 }
 
+
+// Whether segment a → b passes through the interior of the convex polygon `poly` (2D, counter-
+// clockwise) shrunk by `margin`, over a length of more than `margin` (Cyrus–Beck).
+bool segment_inside(const std::vector<std::array<double, 2>>& poly, const std::array<double, 2>& a,
+                    const std::array<double, 2>& b, double margin) {
+    double t0 = 0, t1 = 1;
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+        const auto& e0 = poly[k];
+        const auto& e1 = poly[(k + 1) % poly.size()];
+        const double mx = -(e1[1] - e0[1]), my = e1[0] - e0[0];  // inward (counter-clockwise)
+        const double len = std::hypot(mx, my);
+        const double f0 = (mx * (a[0] - e0[0]) + my * (a[1] - e0[1])) / len - margin;
+        const double f1 = (mx * (b[0] - e0[0]) + my * (b[1] - e0[1])) / len - margin;
+        if (f0 < 0 && f1 < 0) return false;
+        if (f0 < 0) t0 = std::max(t0, f0 / (f0 - f1));
+        if (f1 < 0) t1 = std::min(t1, f0 / (f0 - f1));
+    }
+    return (t1 - t0) * std::hypot(b[0] - a[0], b[1] - a[1]) > margin;
+}
+
 }  // namespace
+
+bool covers_part(const PatchSet& patches, std::uint32_t i, std::uint32_t q) {
+    const Patch& pi = patches.scene.patches[i];
+    const Patch& pq = patches.scene.patches[q];
+    const double tol = 2 * plane_tolerance(pi, pq);
+    const Poly& poly = patches.polys[q];
+    double lo = INFINITY, hi = -INFINITY;
+    for (std::size_t v = 0; v < poly.n; ++v) {
+        const double d = glm::dot(pi.normal, poly.v[v] - pi.centroid);
+        lo = std::min(lo, d);
+        hi = std::max(hi, d);
+    }
+    if (!(lo >= -tol && hi > tol && hi <= kCoverGap * pi.size)) return false;
+    if (!(glm::dot(pq.normal, pi.centroid - pq.centroid) < -tol)) return false;  // i sees q's back
+    // In i's plane, lengths in units of i's size: i's outline (counter-clockwise about its
+    // normal) and q's edges projected; margin 1e-6 (far above rounding, far below a patch).
+    Vec3 t, b;
+    orthonormal_basis(pi.normal, t, b);
+    const auto local = [&](const Vec3& x) {
+        return std::array<double, 2>{glm::dot(x - pi.centroid, t) / pi.size, glm::dot(x - pi.centroid, b) / pi.size};
+    };
+    std::vector<std::array<double, 2>> outline;
+    for (const Vec3& v : patches.polys[i].span()) outline.push_back(local(v));
+    for (std::size_t v = 0; v < poly.n; ++v)
+        if (segment_inside(outline, local(poly.v[v]), local(poly.v[(v + 1) % poly.n]), 1e-6)) return true;
+    return false;
+}
+
 
 int SenderVisibility::occluder_level(std::uint32_t i, std::vector<std::uint32_t>& near) const {
     const Scene& scene = patches_.scene;
@@ -54,8 +106,12 @@ int SenderVisibility::occluder_level_of_candidates(std::uint32_t i, const std::v
         // the other side of it from i's centroid (either side when the centroid is in the plane).
         const double side = glm::dot(pq.normal, pi.centroid - pq.centroid);
         // Seen from behind (i's centre inside a block standing on it): q shows its back, the
-        // centre sees nothing past it, and neither do points under the block.
-        if (side < -tol) continue;
+        // centre sees nothing past it, and neither do points under the block; but a cover
+        // (covers_part: a plate just in front of i over part of it) leaves the rest of i open.
+        if (side < -tol) {
+            if (covers_part(patches_, i, q)) return 2;
+            continue;
+        }
         bool behind = false;
         for (int c = 0; c < 8 && !behind; ++c) {
             const Vec3 corner(c & 1 ? scene_box_.hi.x : scene_box_.lo.x, c & 2 ? scene_box_.hi.y : scene_box_.lo.y,

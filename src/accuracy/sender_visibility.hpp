@@ -18,6 +18,21 @@
 
 namespace ffcube::accuracy {
 
+// A cover of patch i: a patch q that lies wholly in front of i's plane, close to it (every vertex
+// at most kCoverGap × i's size in front), shows i its back (i's centroid behind q's plane), and
+// whose outline, projected along i's normal onto i's plane, crosses i's interior. The part of i
+// under q sees q's back only; the rest sees the scene: i's centre does not see what i sees on
+// average (the Cornell box's light hangs 0.1 below the ceiling: a ceiling patch whose centroid
+// lies above the light's edge had an empty row, its exposed part seeing the room; docs/accuracy.md,
+// "Senders partly covered"). Such a sender is measured as one cut by a facet
+// (gl/exposed_points.hpp: points on its exposed part only).
+// kCoverGap: ExposedPoints counts a point as enclosed when its normal ray and rays 60° off it all
+// meet back faces, i.e. when it lies at least g·tan 60° = 1.73 g inside q's outline (g the gap);
+// the deepest point under q lies at most one size of i inside it, so for g > size/1.73 = 0.58 size
+// no point can count as enclosed and the exposed-point rule has nothing to leave out: 0.5.
+inline constexpr double kCoverGap = 0.5;
+bool covers_part(const PatchSet& patches, std::uint32_t i, std::uint32_t q);
+
 class SenderVisibility {
 public:
     // k: the near distance in sizes (NearFieldOptions::k).
@@ -31,7 +46,8 @@ public:
     // closed room, the ground under a wall) hides nothing and does not count.
     // Returns 0: no occluder; 1: an occluder; 2: an occluder touching i, its bounding box closer
     // to i's centroid than i's size (a wall rising from the sender's edge), whose silhouette
-    // sweeps across the sender. near: the caller's scratch.
+    // sweeps across the sender. Also 2: a cover of i (covers_part), which hides part of the
+    // sender from everything. near: the caller's scratch.
     int occluder_level(std::uint32_t i, std::vector<std::uint32_t>& near) const;
     // The same from `near` already holding the grid's candidates for i's reach (k × the larger of
     // i's size and the largest patch's, as the near-pair search queries it): no second query.

@@ -154,6 +154,16 @@ void add_row_options(CLI::App& app, RowOptions& o) {
         ->type_name("FILE");
 }
 
+void add_far_field_emitters_option(CLI::App& app, RowOptions& o) {
+    o.far_field_emitters = true;
+    app.add_option_function<std::string>(
+           "--far-field-emitters", [&o](const std::string& w) { o.far_field_emitters = w == "on"; },
+           "--correct near, --far-field auto: where the far field is over budget for every row, keep it for the "
+           "emitting patches' rows (they carry the direct term; docs/adaptive.md). on (default) or off")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->default_str("on");
+}
+
 void add_enforce_option(CLI::App& app, RowOptions& o) {
     add_word_option(app, "--enforce", o.enforce, parse_enforce_request, {"reciprocity", "closure", "both"},
                     "reciprocity, closure or both (closed scenes only) on the finished matrix", "");

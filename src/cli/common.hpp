@@ -38,6 +38,8 @@ void add_scene_options(CLI::App& app, SceneFlags& o);
 // --method, --resolution, --backend, --threads, --no-rotate, --seed, --rays, --correct,
 // --near-k, --far-field.
 void add_row_options(CLI::App& app, RowOptions& o);
+// --far-field-emitters on|off (solve and view; on by default): RowOptions::far_field_emitters.
+void add_far_field_emitters_option(CLI::App& app, RowOptions& o);
 // --enforce (formfactors only: it acts on the finished matrix).
 void add_enforce_option(CLI::App& app, RowOptions& o);
 

@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "accuracy/patch_set.hpp"
+#include "accuracy/sender_visibility.hpp"
 #include "accuracy/spatial_grid.hpp"
 #include "ffcube/geometry/polygon.hpp"
 
@@ -151,9 +152,14 @@ bool ExposedPoints::cut(std::uint32_t i) const {
     const Frame f(pi);
     const std::vector<P2> outline = local_polygon(f, patches_->polys[i]);
     std::vector<std::uint32_t> near;
-    grid_->query(patches_->boxes[i], near);
+    // The box grown by the largest gap of a cover (accuracy::covers_part), which need not touch i.
+    const accuracy::Box& box = patches_->boxes[i];
+    const Vec3 grow(accuracy::kCoverGap * pi.size);
+    grid_->query(accuracy::Box{box.lo - grow, box.hi + grow}, near);
     for (std::uint32_t q : near) {
         if (q == i) continue;
+        // A plate just in front of i over part of it (a light below a ceiling) encloses that part.
+        if (accuracy::covers_part(*patches_, i, q)) return true;
         const accuracy::Poly& poly = patches_->polys[q];
         const double tol = accuracy::plane_tolerance(pi, scene_.patches[q]);
         std::array<double, 4> d{};

@@ -44,7 +44,8 @@ public:
     ~ExposedPoints();
 
     // Whether a facet crosses the interior of patch i: some patch rises in front of i's plane and
-    // meets that plane along a segment that passes strictly inside i (not only along its edges).
+    // meets that plane along a segment that passes strictly inside i (not only along its edges),
+    // or a cover lies just in front of part of i (accuracy::covers_part: a light below a ceiling).
     bool cut(std::uint32_t i) const;
 
     // For a cut patch i with some part enclosed: the points on its exposed part and their

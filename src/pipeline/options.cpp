@@ -164,6 +164,7 @@ NearFieldOptions near_field_options(const RowOptions& o) {
     NearFieldOptions nf =
         near_field_options_for_hemicube(o.resolution, o.near_k, o.cost_model.pixel_ns, o.cost_model.cpu_scale);
     nf.far_field = o.far_field;
+    nf.far_field_emitters = o.far_field_emitters;
     nf.sub_hemicube_k = o.sub_hemicube_k;
     nf.exact_visibility_occluders = o.exact_visibility_occluders;
     if (o.exact_visibility_auto) {

@@ -112,6 +112,9 @@ FfmMetadata row_metadata(const RowOptions& o) {
         else if (!o.exact_visibility_auto && o.method == RowMethod::Hemicube)
             meta.settings += " exact_visibility=off";
         if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
+        // The emitting rows' far field (solve's default): their rows differ where it applies.
+        if (o.method == RowMethod::Hemicube && o.far_field_emitters && o.far_field == FarFieldMode::automatic)
+            meta.settings += " far_field_emitters=1";
         // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
             meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);

@@ -176,6 +176,7 @@ py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
 py::tuple solve(const py::object& what, const py::kwargs& kwargs) {
     Kwargs kw(kwargs, "solve");
     RowOptions ro;
+    ro.far_field_emitters = kw.flag("far_field_emitters", true);  // as `ffcube solve` (--far-field-emitters)
     kw.read_row_options(ro, /*enforce=*/false);
     SolverOptions so;
     kw.read_solver_options(so);

@@ -14,6 +14,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "ffcube/accuracy/near_field.hpp"
@@ -552,6 +553,47 @@ TEST(FarField, OffSwitch) {
         // On: every pair across, all beyond 3 sizes (d ≥ 1 = 6 H), none blocked.
         EXPECT_EQ(far, k.on ? 72u * 36u : 0u) << what;
         EXPECT_EQ(unproven, 0u) << what;
+    }
+}
+
+// NearFieldOptions::far_field_emitters: where automatic mode finds the far field over budget for
+// every row, it stays on for the emitting rows alone when their cost fits the run's budget,
+// n_E × cost ≤ n × budget: here 36 emitting patches ("high") of 72, so budgets in [cost/2, cost)
+// keep it on for them (0.75 cost), and below cost/2 (0.25 cost) it is off as before. The
+// emitting rows then get every far entry (36 each, as in OffSwitch), the others none.
+TEST(FarField, EmittingRowsOnlyWithinTheRunsBudget) {
+    using FarField = NearFieldOptions::FarField;
+    Scene s = test::make_scene({test::square_z("low", 0, true), test::square_z("high", 1, false)}, 0.17);
+    Material lamp = s.materials[s.patches[0].material];
+    lamp.ke = Vec3(1.0);
+    s.materials.push_back(lamp);
+    std::vector<bool> emits(s.size());
+    for (std::uint32_t i = 0; i < s.size(); ++i) {
+        emits[i] = s.patches[i].object == 1;
+        if (emits[i]) s.patches[i].material = static_cast<std::uint32_t>(s.materials.size() - 1);
+    }
+    ASSERT_EQ(std::count(emits.begin(), emits.end(), true), 36);
+    NearFieldOptions probe;
+    probe.far_field = FarField::automatic;
+    probe.far_field_budget_ns = 1e9;
+    const double cost = NearFieldCorrector(s, probe).far_field_cost_ns();
+    ASSERT_TRUE(std::isfinite(cost) && cost > 0);
+    for (const auto& [share, flag, on] : {std::tuple{0.75, true, true}, std::tuple{0.25, true, false},
+                                          std::tuple{0.75, false, false}}) {
+        NearFieldOptions o;
+        o.far_field = FarField::automatic;
+        o.far_field_budget_ns = share * cost;
+        o.far_field_emitters = flag;
+        const NearFieldCorrector c(s, o);
+        const std::string what = std::to_string(share) + (flag ? " emitters" : " all");
+        EXPECT_EQ(c.far_field_status().rfind(on ? "on for the 36 emitting rows only" : "off", 0), 0u)
+            << what << ": " << c.far_field_status();
+        for (std::uint32_t i = 0; i < s.size(); ++i) {
+            NearAnalysis a;
+            c.analyse(i, a);
+            EXPECT_EQ(a.far, on && emits[i]) << what << " row " << i;
+            EXPECT_EQ(a.far_entries, on && emits[i] ? 36u : 0u) << what << " row " << i;
+        }
     }
 }
 

@@ -9,8 +9,10 @@
 #include <cmath>
 #include <numbers>
 #include <random>
+#include <tuple>
 
 #include "accuracy/patch_set.hpp"
+#include "accuracy/sender_visibility.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
@@ -206,6 +208,33 @@ TEST(SubHemicubePolicy, NegativeKIsAnInputError) {
     EXPECT_THROW(NearFieldCorrector(s, o), InputError);
     o.sub_hemicube_k = NAN;
     EXPECT_THROW(NearFieldCorrector(s, o), InputError);
+}
+
+// A cover (accuracy::covers_part): a lamp plate 1e-4 below a ceiling [-1,1]² over its part
+// x > −0.375, facing the same way, so that the ceiling's centroid sees the lamp's back. The row
+// is planned at 4 × 4 (occluder level 2: the worker then puts its points on the exposed part),
+// where before the centroid's side of the lamp (behind it) made the lamp count for nothing. Not
+// a cover: the lamp over the whole ceiling, or at 1.2 below it (beyond kCoverGap × size 2 = 1).
+TEST(SubHemicubePolicy, PartlyCoveredSenderIsSampledFine) {
+    const auto scene = [](double gap, double from) {
+        return make({
+            {"ceiling", {{-1, -1, 1}, {-1, 1, 1}, {1, 1, 1}, {1, -1, 1}}},
+            {"lamp", {{from, -2, 1 - gap}, {from, 2, 1 - gap}, {2, 2, 1 - gap}, {2, -2, 1 - gap}}},
+            {"floor", {{-3, -3, -2}, {3, -3, -2}, {3, 3, -2}, {-3, 3, -2}}},
+        });
+    };
+    for (const auto& [gap, from, level] : {std::tuple{1e-4, -0.375, 2}, std::tuple{1e-4, -2.0, 0}, std::tuple{1.2, -0.375, 0}}) {
+        const Scene s = scene(gap, from);
+        ASSERT_EQ(s.patches[0].object, 0u);
+        const accuracy::PatchSet ps(s);
+        EXPECT_EQ(accuracy::covers_part(ps, 0, 1), level == 2) << "gap " << gap << " from " << from;
+        NearFieldOptions o;
+        const NearFieldCorrector c(s, o);
+        NearAnalysis a;
+        NearFieldScratch scratch;
+        c.plan_row(0, a, scratch);
+        EXPECT_EQ(a.occluder, level) << "gap " << gap << " from " << from;
+    }
 }
 
 }  // namespace

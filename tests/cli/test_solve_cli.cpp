@@ -402,3 +402,52 @@ TEST(SolveCli, StiffFurnaceConvergesAndUnconvergedExitsFive) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Issue 16 part 2 (docs/adaptive.md, "The default within 0.1%"): the built-in Cornell box at the
+// default settings, every object's mean luminance within 0.1% of R, the ray caster's reference on
+// the L = 15 mesh (two seeds, σ ≈ 0.024%; independent of the hemicube: area-averaged Monte Carlo
+// rows). The tolerance is the issue's target itself; the default meets it with 0.086% (the right
+// wall) where it was at 0.204% (the tall block) before the covered ceiling patches were measured
+// at their exposed points and the emitting rows got the far field. The report says the far field
+// ran on the 12 emitting rows only, and --far-field-emitters off turns that off.
+TEST(SolveCli, CornellDefaultWithinATenthOfAPercentOfTheRayCastersReference) {
+    TempDir dir;
+    const auto r = run_ffcube("solve -q --objects " + (dir / "o.csv") + " --report " + (dir / "r.json"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const std::map<std::string, double> ref{{"floor", 0.254843},      {"ceiling", 0.208008},     {"back_wall", 0.383158},
+                                            {"right_wall", 0.199734}, {"left_wall", 0.116416},   {"short_block", 0.267503},
+                                            {"tall_block", 0.339736}};
+    std::istringstream in(test::read_text(dir / "o.csv"));
+    std::string line;
+    std::getline(in, line);
+    std::size_t seen = 0;
+    while (std::getline(in, line)) {
+        std::vector<std::string> f;
+        std::stringstream ss(line);
+        for (std::string item; std::getline(ss, item, ',');) f.push_back(item);
+        ASSERT_EQ(f.size(), 5u) << line;
+        const auto it = ref.find(f[0]);
+        if (it == ref.end()) continue;  // the light
+        const double lum = 0.2126 * std::stod(f[2]) + 0.7152 * std::stod(f[3]) + 0.0722 * std::stod(f[4]);
+        EXPECT_NEAR(lum / it->second - 1, 0.0, 1e-3) << f[0];
+        ++seen;
+    }
+    EXPECT_EQ(seen, ref.size());
+    const auto report = nlohmann::json::parse(test::read_text(dir / "r.json"));
+    EXPECT_EQ(report["corrections"]["far_field"].get<std::string>().rfind("on for the 12 emitting rows only", 0), 0u)
+        << report["corrections"]["far_field"];
+    EXPECT_EQ(report["corrections"]["far_field_rows"], 12);
+    EXPECT_EQ(report["sub_hemicube_rows_partly_enclosed"], 12);
+
+    const auto off = run_ffcube("solve -q --far-field-emitters off --report " + (dir / "off.json"));
+    ASSERT_EQ(off.code, 0) << off.output;
+    const auto report_off = nlohmann::json::parse(test::read_text(dir / "off.json"));
+    EXPECT_EQ(report_off["corrections"]["far_field"].get<std::string>().rfind("off", 0), 0u);
+    EXPECT_EQ(report_off["corrections"]["far_field_rows"], 0);
+}
+
+}  // namespace
+}  // namespace ffcube

@@ -284,6 +284,13 @@ class Solve(unittest.TestCase):
         # Energy balance as the report gives it (the solver's own check, to its tolerance).
         self.assertLess(report["energy"]["relative_error"], 1e-6)
 
+    def test_far_field_emitters_as_the_command_line(self):
+        # solve()'s default is `ffcube solve`'s: the far field kept on the emitting rows where it is
+        # over budget for every row (docs/adaptive.md, "The default within 0.1%"); False turns it off.
+        for flag, start in ((True, "on for the"), (False, "off")):
+            _, report = ffcube.solve(None, patches=200, resolution=32, threads=2, far_field_emitters=flag, quiet=True)
+            self.assertTrue(report["corrections"]["far_field"].startswith(start), report["corrections"]["far_field"])
+
     def test_not_converged(self):
         with self.assertRaises(ffcube.NotConvergedError) as e:
             ffcube.solve(None, patches=200, resolution=16, max_iterations=1, quiet=True)

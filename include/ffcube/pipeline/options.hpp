@@ -81,6 +81,11 @@ struct RowOptions {
     // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
     // llvmpipe on the development machines).
     CostModel cost_model;
+    // NearFieldOptions::far_field_emitters (hemicube, --correct near): the far field on the
+    // emitting rows only where automatic mode finds it over budget for every row. `ffcube solve`
+    // (--far-field-emitters on|off) and Python's solve() turn it on by default; formfactors keeps
+    // its rows as before (off).
+    bool far_field_emitters = false;
 };
 
 // Parsers of the command line's words; each throws InputError naming the option and the words
