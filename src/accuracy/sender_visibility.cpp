@@ -29,9 +29,9 @@ double box_distance(const Box& b, const Vec3& p) {
     return glm::length(d);
 }
 
+}  // namespace
 
-// Whether segment a → b passes through the interior of the convex polygon `poly` (2D, counter-
-// clockwise) shrunk by `margin`, over a length of more than `margin` (Cyrus–Beck).
+// Declared in sender_visibility.hpp.
 bool segment_inside(const std::vector<std::array<double, 2>>& poly, const std::array<double, 2>& a,
                     const std::array<double, 2>& b, double margin) {
     double t0 = 0, t1 = 1;
@@ -48,8 +48,6 @@ bool segment_inside(const std::vector<std::array<double, 2>>& poly, const std::a
     }
     return (t1 - t0) * std::hypot(b[0] - a[0], b[1] - a[1]) > margin;
 }
-
-}  // namespace
 
 bool covers_part(const PatchSet& patches, std::uint32_t i, std::uint32_t q) {
     const Patch& pi = patches.scene.patches[i];

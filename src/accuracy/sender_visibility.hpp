@@ -10,6 +10,7 @@
 // whole rows of cells along a wall (docs/accuracy.md, "Senders beside an occluder").
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -31,6 +32,12 @@ namespace ffcube::accuracy {
 // the deepest point under q lies at most one size of i inside it, so for g > size/1.73 = 0.58 size
 // no point can count as enclosed and the exposed-point rule has nothing to leave out: 0.5.
 inline constexpr double kCoverGap = 0.5;
+
+// Whether segment a → b passes through the interior of the convex polygon `poly` (2D, counter-
+// clockwise) shrunk by `margin`, over a length of more than `margin` (Cyrus–Beck). Shared with
+// gl/exposed_points.cpp (enclosed cells).
+bool segment_inside(const std::vector<std::array<double, 2>>& poly, const std::array<double, 2>& a,
+                    const std::array<double, 2>& b, double margin);
 bool covers_part(const PatchSet& patches, std::uint32_t i, std::uint32_t q);
 
 class SenderVisibility {

@@ -102,24 +102,6 @@ std::vector<P2> local_polygon(const Frame& f, const accuracy::Poly& poly) {
     return out;
 }
 
-// Whether the segment a → b (local coordinates) passes through the convex polygon shrunk by
-// `margin` over a length of more than `margin` (Cyrus–Beck).
-bool segment_inside(const std::vector<P2>& poly, const P2& a, const P2& b, double margin) {
-    double t0 = 0, t1 = 1;
-    for (std::size_t k = 0; k < poly.size(); ++k) {
-        const P2& e0 = poly[k];
-        const P2& e1 = poly[(k + 1) % poly.size()];
-        const double mx = -(e1[1] - e0[1]), my = e1[0] - e0[0];  // inward (counter-clockwise)
-        const double len = std::hypot(mx, my);
-        const double f0 = (mx * (a[0] - e0[0]) + my * (a[1] - e0[1])) / len - margin;
-        const double f1 = (mx * (b[0] - e0[0]) + my * (b[1] - e0[1])) / len - margin;
-        if (f0 < 0 && f1 < 0) return false;
-        if (f0 < 0) t0 = std::max(t0, f0 / (f0 - f1));
-        if (f1 < 0) t1 = std::min(t1, f0 / (f0 - f1));
-    }
-    return (t1 - t0) * std::hypot(b[0] - a[0], b[1] - a[1]) > margin;
-}
-
 }  // namespace
 
 bool fit_weights(std::span<const P2> points, const Moments& target, std::vector<double>& w) {
@@ -188,7 +170,7 @@ bool ExposedPoints::cut(std::uint32_t i) const {
         };
         const Vec3 a = farthest(meet[0]), b = farthest(a);
         // Margin: 1e-6 of i's size, far above the rounding of the plane test, far below a cell.
-        if (segment_inside(outline, f.local(a), f.local(b), 1e-6)) return true;
+        if (accuracy::segment_inside(outline, f.local(a), f.local(b), 1e-6)) return true;
     }
     return false;
 }
