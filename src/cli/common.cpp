@@ -131,6 +131,12 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "(docs/accuracy.md). auto: on such scenes, for rows whose range holds at most a quarter of the "
                     "pieces; off (default): sub-hemicubes draw the whole scene",
                     "off");
+    add_word_option(app, "--fine-sub-hemicubes", o.fine_sub_hemicubes, parse_fine_sub_hemicubes,
+                    {"half", "three-eighths", "quarter"},
+                    "--correct near: the resolution of the 16 sub-hemicubes of a row planned at 4 x 4 (an occluder "
+                    "touches the sender; docs/accuracy.md). half (default): N/2; three-eighths: 3N/8; quarter: N/4 "
+                    "(cheaper, noisier rows: docs/benchmarks.md)",
+                    "half");
     app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
                    "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
         ->default_val(24.0);

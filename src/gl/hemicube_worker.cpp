@@ -61,6 +61,12 @@ constexpr std::size_t kOcclusionMinPieces = 128;
 constexpr std::size_t kOccluderCount = 32;
 
 int half_resolution(int n) { return n / 2 >= 8 && (n / 2) % 2 == 0 ? n / 2 : n; }
+int fine_resolution(int n, HemicubeOptions::FineSubResolution mode) {
+    using M = HemicubeOptions::FineSubResolution;
+    const int m = mode == M::quarter ? n / 4 : mode == M::three_eighths ? 3 * n / 8 : 0;
+    const bool exact = mode == M::quarter ? n % 4 == 0 : n % 8 == 0;
+    return mode != M::half && exact && m >= 8 && m % 2 == 0 ? m : half_resolution(n);
+}
 
 bool range_limits_sub_hemicubes(const HemicubeOptions& opt, std::size_t pieces, int n) {
     return opt.sub_hemicube_range == HemicubeOptions::SubHemicubeRange::automatic &&
@@ -70,6 +76,7 @@ bool range_limits_sub_hemicubes(const HemicubeOptions& opt, std::size_t pieces, 
 Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout,
        const HemicubeOptions& opt)
     : gl_(ctx.api()), scene_(scene), pieces_(pieces), layout_(layout), half_layout_(half_resolution(layout.resolution())),
+      quarter_layout_(fine_resolution(layout.resolution(), opt.fine_sub_resolution)),
       opt_(opt) {
     const gl::Api& gl = gl_;
     // The fragment shader specialised to the piece kinds of the scene: llvmpipe runs both
@@ -86,6 +93,8 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     back_program_ = gl::make_program(gl, "item shader (back faces)", shaders::item_vert, back_frag);
     target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
     half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
+    if (opt.fine_sub_resolution != HemicubeOptions::FineSubResolution::half)
+        quarter_target_ = gl::make_item_target(gl, quarter_layout_.atlas_width(), quarter_layout_.atlas_height());
     vao_ = gl::make_vertex_array(gl);
     vbo_ = gl::make_buffer(gl);
     static_vbo_ = gl::make_buffer(gl);
@@ -144,8 +153,10 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     for (std::size_t f = 0; f < 5; ++f) {
         face_m_[f] = layout.faces()[f];
         half_face_m_[f] = half_layout_.faces()[f];
+        quarter_face_m_[f] = quarter_layout_.faces()[f];
     }
     half_ids_.resize(static_cast<std::size_t>(half_layout_.atlas_width()) * half_layout_.atlas_height());
+    quarter_ids_.resize(static_cast<std::size_t>(quarter_layout_.atlas_width()) * quarter_layout_.atlas_height());
     for (auto& l : lists_) l.reserve(slots);
     all_idx_.reserve(slots * 2);
     ids_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
@@ -203,7 +214,7 @@ namespace {
 // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
 // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
 // (half) the half-resolution one of sub-hemicubes.
-void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st) {
+void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st) {
     const gl::Api& gl = gl_;
     const Patch& pa = scene_.patches[p];
     Stopwatch watch;
@@ -252,12 +263,13 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     st.prepare_seconds += watch.seconds();
     watch.restart();
 
-    gl.BindFramebuffer(GL_FRAMEBUFFER, (half ? half_target_ : target_).fbo.id());
-    const std::array<FaceSpec, 5>& faces = half ? half_face_m_ : face_m_;
+    gl.BindFramebuffer(GL_FRAMEBUFFER,
+                       (res == Res::full ? target_ : res == Res::half ? half_target_ : quarter_target_).fbo.id());
+    const std::array<FaceSpec, 5>& faces = res == Res::full ? face_m_ : res == Res::half ? half_face_m_ : quarter_face_m_;
     const double near = HemicubeRowProvider::kNear * pa.size;
     gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
     gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
-    if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, half, st);
+    if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, res, st);
     build_lists(false, &st);
     upload_lists();
     const GLuint zero_id[4] = {0, 0, 0, 0};
@@ -268,9 +280,9 @@ void Worker::render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& s
     gl.Finish();
     st.draw_seconds += watch.seconds();
     watch.restart();
-    const HemicubeLayout& lay = half ? half_layout_ : layout_;
+    const HemicubeLayout& lay = layout_of(res);
     gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_RED_INTEGER, GL_UNSIGNED_INT,
-                  (half ? half_ids_ : ids_).data());
+                  (res == Res::full ? ids_ : res == Res::half ? half_ids_ : quarter_ids_).data());
     gl::check_gl(gl, "hemicube rendering");
     st.readback_seconds += watch.seconds();
     st.hemicubes += 1;
@@ -294,7 +306,7 @@ void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_poi
         ++st.fine_rows_refined;
     }
     if (sub_points < 2) {
-        hemicube_row(p, scene_.patches[p].centroid, false, out, st);
+        hemicube_row(p, scene_.patches[p].centroid, Res::full, out, st);
         return;
     }
     begin_row();
@@ -313,26 +325,27 @@ void Worker::begin_row() {
     touched_.clear();
 }
 
-void Worker::hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st) {
+void Worker::hemicube_row(std::uint32_t p, const Vec3& at, Res res, SparseRow& out, HemicubeStats& st) {
     begin_row();
-    render(p, at, half, st);
-    accumulate(p, 1.0, half, st);
+    render(p, at, res, st);
+    accumulate(p, 1.0, res, st);
     take_row(out, st);
 }
 
 void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
     const auto v = scene_.patch_vertices(p);
     patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
-    accumulate_points(p, st);
+    const bool quarter = sub_points >= 4 && opt_.fine_sub_resolution != HemicubeOptions::FineSubResolution::half;
+    accumulate_points(p, quarter ? Res::quarter : Res::half, st);
 }
 
 // The weighted sum of half-resolution hemicubes at points_ (weights_) into acc_: four of them cost
 // about one full hemicube, and their average has about the pixel noise of one (each has twice the
 // relative noise).
-void Worker::accumulate_points(std::uint32_t p, HemicubeStats& st) {
+void Worker::accumulate_points(std::uint32_t p, Res res, HemicubeStats& st) {
     for (std::size_t q = 0; q < points_.size(); ++q) {
-        render(p, points_[q], true, st);
-        accumulate(p, weights_[q], true, st);
+        render(p, points_[q], res, st);
+        accumulate(p, weights_[q], res, st);
     }
 }
 
@@ -340,7 +353,7 @@ bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
     if (!exposed_) exposed_ = std::make_unique<ExposedPoints>(scene_);
     if (!exposed_->rule(p, points_, weights_)) return false;
     begin_row();
-    accumulate_points(p, st);
+    accumulate_points(p, Res::half, st);
     ++st.sampled_rows;
     ++st.partly_enclosed_rows;
     return true;
@@ -375,8 +388,8 @@ bool Worker::sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st)
     const auto v = scene_.patch_vertices(p);
     patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), 2, points_, weights_);
     sample_rows_.resize(points_.size());
-    for (std::size_t q = 0; q < points_.size(); ++q) hemicube_row(p, points_[q], true, sample_rows_[q], st);
-    hemicube_row(p, scene_.patches[p].centroid, true, centre_row_, st);
+    for (std::size_t q = 0; q < points_.size(); ++q) hemicube_row(p, points_[q], Res::half, sample_rows_[q], st);
+    hemicube_row(p, scene_.patches[p].centroid, Res::half, centre_row_, st);
     Stopwatch watch;
     SampleAgreementOptions o;
     const double n = half_layout_.resolution();
@@ -405,10 +418,10 @@ void Worker::touch(std::uint32_t j) {
 }
 
 // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
-void Worker::accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st) {
+void Worker::accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& st) {
     Stopwatch watch;
-    const std::vector<double>& w = (half ? half_layout_ : layout_).delta_ff();
-    const std::vector<std::uint32_t>& ids = half ? half_ids_ : ids_;
+    const std::vector<double>& w = layout_of(res).delta_ff();
+    const std::vector<std::uint32_t>& ids = res == Res::full ? ids_ : res == Res::half ? half_ids_ : quarter_ids_;
     const std::uint32_t self = p + 1;
     double back = 0.0, miss = 0.0;
     const std::size_t npix = ids.size();
@@ -515,11 +528,11 @@ void Worker::sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats
     std::fill(vis_.begin(), vis_.end(), 0.0);
     range_mode_ = RangeDraw::within_eye;
     for (std::size_t q = 0; q < points_.size(); ++q) {
-        render(p, points_[q], true, st);
+        render(p, points_[q], Res::half, st);
         accumulate_range_near(p, weights_[q], st);
     }
     range_mode_ = RangeDraw::not_near;
-    render(p, scene_.patches[p].centroid, false, st);
+    render(p, scene_.patches[p].centroid, Res::full, st);
     accumulate_range_far(p, st);
 }
 
@@ -734,7 +747,7 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
 // pixel ends at least as near, and the left-out piece could not have won one. The item buffer is
 // bitwise the same as without (test OcclusionCulling.*); the choice of occluders only decides how much
 // is left out, never what the hemicube shows, so rows do not depend on which worker drew what.
-void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st) {
+void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, HemicubeStats& st) {
     const gl::Api& gl = gl_;
     // Occluders: front pieces the last hemicube showed (the same surroundings for the next
     // sub-hemicube of a row, often for the next row), and the kOccluderCount front pieces of the
@@ -774,7 +787,7 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, bool hal
     gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
     draw_lists(faces, near, 1);
     gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    const HemicubeLayout& lay = half ? half_layout_ : layout_;
+    const HemicubeLayout& lay = layout_of(res);
     gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_DEPTH_COMPONENT, GL_FLOAT, depth_.data());
     const std::span<const float> depth(depth_.data(), static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height());
     for (std::size_t f = 0; f < 5; ++f) tiles_[f].build(depth, lay.atlas_width(), faces[f].viewport);

@@ -25,6 +25,10 @@ inline constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
 
 // Resolution of sub-hemicubes: half the row's, when that is still a valid resolution (even, ≥ 8).
 int half_resolution(int n);
+// Resolution of the sub-hemicubes of a 4 × 4 row (HemicubeOptions::fine_sub_resolution): half_resolution(n),
+// 3n/8 (three_eighths, N = 128: 48) or n/4 (quarter, N = 128: 32), where that is a valid
+// resolution (even, ≥ 8); half_resolution(n) where it is not.
+int fine_resolution(int n, HemicubeOptions::FineSubResolution mode);
 
 // Whether rows of sub-hemicubes may be range-limited on a scene of `pieces` pieces at the row
 // resolution n (HemicubeOptions::sub_hemicube_range automatic, enough pieces, a half resolution
@@ -39,11 +43,13 @@ public:
            const HemicubeOptions& opt);
 
     // Renders patch p's hemicube into ids() (the atlas).
-    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, false, st); }
+    void render(std::uint32_t p, HemicubeStats& st) { render(p, scene_.patches[p].centroid, Res::full, st); }
     // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
     // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
     // (half) the half-resolution one of sub-hemicubes.
-    void render(std::uint32_t p, const Vec3& at, bool half, HemicubeStats& st);
+    // Which atlas a hemicube is drawn into: the row's resolution, half_resolution or quarter_resolution.
+    enum class Res { full, half, quarter };
+    void render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st);
     // Row p: one hemicube at the centroid (sub_points 0), or the average of sub-hemicubes at the
     // patch's sub_points × sub_points quadrature points (2 or 4), each with its own visibility.
     void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points = 0);
@@ -57,7 +63,7 @@ private:
         bool back;
         bool occluder = false;  // drawn first by occlude()
     };
-    void accumulate(std::uint32_t p, double weight, bool half, HemicubeStats& st);
+    void accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& st);
     // The sub-hemicubes at sub_points × sub_points points into acc_/touched_ (this epoch_).
     void sample(std::uint32_t p, int sub_points, HemicubeStats& st);
     // Adaptive sampling of a 4 × 4 row: the 2 × 2 samples and the centre, each its own row, then judge_samples;
@@ -69,7 +75,7 @@ private:
     void take_row(SparseRow& out, HemicubeStats& st);
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
-    void accumulate_points(std::uint32_t p, HemicubeStats& st);
+    void accumulate_points(std::uint32_t p, Res res, HemicubeStats& st);
     // Range-limited sub-hemicubes (HemicubeOptions::sub_hemicube_range): whether row p uses them,
     // the row into acc_/touched_, and its two accumulations (near entries and the far visibility
     // from a sub-hemicube; far entries from the centroid's hemicube).
@@ -82,9 +88,12 @@ private:
     void touch(std::uint32_t j);  // column j enters the row being made (epoch_) at 0
     void end_seen();  // the pieces the last hemicube showed become the next one's occluders
     // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
-    void hemicube_row(std::uint32_t p, const Vec3& at, bool half, SparseRow& out, HemicubeStats& st);
+    void hemicube_row(std::uint32_t p, const Vec3& at, Res res, SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
-    void occlude(const std::array<FaceSpec, 5>& faces, double near, bool half, HemicubeStats& st);
+    void occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, HemicubeStats& st);
+    const HemicubeLayout& layout_of(Res res) const {
+        return res == Res::full ? layout_ : res == Res::half ? half_layout_ : quarter_layout_;
+    }
     void build_lists(bool occluders_only, HemicubeStats* st);
     void upload_lists();
     void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes);
@@ -94,13 +103,14 @@ private:
     const ScenePieces& pieces_;
     const HemicubeLayout& layout_;
     const HemicubeLayout half_layout_;  // sub-hemicubes (half_resolution)
+    const HemicubeLayout quarter_layout_;  // 4 × 4 rows' sub-hemicubes under FineSubResolution::quarter
     const HemicubeOptions& opt_;
     // Test hook (docs/robustness.md): FFCUBE_TEST_WORKER_FAIL=input|io|internal|gl makes every
     // row throw that class of error, from inside the worker (thread or process). 0: unset.
     int test_fail_ = 0;
-    std::array<FaceSpec, 5> face_m_, half_face_m_;
+    std::array<FaceSpec, 5> face_m_, half_face_m_, quarter_face_m_;
     gl::Program program_, back_program_;
-    gl::ItemTarget target_, half_target_;
+    gl::ItemTarget target_, half_target_, quarter_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
     GLint u_face_ = -1, u_back_face_ = -1;
@@ -118,7 +128,7 @@ private:
     std::array<FaceDepthTiles, 5> tiles_;
     std::vector<Vec3> corners_;
     std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
-    std::vector<std::uint32_t> ids_, half_ids_;
+    std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;
     std::vector<double> acc_;
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;

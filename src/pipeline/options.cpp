@@ -53,6 +53,13 @@ SubHemicubeRange parse_sub_hemicube_range(std::string_view text) {
     throw InputError(fmt::format("--sub-hemicube-range {}: must be auto or off", text));
 }
 
+FineSubResolution parse_fine_sub_hemicubes(std::string_view text) {
+    if (text == "quarter") return FineSubResolution::quarter;
+    if (text == "three-eighths") return FineSubResolution::three_eighths;
+    if (text == "half") return FineSubResolution::half;
+    throw InputError(fmt::format("--fine-sub-hemicubes {}: must be half, three-eighths or quarter", text));
+}
+
 ContactCuts parse_contact_cuts(std::string_view text) {
     if (text == "auto") return ContactCuts::Auto;
     if (text == "on") return ContactCuts::On;
@@ -139,6 +146,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.adaptive_sampling = o.adaptive_sampling;
     h.sub_hemicube_range = o.sub_hemicube_range;
     h.sub_hemicube_range_k = o.sub_hemicube_range_k;
+    h.fine_sub_resolution = o.fine_sub_hemicubes;
     return h;
 }
 

@@ -118,6 +118,10 @@ FfmMetadata row_metadata(const RowOptions& o) {
         // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
             meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);
+        // 4 × 4 rows at 3N/8 or N/4 instead of N/2: other rows where a scene has such rows.
+        if (o.method == RowMethod::Hemicube && o.fine_sub_hemicubes != FineSubResolution::half)
+            meta.settings += o.fine_sub_hemicubes == FineSubResolution::quarter ? " fine_sub_hemicubes=quarter"
+                                                                                : " fine_sub_hemicubes=three-eighths";
         // A cost model moves the automatic choices (far field, exact visibility): recorded when
         // it is not the built-in one.
         if (o.method == RowMethod::Hemicube && !o.cost_model.builtin())

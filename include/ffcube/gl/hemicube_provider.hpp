@@ -52,6 +52,11 @@ struct HemicubeOptions {
     // at most this share of the scene's pieces: elsewhere the extra full hemicube costs more than
     // the sub-hemicubes save (docs/benchmarks.md, "Range-limited sub-hemicubes").
     double sub_hemicube_range_max_share = 0.25;
+    // The sub-hemicubes of a 4 × 4 row (RowPlan::sampled_fine: an occluder touches the sender)
+    // are drawn at half_resolution (N/2) or quarter_resolution (N/4) (docs/accuracy.md,
+    // "Senders an occluder touches: 4 × 4 sub-hemicubes"). 2 × 2 rows stay at N/2 either way.
+    enum class FineSubResolution { half, three_eighths, quarter };
+    FineSubResolution fine_sub_resolution = FineSubResolution::half;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
