@@ -14,6 +14,7 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "gl/hemicube_worker.hpp"
 #include "support/scenes.hpp"
+#include "support/rows.hpp"
 
 namespace ffcube {
 namespace {
@@ -31,11 +32,7 @@ SparseRow row_of(const Scene& scene, HemicubeOptions o, std::uint32_t p, Plan pl
     return out;
 }
 
-double entry(const SparseRow& r, std::uint32_t j) {
-    for (std::size_t k = 0; k < r.col.size(); ++k)
-        if (r.col[k] == j) return r.val[k];
-    return 0.0;
-}
+using test::entry;
 
 TEST(FineSubHemicubes, ResolutionsAreValidOrFallBackToHalf) {
     EXPECT_EQ(fine_resolution(128, Fine::half), 64);

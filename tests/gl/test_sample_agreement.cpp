@@ -16,6 +16,7 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "gl/sample_agreement.hpp"
 #include "support/scenes.hpp"
+#include "support/rows.hpp"
 
 namespace ffcube {
 namespace {
@@ -72,11 +73,7 @@ std::vector<SparseRow> rows_at(const WallScene& w, const std::vector<Vec3>& poin
     return rows;
 }
 
-double entry(const SparseRow& r, std::uint32_t j) {
-    for (std::size_t a = 0; a < r.nnz(); ++a)
-        if (r.col[a] == j) return r.val[a];
-    return 0.0;
-}
+using test::entry;
 
 SampleAgreementOptions options() {
     SampleAgreementOptions o;

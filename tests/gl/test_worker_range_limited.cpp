@@ -21,6 +21,7 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/hemicube/layout.hpp"
 #include "support/scenes.hpp"
+#include "support/rows.hpp"
 
 namespace ffcube {
 namespace {
@@ -36,11 +37,7 @@ std::map<std::uint32_t, SparseRow> rows_of(const Scene& scene, HemicubeOptions o
     return out;
 }
 
-double entry(const SparseRow& r, std::uint32_t j) {
-    for (std::size_t k = 0; k < r.col.size(); ++k)
-        if (r.col[k] == j) return r.val[k];
-    return 0.0;
-}
+using test::entry;
 
 // A unit square sender on the ground (z = 0, facing up), a unit square occluder 2 above it
 // (facing down: near, within R = 24 sizes), and a plate 8000 wide 40 above (facing down: wholly
