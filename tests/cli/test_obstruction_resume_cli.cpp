@@ -4,13 +4,19 @@
 // --view3d and --elmer byte-identical to an uninterrupted run.
 //
 // The interruption: a SIGKILL leaves the checkpoint's log as a prefix of the uninterrupted run's
-// records, possibly ending in a torn record (docs/robustness.md). These scenes have 3 to 5 rows
-// that take milliseconds, too few to kill reliably in flight (test_resume_cli.cpp kills a
-// 2,000-row run instead), so the test makes those states directly: a finished checkpoint's log cut
-// at record boundaries and inside records, each then resumed.
+// records, possibly ending in a torn record (docs/robustness.md). With --no-subdivide these scenes
+// have 3 to 5 rows that take milliseconds, too few to kill reliably in flight, so those tests make
+// the states directly: a finished checkpoint's log cut at record boundaries and inside records,
+// each then resumed. One test kills a meshed lidded box (1,445 rows) with SIGKILL, as
+// test_resume_cli.cpp does.
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
+#include <thread>
 #include <string>
 #include <vector>
 
@@ -84,6 +90,60 @@ TEST(ObstructionResumeCli, NullAndMaskSurfacesResumeToTheUninterruptedBytes) {
                                             "\nS 3 9 12 11 10 0 0 0.9 opposite\nEnd\n");
         expect_resumes_byte_identical(dir / "w.vs3");
     }
+}
+
+std::vector<std::string> split(const std::string& s) {
+    std::vector<std::string> v;
+    std::size_t b = 0;
+    while (b < s.size()) {
+        const std::size_t e = s.find(' ', b);
+        const std::size_t end = e == std::string::npos ? s.size() : e;
+        if (end > b) v.push_back(s.substr(b, end - b));
+        b = end + 1;
+    }
+    return v;
+}
+
+// The lidded box meshed (1,445 rows at 64², about a second of one worker on llvmpipe), killed with
+// SIGKILL once some rows (records of about 9 KB) are in the log, then resumed.
+TEST(ObstructionResumeCli, KilledMeshedLiddedBoxResumesToTheUninterruptedBytes) {
+    TempDir dir;
+    const std::string job = "formfactors " + test::example("lidded_box.vs3") + " --patches 2000 --resolution 64 --threads 1 -q";
+    const std::string ck = dir / "ck";
+    const std::vector<std::string> args = split(job + outputs(dir, "killed-") + " --checkpoint " + ck);
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        std::vector<char*> argv{const_cast<char*>(FFCUBE_BINARY)};
+        for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        execv(FFCUBE_BINARY, argv.data());
+        _exit(127);
+    }
+    const fs::path rows = fs::path(ck) / "rows.log";
+    bool exited = false;
+    int status = 0;
+    for (;;) {
+        std::error_code ec;
+        if (fs::file_size(rows, ec) >= 64 * 1024 && !ec) break;
+        if (waitpid(pid, &status, WNOHANG) == pid) {
+            exited = true;
+            break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ASSERT_FALSE(exited) << "the run ended (status " << status << ") before it could be killed";
+    ::kill(pid, SIGKILL);
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    EXPECT_FALSE(fs::exists(dir / "killed-F.ffm"));
+
+    const auto resumed = run_ffcube(job + outputs(dir, "resumed-") + " --checkpoint " + ck + " --resume");
+    ASSERT_EQ(resumed.code, 0) << resumed.output;
+    const auto plain = run_ffcube(job + outputs(dir, "plain-"));
+    ASSERT_EQ(plain.code, 0) << plain.output;
+    for (const std::string& out : kOutputs)
+        EXPECT_TRUE(read_text(dir / ("resumed-" + out)) == read_text(dir / ("plain-" + out))) << out << " differs";
 }
 
 // A checkpoint made for the scene without its obstruction is not resumed by the scene with it:
