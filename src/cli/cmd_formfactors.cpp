@@ -54,13 +54,25 @@ struct Figures {
 using RowSinkFn = std::function<void(std::uint32_t, RowView)>;
 using RowFeed = std::function<std::optional<RanksFigures>(const RowSinkFn&)>;
 
+// Per row, the share obstruction-only surfaces intercepted (for the sky outputs; empty without
+// them): under mpirun the ranks' gathered on rank 0; with a checkpoint the shares stored with its
+// rows (reused or computed: a resumed run's are the uninterrupted run's bits); else the
+// RowSource's, which saw every row.
+std::span<const double> obstructed_shares(const Scene& scene, const RowSource& rows, const RowCheckpoint* cp,
+                                          const std::optional<RanksFigures>& ranks) {
+    if (!scene.drawn) return {};
+    if (ranks) return ranks->obstructed;
+    if (cp) return cp->obstructed();
+    return rows.obstructed();
+}
+
 // Rows straight to the outputs as they come (.ffm, .mtx, Elmer's file: MatrixSink), statistics
 // from the stream and from passes over a written .ffm: memory independent of the number of entries
 // (docs/robustness.md). The computed rows go to an .ffm: the output itself, or a scratch file when
 // the output is a .mtx or with --enforce, whose enforced rows then go to the outputs
 // (pipeline/enforcement.hpp).
 Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const RowFeed& feed,
-                 const FfmMetadata& written, Report& report) {
+                 const FfmMetadata& written, Report& report, const RowCheckpoint* cp) {
     const bool progress = !o.scene.quiet;
     const bool enforce = rows.options().enforce != EnforceRequest::None;
     const bool ffm = o.output.ends_with(".ffm");
@@ -158,7 +170,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     f.reciprocity.object_max_rel = final_checks->object_max_rel();
     if (!o.groups.empty()) f.groups = final_checks->object_factors();
     report.set("time.statistics", watch.seconds());
-    write_surface_outputs(o.outputs, sums, *final_checks, scene, report, rows.obstructed());
+    write_surface_outputs(o.outputs, sums, *final_checks, scene, report, obstructed_shares(scene, rows, cp, ranks));
     return f;
 }
 
@@ -166,7 +178,8 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
 // `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
-                  const FfmMetadata& written, Report& report, const std::optional<RanksFigures>& ranks) {
+                  const FfmMetadata& written, Report& report, const std::optional<RanksFigures>& ranks,
+                  const RowCheckpoint* cp) {
     const bool progress = !o.scene.quiet;
     Figures f;
     Stopwatch watch;
@@ -187,7 +200,7 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
         write_mtx(o.output, F, &bar);
     }
     if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
-    write_surface_outputs(o.outputs, F, scene, report, progress, rows.obstructed());
+    write_surface_outputs(o.outputs, F, scene, report, progress, obstructed_shares(scene, rows, cp, ranks));
     report.set("time.writing", watch.seconds());
     return f;
 }
@@ -236,14 +249,14 @@ int run(const Options& o) {
         const RowFeed feed = [&](const RowSinkFn& sink) -> std::optional<RanksFigures> {
             if (distributed)
                 return mpi_stream_rows(rows, scene, row_options, o.checkpoint, meta, o.output, report, progress, sink);
-            stream_rows(rows.provider(), cp, progress, sink);
+            stream_rows(rows.provider(), cp, progress, sink, rows.obstructed());
             return std::nullopt;
         };
         if (!mpi_root()) {  // this rank's block computed and sent to rank 0: its part is done
             feed({});
             return 0;
         }
-        f = streamed(o, scene, rows, feed, written, report);
+        f = streamed(o, scene, rows, feed, written, report, cp);
     } else {
         Stopwatch watch;
         CsrMatrix computed;
@@ -255,9 +268,9 @@ int run(const Options& o) {
             if (!all) return 0;
             computed = std::move(*all);
         } else {
-            computed = compute_matrix(rows.provider(), cp, !o.scene.quiet);
+            computed = compute_matrix(rows.provider(), cp, !o.scene.quiet, rows.obstructed());
         }
-        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report, ranks);
+        f = in_memory(o, scene, rows, std::move(computed), watch.seconds(), written, report, ranks, cp);
     }
     const double seconds = f.seconds;
     report.set("seconds", seconds);

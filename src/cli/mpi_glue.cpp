@@ -74,7 +74,7 @@ std::optional<RowCheckpoint> open_shard(const CheckpointOptions& checkpoint, con
 
 // The rows of [first, last) missing from the store, each appended to it as it comes.
 void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t first, std::uint32_t last,
-                  bool progress) {
+                  bool progress, std::span<const double> obstructed) {
     std::vector<std::uint32_t> todo;
     for (std::uint32_t i = first; i < last; ++i)
         if (!store.has(i)) todo.push_back(i);
@@ -82,17 +82,29 @@ void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t fir
     {
         Progress bar("rows (rank 0's block)", todo.size(), progress && mpi::rank() == 0);
         provider.compute_rows(todo, [&](std::uint32_t i, const SparseRow& row) {
-            store.append(i, row);
+            store.append(i, row, obstructed.empty() ? 0.0 : obstructed[i]);
             bar.add();
         });
     }
     store.sync();
 }
 
-// The closure evidence of every rank's rows (a process's providers saw only its own), on rank 0.
-// Collective.
-RanksFigures reduce_figures(const RowSource& rows) {
+// The closure evidence of every rank's rows (a process's providers saw only its own), and with
+// obstruction-only surfaces every row's obstructed share, on rank 0. Collective. This rank's rows
+// are [first, last); store: where they wait (their shares as stored, reused rows' included), or
+// null (the RowSource computed them all).
+RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint32_t first, std::uint32_t last,
+                            const RowCheckpoint* store) {
     RanksFigures figures;
+    if (scene.drawn) {
+        // Zeros outside this rank's block: the sum over the ranks is each row's owner's value,
+        // bit for bit (x + 0 = x exactly, in any order).
+        figures.obstructed.assign(scene.size(), 0.0);
+        const std::span<const double> mine = store ? store->obstructed() : rows.obstructed();
+        FFCUBE_CHECK(mine.size() == scene.size());
+        for (std::uint32_t i = first; i < last; ++i) figures.obstructed[i] = mine[i];
+        mpi::reduce_sum_to_root(figures.obstructed);
+    }
     figures.evidence = closure_evidence(rows);
     double miss = std::isnan(figures.evidence.hemicube_miss_weight) ? 0.0 : figures.evidence.hemicube_miss_weight;
     mpi::reduce_sum_to_root(std::span(&miss, 1));
@@ -140,6 +152,7 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene,
     info("{} ranks; rank 0 computes rows {}..{} of {}", k, bounds[0], bounds[1], scene.size());
     report.set("mpi.rows_rank0", bounds[1] - bounds[0]);
     mpi::RowBlock mine;
+    std::optional<RowCheckpoint> shard;
     if (checkpoint.dir.empty()) {
         std::vector<std::uint32_t> list;
         for (std::uint32_t i = first; i < last; ++i) list.push_back(i);
@@ -152,10 +165,11 @@ std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene,
         });
     } else {
         std::optional<RowCheckpoint> c = open_shard(checkpoint, scene, meta, report);
-        compute_into(provider, *c, first, last, progress);
+        compute_into(provider, *c, first, last, progress, rows.obstructed());
         c->read_rows(first, last, mine.nnz, mine.col, mine.val);  // bit-identical to the rows as computed
+        shard = std::move(c);
     }
-    const RanksFigures reduced = reduce_figures(rows);
+    const RanksFigures reduced = reduce_figures(rows, scene, first, last, shard ? &*shard : nullptr);
     if (figures) *figures = reduced;
     return mpi::gather_rows(static_cast<std::uint32_t>(scene.size()), bounds, mine);
 }
@@ -184,7 +198,7 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
         store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta));
     }
     if (store) {
-        compute_into(provider, *store, first, last, progress);
+        compute_into(provider, *store, first, last, progress, rows.obstructed());
         if (r == 0) {  // rank 0's block read back from its shard, bit-identical to the rows as computed
             mpi::RowBlock row;
             for (std::uint32_t i = first; i < last; ++i) {
@@ -207,7 +221,7 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
             bar.add();
         });
     }
-    const RanksFigures figures = reduce_figures(rows);
+    const RanksFigures figures = reduce_figures(rows, scene, first, last, store ? &*store : nullptr);
     if (r != 0) {
         mpi::serve_rows(first, last, [&](std::uint32_t i, mpi::RowBlock& chunk) {
             store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val);

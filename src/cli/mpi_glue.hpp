@@ -41,10 +41,13 @@ Scene mpi_load_and_mesh(const SceneOptions& options, Report& report);
 
 
 // What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
-// own block only: reduced over the ranks onto rank 0. (RowSource::obstructed() needs no such
-// reduction: scenes with obstruction-only surfaces are refused under mpirun, io/scene_blob.hpp.)
+// own block only: reduced over the ranks onto rank 0.
 struct RanksFigures {
     ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
+    // With obstruction-only surfaces (Scene::drawn): every row's obstructed share
+    // (RowSource::obstructed(), or a reused row's from its rank's checkpoint shard), each from the
+    // rank that owns the row; empty without them.
+    std::vector<double> obstructed;
 };
 
 // Every rank computes its block of rows (pipeline/row_partition.hpp), through its own shard of

@@ -25,17 +25,14 @@ CheckpointManifest checkpoint_manifest(const Scene& scene, const FfmMetadata& me
     m.meshing = scene.stats.how;
     m.max_patch_edge = scene.stats.max_patch_edge;
     m.meta = meta;
+    // Each row's obstructed share goes with it: a resumed row needs it for the sky.
+    m.obstructions = scene.drawn != nullptr;
     return m;
 }
 
 std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const Scene& scene, const FfmMetadata& meta,
                                              Report& report) {
     if (o.dir.empty()) return std::nullopt;
-    // A resumed row would come back without the share the obstructions intercepted (the sky).
-    if (scene.drawn)
-        throw InputError(fmt::format("--checkpoint: {} has obstruction-only surfaces (O): checkpoints are not supported for "
-                                     "them yet",
-                                     scene.source));
     const CheckpointManifest m = checkpoint_manifest(scene, meta);
     RowCheckpoint c = o.resume ? RowCheckpoint::resume(o.dir, m) : RowCheckpoint::create(o.dir, m);
     for (const std::string& w : c.warnings()) log_warning(w);
@@ -49,12 +46,12 @@ std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const S
 namespace {
 
 // The rows missing from the checkpoint, each appended to its log as it comes.
-void compute_into(RowProvider& provider, RowCheckpoint& checkpoint, bool progress) {
+void compute_into(RowProvider& provider, RowCheckpoint& checkpoint, bool progress, std::span<const double> obstructed) {
     const std::vector<std::uint32_t> rows = checkpoint.missing();
     {
         Progress bar("rows", rows.size(), progress);
         provider.compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) {
-            checkpoint.append(i, row);
+            checkpoint.append(i, row, obstructed.empty() ? 0.0 : obstructed[i]);
             bar.add();
         });
     }
@@ -63,7 +60,8 @@ void compute_into(RowProvider& provider, RowCheckpoint& checkpoint, bool progres
 
 }  // namespace
 
-CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress) {
+CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
+                         std::span<const double> obstructed) {
     const std::uint32_t n = provider.size();
     if (!checkpoint) {
         CsrMatrix F(n);
@@ -76,12 +74,12 @@ CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool 
         });
         return F;
     }
-    compute_into(provider, *checkpoint, progress);
+    compute_into(provider, *checkpoint, progress, obstructed);
     return checkpoint->assemble();
 }
 
 void stream_rows(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
-                 const std::function<void(std::uint32_t, RowView)>& sink) {
+                 const std::function<void(std::uint32_t, RowView)>& sink, std::span<const double> obstructed) {
     const std::uint32_t n = provider.size();
     if (!checkpoint) {
         Progress bar("rows", n, progress);
@@ -96,7 +94,7 @@ void stream_rows(RowProvider& provider, RowCheckpoint* checkpoint, bool progress
         });
         return;
     }
-    compute_into(provider, *checkpoint, progress);
+    compute_into(provider, *checkpoint, progress, obstructed);
     Progress bar("rows from the checkpoint", n, progress);
     checkpoint->for_each_row([&](std::uint32_t i, RowView row) {
         sink(i, row);

@@ -35,14 +35,18 @@ std::optional<RowCheckpoint> open_checkpoint(const CheckpointOptions& o, const S
 
 // Every row of F. Without a checkpoint, rows go straight into the matrix. With one, only the rows
 // missing from it are computed, each appended to the log as it comes, and the matrix is then read
-// back from the log in row order: bit-identical to an uninterrupted run.
-CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress);
+// back from the log in row order: bit-identical to an uninterrupted run. obstructed: the
+// provider's per-row obstructed shares (RowSource::obstructed(), set before each row reaches the
+// sink; empty without obstruction-only surfaces), stored with each row in the checkpoint, whose
+// obstructed() then holds every row's, reused or computed.
+CsrMatrix compute_matrix(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
+                         std::span<const double> obstructed = {});
 
 // The same rows, each handed to sink in row order as the float row CsrMatrix would hold
 // (bit-identical to compute_matrix's), without holding the matrix: straight from the provider,
 // or, with a checkpoint, the missing rows computed into the log and then every row read back
 // from it one at a time.
 void stream_rows(RowProvider& provider, RowCheckpoint* checkpoint, bool progress,
-                 const std::function<void(std::uint32_t, RowView)>& sink);
+                 const std::function<void(std::uint32_t, RowView)>& sink, std::span<const double> obstructed = {});
 
 }  // namespace ffcube::cli

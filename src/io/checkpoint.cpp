@@ -26,13 +26,17 @@ constexpr std::size_t kHeader = 16, kTrailer = 8;
 constexpr float kMaxValue = 1.001f;  // as the .ffm reader: F entries are fractions, with rounding room
 constexpr const char* kManifestName = "manifest.txt";
 constexpr const char* kLogName = "rows.log";
-constexpr const char* kFormatLine = "ffcube-checkpoint 1";
+constexpr const char* kFormatLine = "ffcube-checkpoint 2";  // written; format 1 is still read
+constexpr const char* kFormatLine1 = "ffcube-checkpoint 1";  // before the obstructed shares (flags always 0)
+constexpr std::uint32_t kFlagObstructed = 1;                 // an f64 obstructed share after the values
 
 double now_seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-std::uint64_t record_size(std::uint32_t nnz) { return kHeader + 8 * std::uint64_t(nnz) + kTrailer; }
+std::uint64_t record_bytes(std::uint32_t nnz, std::uint32_t flags) {
+    return kHeader + 8 * std::uint64_t(nnz) + ((flags & kFlagObstructed) ? 8 : 0) + kTrailer;
+}
 
 std::uint32_t get_u32(const unsigned char* p) {
     std::uint32_t v;
@@ -48,7 +52,8 @@ std::vector<std::pair<std::string, std::string>> manifest_fields(const Checkpoin
             {"max_patch_edge", fmt::format("{:.17g}", m.max_patch_edge)},
             {"method", m.meta.method},
             {"resolution", std::to_string(m.meta.resolution)},
-            {"settings", m.meta.settings}};
+            {"settings", m.meta.settings},
+            {"obstructions", m.obstructions ? "1" : "0"}};
 }
 
 void fsync_dir(const fs::path& dir) {
@@ -78,13 +83,19 @@ void pread_all(int fd, void* data, std::size_t size, std::uint64_t offset, const
     }
 }
 
-// Checks a whole record in buf (record_size(nnz) bytes): checksum, then content. Returns what is
-// wrong, or an empty string.
-std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint32_t n) {
-    const std::size_t body = kHeader + 8 * std::size_t(nnz);
+// Checks a whole record in buf (record_bytes(nnz, flags) bytes): checksum, then content. Returns
+// what is wrong, or an empty string.
+std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint32_t n, std::uint32_t flags) {
+    const std::size_t body = record_bytes(nnz, flags) - kTrailer;
     std::uint64_t stored;
     std::memcpy(&stored, buf + body, 8);
     if (checksum64(buf, body) != stored) return "checksum mismatch";
+    if (get_u32(buf + 12) != flags) return fmt::format("flags {} where the checkpoint's records have {}", get_u32(buf + 12), flags);
+    if (flags & kFlagObstructed) {
+        double o;
+        std::memcpy(&o, buf + kHeader + 8 * std::size_t(nnz), 8);
+        if (!std::isfinite(o) || o < 0.0 || o > kMaxValue) return fmt::format("obstructed share {} out of range", o);
+    }
     const unsigned char* cols = buf + kHeader;
     const unsigned char* vals = cols + 4 * std::size_t(nnz);
     for (std::uint32_t k = 0; k < nnz; ++k) {
@@ -99,11 +110,15 @@ std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint3
 
 }  // namespace
 
-RowCheckpoint::RowCheckpoint(fs::path dir, std::uint32_t n) : dir_(std::move(dir)), offsets_(n, kMissing) {}
+RowCheckpoint::RowCheckpoint(fs::path dir, std::uint32_t n, bool obstructions)
+    : dir_(std::move(dir)), offsets_(n, kMissing), flags_(obstructions ? kFlagObstructed : 0), obstructed_(n, 0.0) {}
+
+std::uint64_t RowCheckpoint::record_size(std::uint32_t nnz) const { return record_bytes(nnz, flags_); }
 
 RowCheckpoint::RowCheckpoint(RowCheckpoint&& o) noexcept
     : dir_(std::move(o.dir_)), fd_(o.fd_), end_(o.end_), offsets_(std::move(o.offsets_)), stored_(o.stored_),
-      warnings_(std::move(o.warnings_)), last_sync_(o.last_sync_), buffer_(std::move(o.buffer_)) {
+      warnings_(std::move(o.warnings_)), last_sync_(o.last_sync_), buffer_(std::move(o.buffer_)), flags_(o.flags_),
+      obstructed_(std::move(o.obstructed_)) {
     o.fd_ = -1;
 }
 
@@ -119,6 +134,8 @@ RowCheckpoint& RowCheckpoint::operator=(RowCheckpoint&& o) noexcept {
         warnings_ = std::move(o.warnings_);
         last_sync_ = o.last_sync_;
         buffer_ = std::move(o.buffer_);
+        flags_ = o.flags_;
+        obstructed_ = std::move(o.obstructed_);
     }
     return *this;
 }
@@ -143,7 +160,7 @@ RowCheckpoint RowCheckpoint::create(const fs::path& dir, const CheckpointManifes
     if (!fs::create_directory(dir, ec) && ec)
         throw InputError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
 
-    RowCheckpoint c(dir, manifest.patches);
+    RowCheckpoint c(dir, manifest.patches, manifest.obstructions);
     // An empty log first, the manifest last: rows are appended only once the manifest exists, so
     // a log without a manifest (a kill between the two) holds no rows and is emptied here.
     c.fd_ = open_log(dir / kLogName, O_RDWR | O_CREAT | O_TRUNC);
@@ -168,14 +185,17 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
                                      dir.string(), kManifestName));
     std::ifstream in(mpath, std::ios::binary);
     std::string line;
-    if (!std::getline(in, line) || line != kFormatLine)
-        throw InputError(fmt::format("{}: not an ffcube checkpoint manifest (expected '{}' on line 1)", mpath.string(),
-                                     kFormatLine));
+    if (!std::getline(in, line) || (line != kFormatLine && line != kFormatLine1))
+        throw InputError(fmt::format("{}: not an ffcube checkpoint manifest (expected '{}' or '{}' on line 1)",
+                                     mpath.string(), kFormatLine, kFormatLine1));
+    const bool format1 = line == kFormatLine1;
     std::map<std::string, std::string> found;
     while (std::getline(in, line)) {
         const auto space = line.find(' ');
         found[line.substr(0, space)] = space == std::string::npos ? "" : line.substr(space + 1);
     }
+    // Format 1 came before obstruction-only surfaces could be checkpointed: it has none.
+    if (format1) found.emplace("obstructions", "0");
     std::string differences;
     for (const auto& [key, value] : manifest_fields(manifest)) {
         const auto it = found.find(key);
@@ -187,7 +207,7 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
                                      "reused (remove it, or run the command that made it):{}",
                                      dir.string(), differences));
 
-    RowCheckpoint c(dir, manifest.patches);
+    RowCheckpoint c(dir, manifest.patches, manifest.obstructions);
     const fs::path lpath = dir / kLogName;
     c.fd_ = open_log(lpath, O_RDWR | O_CREAT);
     const off_t size = ::lseek(c.fd_, 0, SEEK_END);
@@ -204,13 +224,13 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
         }
         pread_all(c.fd_, header, kHeader, pos, lpath);
         const std::uint32_t magic = get_u32(header), row = get_u32(header + 4), nnz = get_u32(header + 8);
-        if (magic != kMagic || row >= n || nnz > n || get_u32(header + 12) != 0) {
+        if (magic != kMagic || row >= n || nnz > n || get_u32(header + 12) != c.flags_) {
             c.warnings_.push_back(fmt::format("{}: corrupted record at offset {} (bad header); it and the {} bytes after "
                                               "it are dropped and their rows computed again",
                                               lpath.string(), pos, file_size - pos));
             break;
         }
-        const std::uint64_t rsize = record_size(nnz);
+        const std::uint64_t rsize = c.record_size(nnz);
         if (file_size - pos < rsize) {
             c.warnings_.push_back(fmt::format("{}: the last record (row {}) is torn ({} of {} bytes); it is ignored",
                                               lpath.string(), row, file_size - pos, rsize));
@@ -218,7 +238,7 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
         }
         c.buffer_.resize(rsize);
         pread_all(c.fd_, c.buffer_.data(), rsize, pos, lpath);
-        const std::string wrong = check_record(c.buffer_.data(), nnz, n);
+        const std::string wrong = check_record(c.buffer_.data(), nnz, n, c.flags_);
         if (!wrong.empty()) {
             c.warnings_.push_back(fmt::format("{}: corrupted record at offset {} (row {}: {}); it and the {} bytes after "
                                               "it are dropped and their rows computed again",
@@ -227,6 +247,7 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
         }
         if (c.offsets_[row] == kMissing) {
             c.offsets_[row] = pos;
+            if (c.flags_ & kFlagObstructed) std::memcpy(&c.obstructed_[row], c.buffer_.data() + kHeader + 8 * std::size_t(nnz), 8);
             ++c.stored_;
         }
         pos += rsize;
@@ -250,19 +271,22 @@ std::vector<std::uint32_t> RowCheckpoint::missing() const {
     return rows;
 }
 
-void RowCheckpoint::append(std::uint32_t i, const SparseRow& row) {
+void RowCheckpoint::append(std::uint32_t i, const SparseRow& row, double obstructed) {
     FFCUBE_CHECK(i < size() && !has(i) && row.col.size() == row.val.size());
+    FFCUBE_CHECK_MSG((flags_ & kFlagObstructed) || obstructed == 0.0,
+                     "an obstructed share for a checkpoint made without obstructions");
     const auto nnz = static_cast<std::uint32_t>(row.col.size());
     const std::uint64_t rsize = record_size(nnz);
     buffer_.resize(rsize);
     unsigned char* p = buffer_.data();
-    const std::uint32_t header[4] = {kMagic, i, nnz, 0};
+    const std::uint32_t header[4] = {kMagic, i, nnz, flags_};
     std::memcpy(p, header, kHeader);
     std::memcpy(p + kHeader, row.col.data(), 4 * std::size_t(nnz));
     for (std::uint32_t k = 0; k < nnz; ++k) {
         const float v = static_cast<float>(row.val[k]);  // exactly what CsrMatrix::append_row stores
         std::memcpy(p + kHeader + 4 * std::size_t(nnz) + 4 * k, &v, 4);
     }
+    if (flags_ & kFlagObstructed) std::memcpy(p + kHeader + 8 * std::size_t(nnz), &obstructed, 8);
     const std::uint64_t sum = checksum64(p, rsize - kTrailer);
     std::memcpy(p + rsize - kTrailer, &sum, 8);
     std::size_t done = 0;
@@ -273,6 +297,7 @@ void RowCheckpoint::append(std::uint32_t i, const SparseRow& row) {
         done += static_cast<std::size_t>(w);
     }
     offsets_[i] = end_;
+    obstructed_[i] = obstructed;
     end_ += rsize;
     ++stored_;
     maybe_sync();
@@ -335,7 +360,7 @@ void RowCheckpoint::for_each_row(const std::function<void(std::uint32_t, RowView
         buf.resize(record_size(nnz));
         pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
         if (get_u32(buf.data() + 8) != nnz) throw changed(i, "length");
-        const std::string wrong = check_record(buf.data(), nnz, n);
+        const std::string wrong = check_record(buf.data(), nnz, n, flags_);
         if (!wrong.empty()) throw changed(i, wrong);
         col.resize(nnz);
         val.resize(nnz);
@@ -362,7 +387,7 @@ void RowCheckpoint::read_rows(std::uint32_t first, std::uint32_t last, std::vect
         if (get_u32(buf.data()) != kMagic || get_u32(buf.data() + 4) != i || count > n) throw changed("bad header");
         buf.resize(record_size(count));
         pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
-        const std::string wrong = check_record(buf.data(), count, n);
+        const std::string wrong = check_record(buf.data(), count, n, flags_);
         if (!wrong.empty()) throw changed(wrong);
         const std::size_t at = col.size();
         col.resize(at + count);

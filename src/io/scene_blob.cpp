@@ -11,7 +11,7 @@
 namespace ffcube {
 namespace {
 
-constexpr std::uint64_t kMagic = 0x3142534542434646;  // "FFCBSEB1"
+constexpr std::uint64_t kMagic = 0x3242534542434646;  // "FFCBSEB2" (2: the drawn scene, obstructions)
 
 class Writer {
 public:
@@ -85,15 +85,8 @@ void put_material(Writer& w, const Material& m) {
     w.put(m.ke);
 }
 
-}  // namespace
-
-std::vector<std::uint8_t> serialize_scene(const Scene& s) {
-    if (s.drawn)
-        throw InputError(fmt::format("{}: obstruction-only surfaces (View3D's O, N or M: null and masking surfaces block as "
-                                     "obstructions) are not supported under mpirun yet; run without mpirun (docs/scaling.md)",
-                                     s.source));
-    Writer w;
-    w.put(kMagic);
+// One Scene's own fields (not `drawn`).
+void put_scene(Writer& w, const Scene& s) {
     w.put(s.source);
     w.put_all(s.positions, [&](const Vec3& p) { w.put(p); });
     w.put_all(s.patches, [&](const Patch& p) {
@@ -131,13 +124,17 @@ std::vector<std::uint8_t> serialize_scene(const Scene& s) {
     w.put<std::int32_t>(s.view3d.out);
     w.put(s.view3d.title);
     w.put_all(s.view3d.ignored, [&](const std::string& x) { w.put(x); });
-    w.put<std::uint64_t>(w.out.size() + 8);  // the total, last: a truncated or padded blob is refused
-    return std::move(w.out);
+    w.put_all(s.view3d.masks, [&](const View3dControls::Mask& m) {
+        w.put(m.name);
+        w.put(m.base_object);
+        w.put(m.position);
+        w.put(m.area);
+        w.put(m.emissivity);
+    });
+    w.put(s.obstruction_first);
 }
 
-Scene deserialize_scene(std::span<const std::uint8_t> bytes) {
-    Reader r(bytes);
-    if (r.get<std::uint64_t>() != kMagic) r.fail("not a scene blob (wrong magic or version)");
+Scene get_scene(Reader& r) {
     Scene s;
     s.source = r.get_string();
     s.positions.resize(r.count(24, "positions"));
@@ -187,14 +184,59 @@ Scene deserialize_scene(std::span<const std::uint8_t> bytes) {
     s.view3d.title = r.get_string();
     s.view3d.ignored.resize(r.count(8, "ignored View3D controls"));
     for (std::string& x : s.view3d.ignored) x = r.get_string();
-    if (r.get<std::uint64_t>() != bytes.size() || r.at != bytes.size()) r.fail("its length does not match its contents");
-    // Indices in range, so that a damaged blob cannot make a row provider read out of bounds.
+    s.view3d.masks.resize(r.count(32, "View3D masks"));
+    for (View3dControls::Mask& m : s.view3d.masks) {
+        m.name = r.get_string();
+        m.base_object = r.get<std::uint32_t>();
+        m.position = r.get<std::uint32_t>();
+        m.area = r.get<double>();
+        m.emissivity = r.get<double>();
+    }
+    s.obstruction_first = r.get<std::uint32_t>();
+    return s;
+}
+
+// Indices in range, so that a damaged blob cannot make a row provider read out of bounds.
+void check_indices(const Reader& r, const Scene& s, const char* which) {
     for (std::size_t i = 0; i < s.patches.size(); ++i) {
         const Patch& p = s.patches[i];
         bool ok = (p.count == 3 || p.count == 4) && p.object < s.objects.size() && p.material < s.materials.size();
         for (std::uint32_t v : p.v) ok = ok && v < s.positions.size();
-        if (!ok) r.fail(fmt::format("patch {} has an index out of range", i));
+        if (!ok) r.fail(fmt::format("{}patch {} has an index out of range", which, i));
     }
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> serialize_scene(const Scene& s) {
+    FFCUBE_CHECK_MSG(!s.drawn || !s.drawn->drawn, "a drawn scene is whole: it has no drawn scene of its own");
+    Writer w;
+    w.put(kMagic);
+    put_scene(w, s);
+    // The whole scene as drawn (obstruction-only surfaces included), which every rank draws.
+    w.put<std::uint8_t>(s.drawn ? 1 : 0);
+    if (s.drawn) put_scene(w, *s.drawn);
+    w.put<std::uint64_t>(w.out.size() + 8);  // the total, last: a truncated or padded blob is refused
+    return std::move(w.out);
+}
+
+Scene deserialize_scene(std::span<const std::uint8_t> bytes) {
+    Reader r(bytes);
+    if (r.get<std::uint64_t>() != kMagic) r.fail("not a scene blob (wrong magic or version)");
+    Scene s = get_scene(r);
+    const std::uint8_t has_drawn = r.get<std::uint8_t>();
+    if (has_drawn > 1) r.fail("bad drawn-scene flag");
+    if (has_drawn) {
+        Scene d = get_scene(r);
+        check_indices(r, d, "drawn scene: ");
+        // The radiating patches are the drawn scene's first ones, the obstructions after them.
+        if (d.size() <= s.size() || d.obstruction_first != s.size())
+            r.fail(fmt::format("the drawn scene's {} patches (obstructions from {}) do not extend the {} radiating ones",
+                               d.size(), d.obstruction_first, s.size()));
+        s.drawn = std::make_shared<const Scene>(std::move(d));
+    }
+    if (r.get<std::uint64_t>() != bytes.size() || r.at != bytes.size()) r.fail("its length does not match its contents");
+    check_indices(r, s, "");
     return s;
 }
 

@@ -159,6 +159,66 @@ TEST_F(Checkpoint, NewCheckpointNeverOverwritesOneAndResumeNeedsOne) {
     EXPECT_THROW(RowCheckpoint::create(path("file"), manifest()), InputError);
 }
 
+// With obstruction-only surfaces each record carries its row's obstructed share (format 2): a
+// resume gives back the very bits appended, for the rows of the log, and a torn last record's
+// share is gone with its row.
+TEST_F(Checkpoint, ObstructedSharesComeBackBitForBit) {
+    CheckpointManifest m = manifest();
+    m.obstructions = true;
+    // Shares not exactly representable as float: a float on the way would change them.
+    const auto share = [](std::uint32_t i) { return 0.2 / (i + 3.0); };
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), m);
+        for (std::uint32_t i : {3u, 0u, 4u}) c.append(i, row(i), share(i));
+        EXPECT_EQ(c.obstructed()[3], share(3));
+    }
+    EXPECT_NE(read_all(dir() / "manifest.txt").find("obstructions 1\n"), std::string::npos);
+    // The last record (row 4) torn. Each record: a 16-byte header, 4 columns and 4 values, the
+    // 8-byte share, the 8-byte checksum.
+    std::string bytes = read_all(log());
+    EXPECT_EQ(bytes.size(), 3u * (16 + 8 * 4 + 8 + 8));
+    write_all(log(), bytes.substr(0, bytes.size() - 3));
+    RowCheckpoint c = RowCheckpoint::resume(dir(), m);
+    EXPECT_EQ(c.rows_stored(), 2u);
+    EXPECT_EQ(c.obstructed()[3], share(3));
+    EXPECT_EQ(c.obstructed()[0], share(0));
+    EXPECT_EQ(c.obstructed()[4], 0.0);  // torn: not stored
+    for (std::uint32_t i : c.missing()) c.append(i, row(i), share(i));
+    for (std::uint32_t i = 0; i < 5; ++i) EXPECT_EQ(c.obstructed()[i], share(i)) << i;
+    expect_same(c.assemble(), direct());
+}
+
+// A format 1 checkpoint (before the shares; its records' flags word is 0, its manifest has no
+// "obstructions" line) is still resumed and continued, as a checkpoint without obstructions; a
+// run with obstructions refuses it, naming the setting.
+TEST_F(Checkpoint, FormatOneCheckpointsAreStillRead) {
+    {
+        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+        for (std::uint32_t i : {1u, 2u}) c.append(i, row(i));
+    }
+    std::string text = read_all(dir() / "manifest.txt");
+    ASSERT_EQ(text.rfind("ffcube-checkpoint 2\n", 0), 0u);
+    text.replace(0, 19, "ffcube-checkpoint 1");
+    const auto at = text.find("obstructions 0\n");
+    ASSERT_NE(at, std::string::npos);
+    text.erase(at, 15);
+    write_all(dir() / "manifest.txt", text);
+    {
+        RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+        EXPECT_EQ(c.rows_stored(), 2u);
+        for (std::uint32_t i : c.missing()) c.append(i, row(i));
+        expect_same(c.assemble(), direct());
+    }
+    CheckpointManifest with = manifest();
+    with.obstructions = true;
+    try {
+        RowCheckpoint::resume(dir(), with);
+        FAIL() << "a format 1 checkpoint was resumed for a scene with obstructions";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("obstructions: checkpoint '0', this run '1'"), std::string::npos) << e.what();
+    }
+}
+
 }  // namespace
 }  // namespace ffcube
 

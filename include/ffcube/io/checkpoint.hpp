@@ -5,16 +5,24 @@
 // DIR/manifest.txt  what the rows depend on: scene fingerprint, patch count, meshing, method,
 //                   resolution and settings (written atomically when the checkpoint is created).
 // DIR/rows.log      an append-only log of records, one per row, each with its own checksum:
-//                     u32 magic "FFCR", u32 row, u32 nnz, u32 0,
-//                     u32 col[nnz], f32 val[nnz], u64 checksum64 of everything before it
+//                     u32 magic "FFCR", u32 row, u32 nnz, u32 flags,
+//                     u32 col[nnz], f32 val[nnz], [f64 obstructed], u64 checksum64 of everything
+//                     before it
 //                   (little-endian; every record is a multiple of 8 bytes). Values are stored as
 //                   the float the CsrMatrix keeps, so a matrix assembled from the log is
-//                   bit-identical to one built from the rows directly.
+//                   bit-identical to one built from the rows directly. flags is 1 in every record
+//                   of a checkpoint whose manifest says "obstructions 1" (a scene with
+//                   obstruction-only surfaces, Scene::drawn): the record then holds the row's
+//                   obstructed share (RowSource::obstructed(), the double's bits), 0 otherwise.
+// Format 2 (the manifest's first line "ffcube-checkpoint 2") added the flags and the
+// "obstructions" line; format 1 checkpoints (flags always 0, no obstructions) are still read and
+// continued.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -30,6 +38,8 @@ struct CheckpointManifest {
     std::string meshing;            // MeshStats::how
     double max_patch_edge = 0.0;    // MeshStats::max_patch_edge
     FfmMetadata meta;               // method, resolution, settings (rotation, seed, ...)
+    // The scene has obstruction-only surfaces: every record holds its row's obstructed share.
+    bool obstructions = false;
 
     bool operator==(const CheckpointManifest&) const = default;
 };
@@ -61,12 +71,17 @@ public:
     std::uint32_t rows_stored() const { return stored_; }
     std::vector<std::uint32_t> missing() const;  // rows not in the log, ascending
     const std::vector<std::string>& warnings() const { return warnings_; }
+    // Per row, the obstructed share stored with it (the same bits as appended; 0 for rows not
+    // stored, and for every row of a checkpoint without obstructions).
+    std::span<const double> obstructed() const { return obstructed_; }
 
     // Appends row i (i < size(), not yet stored; columns strictly increasing) with one write(2):
     // once it returns the row survives the process being killed. The log is fsync'ed at most
     // once a second here (an fsync per row would dominate small rows) and by sync(), so a power
     // loss costs at most the last second of rows. Throws IoError when the write fails.
-    void append(std::uint32_t i, const SparseRow& row);
+    // obstructed: the row's obstructed share (stored when the manifest has obstructions, else
+    // required to be 0).
+    void append(std::uint32_t i, const SparseRow& row, double obstructed = 0.0);
     // fsync's the log. Throws IoError on failure.
     void sync();
 
@@ -88,7 +103,8 @@ public:
 
 private:
     static constexpr std::uint64_t kMissing = ~std::uint64_t{0};
-    RowCheckpoint(std::filesystem::path dir, std::uint32_t n);
+    RowCheckpoint(std::filesystem::path dir, std::uint32_t n, bool obstructions);
+    std::uint64_t record_size(std::uint32_t nnz) const;
     void maybe_sync();
 
     std::filesystem::path dir_;
@@ -99,6 +115,8 @@ private:
     std::vector<std::string> warnings_;
     double last_sync_ = 0.0;              // steady-clock seconds
     std::vector<unsigned char> buffer_;   // one record, reused
+    std::uint32_t flags_ = 0;             // every record's flags: 1 with obstructions
+    std::vector<double> obstructed_;      // per row, its stored obstructed share
 };
 
 }  // namespace ffcube
