@@ -1,15 +1,20 @@
 // Runs the ffcube binary in a test: exit code and combined output.
 #pragma once
 
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <array>
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
 #include <string>
+#include <thread>
+#include <vector>
 
 namespace ffcube::test {
 
@@ -33,6 +38,48 @@ inline RunResult run_ffcube_env(const std::string& env, const std::string& args)
 }
 
 inline RunResult run_ffcube(const std::string& args) { return run_ffcube_env("", args); }
+
+// The words of a command line split at spaces (the tests' paths have none).
+inline std::vector<std::string> split_words(const std::string& s) {
+    std::vector<std::string> v;
+    std::size_t b = 0;
+    while (b < s.size()) {
+        const std::size_t e = s.find(' ', b);
+        const std::size_t end = e == std::string::npos ? s.size() : e;
+        if (end > b) v.push_back(s.substr(b, end - b));
+        b = end + 1;
+    }
+    return v;
+}
+
+// Starts ffcube with `args` and kills it with SIGKILL once `file` holds at least `bytes` (a
+// checkpoint's log with some rows in it). Returns "" when it was killed so, else what happened
+// instead (it ended first, or did not die by the signal).
+inline std::string kill_when_file_reaches(const std::string& args, const std::filesystem::path& file,
+                                          std::uintmax_t bytes) {
+    const std::vector<std::string> words = split_words(args);
+    const pid_t pid = fork();
+    if (pid < 0) return "fork failed";
+    if (pid == 0) {
+        std::vector<char*> argv{const_cast<char*>(FFCUBE_BINARY)};
+        for (const auto& a : words) argv.push_back(const_cast<char*>(a.c_str()));
+        argv.push_back(nullptr);
+        execv(FFCUBE_BINARY, argv.data());
+        _exit(127);
+    }
+    int status = 0;
+    for (;;) {
+        std::error_code ec;
+        if (std::filesystem::file_size(file, ec) >= bytes && !ec) break;
+        if (waitpid(pid, &status, WNOHANG) == pid)
+            return "the run ended (status " + std::to_string(status) + ") before it could be killed";
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ::kill(pid, SIGKILL);
+    if (waitpid(pid, &status, 0) != pid) return "waitpid failed";
+    if (!(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL)) return "not killed by SIGKILL: status " + std::to_string(status);
+    return "";
+}
 
 inline std::string read_text(const std::filesystem::path& p) {
     std::ifstream in(p, std::ios::binary);

@@ -92,50 +92,15 @@ TEST(ObstructionResumeCli, NullAndMaskSurfacesResumeToTheUninterruptedBytes) {
     }
 }
 
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> v;
-    std::size_t b = 0;
-    while (b < s.size()) {
-        const std::size_t e = s.find(' ', b);
-        const std::size_t end = e == std::string::npos ? s.size() : e;
-        if (end > b) v.push_back(s.substr(b, end - b));
-        b = end + 1;
-    }
-    return v;
-}
-
 // The lidded box meshed (1,445 rows at 64², about a second of one worker on llvmpipe), killed with
 // SIGKILL once some rows (records of about 9 KB) are in the log, then resumed.
 TEST(ObstructionResumeCli, KilledMeshedLiddedBoxResumesToTheUninterruptedBytes) {
     TempDir dir;
     const std::string job = "formfactors " + test::example("lidded_box.vs3") + " --patches 2000 --resolution 64 --threads 1 -q";
     const std::string ck = dir / "ck";
-    const std::vector<std::string> args = split(job + outputs(dir, "killed-") + " --checkpoint " + ck);
-    const pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        std::vector<char*> argv{const_cast<char*>(FFCUBE_BINARY)};
-        for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        execv(FFCUBE_BINARY, argv.data());
-        _exit(127);
-    }
     const fs::path rows = fs::path(ck) / "rows.log";
-    bool exited = false;
-    int status = 0;
-    for (;;) {
-        std::error_code ec;
-        if (fs::file_size(rows, ec) >= 64 * 1024 && !ec) break;
-        if (waitpid(pid, &status, WNOHANG) == pid) {
-            exited = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ASSERT_FALSE(exited) << "the run ended (status " << status << ") before it could be killed";
-    ::kill(pid, SIGKILL);
-    ASSERT_EQ(waitpid(pid, &status, 0), pid);
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    const std::string killed = test::kill_when_file_reaches(job + outputs(dir, "killed-") + " --checkpoint " + ck, rows, 64 * 1024);
+    ASSERT_EQ(killed, "");
     EXPECT_FALSE(fs::exists(dir / "killed-F.ffm"));
 
     const auto resumed = run_ffcube(job + outputs(dir, "resumed-") + " --checkpoint " + ck + " --resume");

@@ -28,18 +28,6 @@ std::string job(const TempDir& dir, const std::string& output, const std::string
            (dir / output) + " " + extra;
 }
 
-std::vector<std::string> split(const std::string& s) {
-    std::vector<std::string> v;
-    std::size_t b = 0;
-    while (b < s.size()) {
-        const std::size_t e = s.find(' ', b);
-        const std::size_t end = e == std::string::npos ? s.size() : e;
-        if (end > b) v.push_back(s.substr(b, end - b));
-        b = end + 1;
-    }
-    return v;
-}
-
 TEST(ResumeCli, KilledRunResumesToByteIdenticalMatrix) {
     TempDir dir;
     const std::string ck = dir / "ck";
@@ -47,32 +35,9 @@ TEST(ResumeCli, KilledRunResumesToByteIdenticalMatrix) {
 
     // Start the checkpointed run and kill -9 it once some rows (but not all) are in the log. A
     // row record at 64² is about 10 KB; 64 KB of log is a handful of rows out of 2000.
-    const std::vector<std::string> args = split(job(dir, "killed.ffm", "--checkpoint " + ck));
-    const pid_t pid = fork();
-    ASSERT_GE(pid, 0);
-    if (pid == 0) {
-        std::vector<char*> argv{const_cast<char*>(FFCUBE_BINARY)};
-        for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-        argv.push_back(nullptr);
-        execv(FFCUBE_BINARY, argv.data());
-        _exit(127);
-    }
     const fs::path rows = fs::path(ck) / "rows.log";
-    bool exited = false;
-    int status = 0;
-    for (;;) {
-        std::error_code ec;
-        if (fs::file_size(rows, ec) >= 64 * 1024 && !ec) break;
-        if (waitpid(pid, &status, WNOHANG) == pid) {
-            exited = true;
-            break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ASSERT_FALSE(exited) << "the run ended (status " << status << ") before it could be killed";
-    ::kill(pid, SIGKILL);
-    ASSERT_EQ(waitpid(pid, &status, 0), pid);
-    ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL);
+    const std::string killed = test::kill_when_file_reaches(job(dir, "killed.ffm", "--checkpoint " + ck), rows, 64 * 1024);
+    ASSERT_EQ(killed, "");
     // Worker processes die with their parent's pipes; the log no longer grows once the writer (the
     // parent) is gone.
     EXPECT_FALSE(fs::exists(dir / "killed.ffm"));  // atomic output: nothing half-written
