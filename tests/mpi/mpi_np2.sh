@@ -9,13 +9,7 @@
 set -u
 ffcube=$1
 work=$2
-mpirun=$(command -v mpirun) || { echo "mpirun not found: skipped"; exit 77; }
-# CI runs as root; OpenMPI refuses that unless told (both variables).
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-# One machine with few cores, no network: the shared-memory and self transports only.
-export OMPI_MCA_btl=self,vader OMPI_MCA_rmaps_base_oversubscribe=1
-mpi() { "$mpirun" --oversubscribe -np 2 "$ffcube" "$@"; }
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/mpi_env.sh"
 descendants() { for c in $(ps -o pid= --ppid "$1"); do echo "$c"; descendants "$c"; done; }
 scene="$(cd "$(dirname "$0")/../../examples" && pwd)/cube.obj"
 rm -rf "$work" && mkdir -p "$work/tmp" && cd "$work" || exit 1

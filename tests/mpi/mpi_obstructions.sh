@@ -13,11 +13,7 @@
 set -u
 ffcube=$1
 work=$2
-mpirun=$(command -v mpirun) || { echo "mpirun not found: skipped"; exit 77; }
-export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
-export OMPI_MCA_btl=self,vader OMPI_MCA_rmaps_base_oversubscribe=1
-mpi() { "$mpirun" --oversubscribe -np 2 "$ffcube" "$@"; }
-fail() { echo "FAIL: $*"; exit 1; }
+. "$(dirname "$0")/mpi_env.sh"
 examples="$(cd "$(dirname "$0")/../../examples" && pwd)"
 rm -rf "$work" && mkdir -p "$work/tmp" && cd "$work" || exit 1
 export TMPDIR="$work/tmp"
