@@ -9,7 +9,7 @@
 set -u
 ffcube=$1
 work=$2
-. "$(dirname "$0")/mpi_env.sh"
+. "${BASH_SOURCE[0]%/*}/mpi_env.sh"
 descendants() { for c in $(ps -o pid= --ppid "$1"); do echo "$c"; descendants "$c"; done; }
 scene="$(cd "$(dirname "$0")/../../examples" && pwd)/cube.obj"
 rm -rf "$work" && mkdir -p "$work/tmp" && cd "$work" || exit 1

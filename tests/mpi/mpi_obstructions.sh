@@ -13,7 +13,7 @@
 set -u
 ffcube=$1
 work=$2
-. "$(dirname "$0")/mpi_env.sh"
+. "${BASH_SOURCE[0]%/*}/mpi_env.sh"
 examples="$(cd "$(dirname "$0")/../../examples" && pwd)"
 rm -rf "$work" && mkdir -p "$work/tmp" && cd "$work" || exit 1
 export TMPDIR="$work/tmp"
