@@ -14,6 +14,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/hemicube/frame.hpp"
+#include "ffcube/hemicube/runs.hpp"
 #include "gl/gl_api.hpp"
 #include "gl/sample_agreement.hpp"
 #include "gl/shaders.hpp"
@@ -417,36 +418,49 @@ void Worker::touch(std::uint32_t j) {
     }
 }
 
+// Calls f(a, b, id, ΔF) for every run [a, b) of pixels of one id within a face's row of the
+// atlas `ids` (indices into ids), ΔF summed over the run (HemicubeLayout::run_sum). A patch covers
+// runs of neighbouring pixels: the run starts are found four pixels at a time
+// (hemicube/runs.hpp) and a run's ΔF costs one subtraction, so the per-pixel work is one compare,
+// not an addition chained to the previous one and a branch that mispredicts at every run's end
+// (at N = 256: 2.5 ns a pixel before, 1.1 after; docs/benchmarks.md, "The rows' accumulation").
+template <class F>
+void Worker::for_each_id_run(const std::vector<std::uint32_t>& ids, const HemicubeLayout& lay, F&& f) {
+    const std::size_t width = static_cast<std::size_t>(lay.atlas_width());
+    for (std::size_t y = 0; y * width < ids.size(); ++y) {
+        const std::size_t row = y * width;
+        for (const HemicubeLayout::RowSegment& seg : lay.row_segments(static_cast<int>(y))) {
+            const std::size_t len = seg.end - seg.begin, first = row + seg.begin;
+            run_bits_.resize((len + 63) / 64);
+            mark_run_starts(std::span<const std::uint32_t>(ids.data() + first, len), run_bits_.data());
+            for_each_run(run_bits_.data(), len, [&](std::size_t a, std::size_t b) __attribute__((always_inline)) {
+                f(first + a, first + b, ids[first + a], lay.run_sum(seg, seg.begin + a, seg.begin + b));
+            });
+        }
+    }
+}
+
 // Adds weight × ΔF of every pixel of the rendered atlas to the row being made (epoch_).
 void Worker::accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& st) {
     Stopwatch watch;
-    const std::vector<double>& w = layout_of(res).delta_ff();
+    const HemicubeLayout& lay = layout_of(res);
     const std::vector<std::uint32_t>& ids = res == Res::full ? ids_ : res == Res::half ? half_ids_ : quarter_ids_;
     const std::uint32_t self = p + 1;
     double back = 0.0, miss = 0.0;
-    const std::size_t npix = ids.size();
-    // A patch covers runs of neighbouring pixels: each run is summed in a register and stored
-    // once, the same additions in the same order as pixel by pixel (the row is bitwise the same).
-    for (std::size_t k = 0; k < npix;) {
-        const std::uint32_t id = ids[k];
-        if (id == 0) {
-            miss += w[k++];
+    for_each_id_run(ids, lay, [&](std::size_t a, std::size_t b, std::uint32_t id, double s) __attribute__((always_inline)) {
+        if (id == self) {
+            st.self_hits += b - a;
+        } else if (id == 0) {
+            miss += s;
         } else if (id == kBackFace) {
-            back += w[k++];
-        } else if (id == self) {
-            ++st.self_hits;
-            ++k;
+            back += s;
         } else {
-            const std::uint32_t j = column_of(p, k, id);
+            const std::uint32_t j = column_of(p, a, id);
             seen_[piece_of_[j]] = seen_stamp_;
             touch(j);
-            double a = acc_[j];
-            do {
-                a += weight * w[k++];
-            } while (k < npix && ids[k] == id);
-            acc_[j] = a;
+            acc_[j] += weight * s;
         }
-    }
+    });
     end_seen();
     st.back_face_weight += weight * back;
     st.miss_weight += weight * miss;
@@ -541,30 +555,29 @@ void Worker::sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats
 // blocks.
 void Worker::accumulate_range_near(std::uint32_t p, double weight, HemicubeStats& st) {
     Stopwatch watch;
-    const std::vector<double>& w = half_layout_.delta_ff();
     const std::uint32_t self = p + 1;
     double back = 0.0;
-    const std::size_t npix = half_ids_.size();
-    for (std::size_t k = 0; k < npix; ++k) {
-        const std::uint32_t id = half_ids_[k];
-        if (id == 0) {
-            vis_[k] += weight;
-        } else if (id == kBackFace) {
-            back += w[k];
-        } else if (id == self) {
-            ++st.self_hits;
-        } else {
-            const std::uint32_t j = column_of(p, k, id);
+    for_each_id_run(half_ids_, half_layout_, [&](std::size_t a, std::size_t b, std::uint32_t id, double s) {
+        if (id == self) {
+            st.self_hits += b - a;
+            return;
+        }
+        if (id == kBackFace) {
+            back += s;
+            return;
+        }
+        if (id != 0) {
+            const std::uint32_t j = column_of(p, a, id);
             const std::uint32_t g = piece_of_[j];
             seen_[g] = seen_stamp_;
-            if (!piece_near(g)) {
-                vis_[k] += weight;
-                continue;
+            if (piece_near(g)) {
+                touch(j);
+                acc_[j] += weight * s;
+                return;
             }
-            touch(j);
-            acc_[j] += weight * w[k];
         }
-    }
+        for (std::size_t k = a; k < b; ++k) vis_[k] += weight;
+    });
     end_seen();
     st.back_face_weight += weight * back;
     st.accumulate_seconds += watch.seconds();

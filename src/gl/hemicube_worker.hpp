@@ -73,6 +73,8 @@ private:
     // part (gl/exposed_points.hpp); false (nothing done) for any other sender.
     bool sample_exposed(std::uint32_t p, HemicubeStats& st);
     void take_row(SparseRow& out, HemicubeStats& st);
+    template <class F>
+    void for_each_id_run(const std::vector<std::uint32_t>& ids, const HemicubeLayout& lay, F&& f);
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
     void accumulate_points(std::uint32_t p, Res res, HemicubeStats& st);
@@ -130,6 +132,7 @@ private:
     std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
     std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;
     std::vector<double> acc_;
+    std::vector<std::uint64_t> run_bits_;  // accumulate(): where runs of one id start in a line
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;
     std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row

@@ -110,6 +110,29 @@ HemicubeLayout::HemicubeLayout(int resolution) : n_(resolution) {
                       dff_.begin() + static_cast<std::ptrdiff_t>(vp.y + j) * w + vp.x);
         }
     }
+    // The prefix tables (row_segments): the top face's rows 0 … N/2 − 1 (row N−1−y has row y's
+    // values, bit for bit: folded above), then the side faces' rows 0 … N/2 − 1.
+    const std::size_t table = static_cast<std::size_t>(n) + 1;
+    prefix_.assign(table * static_cast<std::size_t>(n), 0.0);
+    auto fill = [&](std::size_t t, const double* row) {
+        double* out = prefix_.data() + t * table;
+        double sum = 0.0;
+        out[0] = 0.0;
+        for (int i = 0; i < n; ++i) {
+            sum += row[i];
+            out[i + 1] = sum;
+        }
+    };
+    for (int j = 0; j < h; ++j) fill(static_cast<std::size_t>(j), dff_.data() + static_cast<std::size_t>(j) * w);
+    for (int j = 0; j < h; ++j)
+        fill(static_cast<std::size_t>(h + j), dff_.data() + static_cast<std::size_t>(j) * w + faces_[1].viewport.x);
+    segments_.resize(static_cast<std::size_t>(n));
+    for (int y = 0; y < n; ++y) {
+        const auto top = static_cast<std::uint32_t>(std::min(y, n - 1 - y) * table);
+        const auto side = static_cast<std::uint32_t>((h + y % h) * table);
+        const auto un = static_cast<std::uint32_t>(n);
+        segments_[static_cast<std::size_t>(y)] = {{{0, un, top}, {un, 2 * un, side}, {2 * un, 3 * un, side}}};
+    }
 }
 
 std::optional<AtlasPixel> HemicubeLayout::pixel_of_direction(const Vec3& d) const {

@@ -5,11 +5,13 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/runs.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -230,6 +232,67 @@ TEST(HemicubeLayout, PixelOfDirection) {
     }
     EXPECT_FALSE(h.pixel_of_direction(Vec3(0.3, 0.2, -0.1)).has_value());
     EXPECT_FALSE(h.pixel_of_direction(Vec3(0.0)).has_value());
+}
+
+// The accumulation's run sums (row_segments, run_sum) against adding delta_ff() pixel by pixel:
+// every run of every row of N = 8 … 256 (odd and even segment lengths not needed: faces are N
+// wide). Both are sums of at most N positive terms of the same row, so each is within N·ε of
+// the exact sum times the row's ΔF total (the standard bound for recursive summation, (n − 1)·u·
+// Σ|x|); their difference within 2N·ε·total, and the segments tile every row exactly once.
+TEST(Layout, RunSumsAreTheRowsDeltaFormFactorsSummed) {
+    std::mt19937 rng(7);
+    for (int n : {8, 48, 64, 256}) {
+        const HemicubeLayout h(n);
+        double table_sum = 0.0;
+        for (int y = 0; y < n; ++y) {
+            const auto& segs = h.row_segments(y);
+            ASSERT_EQ(segs[0].begin, 0u);
+            ASSERT_EQ(segs[2].end, static_cast<std::uint32_t>(h.atlas_width()));
+            for (std::size_t s = 1; s < segs.size(); ++s) ASSERT_EQ(segs[s].begin, segs[s - 1].end);
+            double row_total = 0.0;
+            for (int x = 0; x < h.atlas_width(); ++x) row_total += at(h, x, y);
+            const double bound = 2.0 * n * std::numeric_limits<double>::epsilon() * row_total;
+            for (const auto& seg : segs) {
+                table_sum += h.run_sum(seg, seg.begin, seg.end);
+                for (int trial = 0; trial < 50; ++trial) {
+                    std::uniform_int_distribution<std::uint32_t> pick(seg.begin, seg.end);
+                    std::uint32_t a = pick(rng), b = pick(rng);
+                    if (a > b) std::swap(a, b);
+                    double direct = 0.0;
+                    for (std::uint32_t x = a; x < b; ++x) direct += at(h, static_cast<int>(x), y);
+                    ASSERT_NEAR(h.run_sum(seg, a, b), direct, bound) << "N " << n << " row " << y << " [" << a << ", " << b << ")";
+                }
+            }
+        }
+        // The whole table through the segments: 1 up to the table's own rounding (about 1e-13).
+        EXPECT_NEAR(table_sum, 1.0, 1e-12) << "N " << n;
+    }
+}
+
+// mark_run_starts / for_each_run against a plain scan: lines of every length 0 … 200 (SIMD body,
+// scalar head and tail, words straddled), of ids drawn from few values so runs are short and long.
+TEST(Runs, RunsOfEqualIdsMatchAPlainScan) {
+    std::mt19937 rng(11);
+    for (std::size_t n = 0; n <= 200; ++n) {
+        for (int values : {1, 2, 5}) {
+            std::vector<std::uint32_t> ids(n);
+            std::uniform_int_distribution<std::uint32_t> v(0, static_cast<std::uint32_t>(values - 1));
+            std::bernoulli_distribution keep(0.7);
+            for (std::size_t k = 0; k < n; ++k) ids[k] = k > 0 && keep(rng) ? ids[k - 1] : v(rng);
+            std::vector<std::pair<std::size_t, std::size_t>> expected, got;
+            for (std::size_t a = 0; a < n;) {
+                std::size_t b = a + 1;
+                while (b < n && ids[b] == ids[a]) ++b;
+                expected.emplace_back(a, b);
+                a = b;
+            }
+            std::vector<std::uint64_t> bits((n + 63) / 64 + 1, ~std::uint64_t{0});
+            mark_run_starts(ids, bits.data());
+            for_each_run(bits.data(), n, [&](std::size_t a, std::size_t b) { got.emplace_back(a, b); });
+            ASSERT_EQ(got, expected) << "n " << n << " values " << values;
+            ASSERT_EQ(bits.back(), ~std::uint64_t{0}) << "wrote past its words, n " << n;
+        }
+    }
 }
 
 }  // namespace
