@@ -151,16 +151,20 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
         // per entry held): a pass over the file spills the bands to scratch files, a second reads
         // the rows again with the bands one at a time (io/transpose_scratch.hpp).
-        const TransposePlan plan = plan_transpose(checks.col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
+        // Only the columns' parts below the diagonal: the measure is symmetric in the pair, so each
+        // pair is looked at once, from its lower row (half the entries to hold and spill).
+        const TransposePlan plan =
+            plan_transpose(checks.lower_col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
         FfmReader reader(first);
-        PatchReciprocity patch(areas);
+        PatchReciprocity patch(areas, ColumnPart::below_diagonal);
         Progress bar(fmt::format("reciprocity ({} pass{} over {}, {} band{})", plan.passes, plan.passes == 1 ? "" : "es",
                                  first.filename().string(), plan.band_count(), plan.band_count() == 1 ? "" : "s"),
                      std::uint64_t(scene.size()) * plan.passes, progress);
         const TransposeFigures t = for_each_row_and_column(
-            [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); }, checks.col_counts(),
-            plan, scratch.path(), [&](std::uint32_t i, RowView row, RowView column) { patch.add(i, row, column); },
-            &bar);
+            [&](const std::function<void(std::uint32_t, RowView)>& g) { reader.for_each_row(g); },
+            checks.lower_col_counts(), plan, scratch.path(),
+            [&](std::uint32_t i, RowView row, RowView column) { patch.add(i, row, column); }, &bar,
+            ColumnPart::below_diagonal);
         f.reciprocity.patch_max_abs = patch.max_abs();
         report.set("reciprocity.passes", t.passes);
         report.set("reciprocity.bands", plan.band_count());

@@ -38,7 +38,8 @@ RowStreamChecks::RowStreamChecks(const Scene& scene)
     : scene_(scene),
       g_(scene.objects.size(), std::vector<double>(scene.objects.size(), 0.0)),
       area_(scene.objects.size(), 0.0),
-      col_counts_(scene.size(), 0) {
+      col_counts_(scene.size(), 0),
+      lower_col_counts_(scene.size(), 0) {
     row_counts_.reserve(scene.size());
 }
 
@@ -56,6 +57,7 @@ void RowStreamChecks::add(std::uint32_t i, RowView r) {
     for (std::size_t k = 0; k < r.col.size(); ++k) {
         g[scene_.patches[r.col[k]].object] += p.area * static_cast<double>(r.val[k]);
         ++col_counts_[r.col[k]];
+        lower_col_counts_[r.col[k]] += r.col[k] < i;
     }
     row_counts_.push_back(static_cast<std::uint32_t>(r.col.size()));
 }
@@ -127,6 +129,8 @@ void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
     FFCUBE_CHECK(i < areas_.size());
     const double ai = areas_[i];
     std::size_t x = 0, y = 0;
+    if (part_ == ColumnPart::below_diagonal)  // pairs (i, j > i) only: the others were row j's
+        x = static_cast<std::size_t>(std::upper_bound(row.col.begin(), row.col.end(), i) - row.col.begin());
     while (x < row.col.size() || y < column.col.size()) {
         const std::uint32_t jr = x < row.col.size() ? row.col[x] : ~0u, jc = y < column.col.size() ? column.col[y] : ~0u;
         const std::uint32_t j = std::min(jr, jc);

@@ -157,8 +157,14 @@ TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uin
 
 TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const std::uint32_t> col_counts,
                                          const TransposePlan& plan, const std::filesystem::path& scratch_dir,
-                                         const RowAndColumnFn& f, Progress* progress) {
+                                         const RowAndColumnFn& f, Progress* progress, ColumnPart part) {
     const std::vector<std::uint32_t>& starts = plan.bands;
+    // The entries of row i that go to the columns: all, or those left of the diagonal (column
+    // c < i, so row i lies below column c's diagonal). Columns increase along a row.
+    const auto held = [part](std::uint32_t i, RowView r) {
+        return part == ColumnPart::all ? r.col.size()
+                                       : static_cast<std::size_t>(std::lower_bound(r.col.begin(), r.col.end(), i) - r.col.begin());
+    };
     const std::size_t bands = plan.band_count();
     TransposeFigures figures;
     Band band;
@@ -166,7 +172,8 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
         band.reset(0, starts[1], col_counts);
         pass([&](std::uint32_t i, RowView r) {
             if (progress) progress->add();
-            for (std::size_t k = 0; k < r.col.size(); ++k) band.add(i, r.col[k], r.val[k]);
+            const std::size_t m = held(i, r);
+            for (std::size_t k = 0; k < m; ++k) band.add(i, r.col[k], r.val[k]);
         });
         band.check_full();
         ++figures.passes;
@@ -180,11 +187,12 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
         pass([&](std::uint32_t i, RowView r) {
             if (progress) progress->add();
             // The row's entries in this group's columns, one run per band (columns increase).
-            auto it = std::lower_bound(r.col.begin(), r.col.end(), lo);
-            std::size_t b = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), it == r.col.end() ? hi : *it) - starts.begin()) - 1;
-            while (it != r.col.end() && *it < hi) {
+            const auto last = r.col.begin() + static_cast<std::ptrdiff_t>(held(i, r));
+            auto it = std::lower_bound(r.col.begin(), last, lo);
+            std::size_t b = static_cast<std::size_t>(std::upper_bound(starts.begin(), starts.end(), it == last ? hi : *it) - starts.begin()) - 1;
+            while (it != last && *it < hi) {
                 while (*it >= starts[b + 1]) ++b;
-                const auto end = std::lower_bound(it, r.col.end(), starts[b + 1]);
+                const auto end = std::lower_bound(it, last, starts[b + 1]);
                 const auto k = static_cast<std::size_t>(it - r.col.begin());
                 const auto count = static_cast<std::uint32_t>(end - it);
                 const std::uint32_t head[2] = {i, count};

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <numeric>
 #include <random>
 #include <string>
 
@@ -361,25 +362,30 @@ TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
     std::vector<double> areas;
     for (const Patch& p : scene.patches) areas.push_back(p.area);
     FfmReader reader(path("F.ffm"));
+    // Whole columns, and (what the reciprocity check uses) their parts below the diagonal: the
+    // same maximum bit for bit, each pair looked at once.
+    for (const ColumnPart part : {ColumnPart::all, ColumnPart::below_diagonal})
     for (std::uint64_t budget : {std::uint64_t(1), std::uint64_t(500), std::uint64_t(4000), F.nnz()}) {
         SCOPED_TRACE(budget);
-        const TransposePlan plan = plan_transpose(checks.col_counts(), budget);
+        SCOPED_TRACE(part == ColumnPart::all ? "whole columns" : "below the diagonal");
+        const std::vector<std::uint32_t>& counts = part == ColumnPart::all ? checks.col_counts() : checks.lower_col_counts();
+        const TransposePlan plan = plan_transpose(counts, budget);
         std::filesystem::create_directory(path("scratch"));
         unsigned passes = 0;
         std::uint32_t next = 0;
-        PatchReciprocity patch(areas);
+        PatchReciprocity patch(areas, part);
         const TransposeFigures t = for_each_row_and_column(
             [&](const std::function<void(std::uint32_t, RowView)>& f) {
                 ++passes;
                 reader.for_each_row(f);
             },
-            checks.col_counts(), plan, path("scratch"),
+            counts, plan, path("scratch"),
             [&](std::uint32_t i, RowView row, RowView column) {
                 ASSERT_EQ(i, next++);
                 ASSERT_TRUE(std::ranges::equal(row.col, F.row(i).col));
-                // Column i: every F_ki > 0 in increasing k.
+                // Column i: every F_ki > 0 (k > i below the diagonal) in increasing k.
                 std::size_t c = 0;
-                for (std::uint32_t k = 0; k < n; ++k) {
+                for (std::uint32_t k = part == ColumnPart::all ? 0 : i + 1; k < n; ++k) {
                     const double v = F.at(k, i);
                     if (v == 0) continue;
                     ASSERT_LT(c, column.col.size());
@@ -390,7 +396,7 @@ TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
                 EXPECT_EQ(c, column.col.size());
                 patch.add(i, row, column);
             },
-            nullptr);
+            nullptr, part);
         EXPECT_EQ(next, n);
         EXPECT_EQ(patch.max_abs(), want.patch_max_abs);
         EXPECT_EQ(passes, plan.passes);
@@ -400,10 +406,19 @@ TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
         // At most budget entries per band, but at least one column each.
         for (std::size_t b = 0; b < plan.band_count(); ++b) {
             std::uint64_t held = 0;
-            for (std::uint32_t j = plan.bands[b]; j < plan.bands[b + 1]; ++j) held += checks.col_counts()[j];
+            for (std::uint32_t j = plan.bands[b]; j < plan.bands[b + 1]; ++j) held += counts[j];
             EXPECT_TRUE(held <= budget || plan.bands[b + 1] == plan.bands[b] + 1) << b;
         }
-        if (budget == 1) {  // a band per column: 250 bands, spilled 64 at a time (4 passes), then 1
+        const std::uint64_t held_total = std::accumulate(counts.begin(), counts.end(), std::uint64_t{0});
+        if (part == ColumnPart::below_diagonal) {  // the entries F_ki with k > i, counted from F itself
+            std::uint64_t below = 0;
+            for (std::uint32_t k = 0; k < n; ++k)
+                for (std::uint32_t c : F.row(k).col) below += c < k;
+            EXPECT_EQ(held_total, below);
+            EXPECT_LT(below, F.nnz());
+            if (budget == 1) EXPECT_GT(t.scratch_bytes, 8 * held_total);
+        }
+        if (budget == 1 && part == ColumnPart::all) {  // a band per column: 250 bands, spilled 64 at a time (4 passes), then 1
             EXPECT_EQ(plan.band_count(), n);
             EXPECT_EQ(passes, 5u);
             EXPECT_GT(t.scratch_bytes, 8 * F.nnz());  // every entry (u32 + float) and the runs' heads

@@ -46,6 +46,8 @@ public:
     double object_max_rel() const;                            // as ReciprocityStats::object_max_rel
     const std::vector<std::uint32_t>& row_counts() const { return row_counts_; }
     const std::vector<std::uint32_t>& col_counts() const { return col_counts_; }
+    // Per column c, its entries below the diagonal (rows i > c): ColumnPart::below_diagonal's counts.
+    const std::vector<std::uint32_t>& lower_col_counts() const { return lower_col_counts_; }
 
 private:
     const Scene& scene_;
@@ -53,7 +55,7 @@ private:
     double min_ = 0, max_ = 0, total_ = 0;
     std::vector<std::vector<double>> g_;  // Σ A_i F_ij per object pair, not yet divided
     std::vector<double> area_;            // per object, of the rows seen
-    std::vector<std::uint32_t> row_counts_, col_counts_;
+    std::vector<std::uint32_t> row_counts_, col_counts_, lower_col_counts_;
 };
 
 // One pass over a matrix: calls its argument with every row, in order (e.g. FfmReader::for_each_row).
@@ -61,18 +63,27 @@ using RowPass = std::function<void(const std::function<void(std::uint32_t, RowVi
 // Row i of a matrix with its column i (row i of the transpose: row indices increasing and the
 // values F_ki), as io/transpose_scratch.hpp's for_each_row_and_column gives them.
 using RowAndColumnFn = std::function<void(std::uint32_t i, RowView row, RowView column)>;
+// Which part of column i for_each_row_and_column (io/transpose_scratch.hpp) gives: every F_ki,
+// or only those below the diagonal (k > i), half the entries to hold and spill, which is all a
+// check symmetric in the pair needs (PatchReciprocity).
+enum class ColumnPart { all, below_diagonal };
 
 // ReciprocityStats::patch_max_abs (the same number as reciprocity_stats gives for the matrix in
 // memory) from every row i with its column i, fed in any order: row and column merged by j, a
-// missing entry 0. areas must outlive it.
+// missing entry 0. areas must outlive it. With ColumnPart::below_diagonal the columns hold only
+// F_ki for k > i, and each pair is looked at once, from the row of its lower index: the measure
+// is symmetric in the pair bit for bit (|a − b| = |b − a|, A_i + A_j = A_j + A_i), so the maximum
+// is the same number.
 class PatchReciprocity {
 public:
-    explicit PatchReciprocity(std::span<const double> areas) : areas_(areas) {}
+    explicit PatchReciprocity(std::span<const double> areas, ColumnPart part = ColumnPart::all)
+        : areas_(areas), part_(part) {}
     void add(std::uint32_t i, RowView row, RowView column);
     double max_abs() const { return worst_; }
 
 private:
     std::span<const double> areas_;
+    ColumnPart part_;
     double worst_ = 0.0;
 };
 

@@ -54,14 +54,17 @@ struct TransposeFigures {
     std::size_t passes = 0;            // passes made over the matrix (plan.passes)
     std::uint64_t scratch_bytes = 0;   // written to scratch files
 };
+// part: every F_ki of column i, or those below the diagonal (formfactor/checks.hpp ColumnPart).
 // Calls f with every row i of the matrix `pass` goes over and its column i, in row order.
-// col_counts: the entries per column (RowStreamChecks::col_counts), as the plan was made from.
+// col_counts: the entries per column (RowStreamChecks::col_counts, or lower_col_counts for
+// ColumnPart::below_diagonal), as the plan was made from.
 // Scratch files go to scratch_dir and are removed as soon as read. progress, when given, is
 // advanced by one per row of each pass. IoError naming the scratch file when writing or reading it
 // fails (disk full); InternalError when a pass gives other rows than the first.
 TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const std::uint32_t> col_counts,
                                          const TransposePlan& plan, const std::filesystem::path& scratch_dir,
-                                         const RowAndColumnFn& f, Progress* progress = nullptr);
+                                         const RowAndColumnFn& f, Progress* progress = nullptr,
+                                         ColumnPart part = ColumnPart::all);
 
 // Rows of (u32 column, double value) written once and read back in order any number of times
 // (--enforce closure's G, one pass per iteration): held in memory while they take at most
