@@ -19,9 +19,11 @@ struct Case {
 
 TEST(StreamOutputsCli, StreamedOutputsEqualTheInMemoryOnesByteForByte) {
     test::TempDir dir;
-    // 432 patches: about 1.5e5 entries, more than the 131,072 a 1 MiB band holds (8 bytes each), so
-    // --stats-memory 1 makes several bands and 512 one. The cube is closed: closure applies.
-    const std::string scene = test::example("closed_cube.stl") + " --max-patch-edge 0.25 --resolution 32 -q";
+    // 768 patches: about 4.5e5 entries. The reciprocity check holds the columns' parts below the
+    // diagonal (about 2.3e5 entries) and --enforce whole columns: either is more than the 131,072
+    // a 1 MiB band holds (8 bytes each), so --stats-memory 1 makes several bands and 512 one. The
+    // cube is closed: closure applies.
+    const std::string scene = test::example("closed_cube.stl") + " --max-patch-edge 0.2 --resolution 32 -q";
     const std::vector<Case> cases = {
         {"", "mtx", "", {"1", "512"}},
         {" --enforce closure", "mtx", " --elmer-format binary --view3d-format binary", {"1", "512"}},
