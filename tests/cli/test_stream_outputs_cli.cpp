@@ -73,7 +73,7 @@ TEST(StreamOutputsCli, StreamedOutputsEqualTheInMemoryOnesByteForByte) {
                 in >> rows >> cols >> nnz;
                 std::getline(in, line);
                 while (std::getline(in, line)) ++lines;
-                EXPECT_EQ(rows, 432u);
+                EXPECT_EQ(rows, 768u);
                 EXPECT_EQ(nnz, lines);
                 EXPECT_EQ(static_cast<double>(nnz), b["nnz"].get<double>());
             }
