@@ -150,11 +150,12 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     } else {
         // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
         // per entry held): a pass over the file spills the bands to scratch files, a second reads
-        // the rows again with the bands one at a time (io/transpose_scratch.hpp).
+        // the rows again with the bands one at a time (io/transpose_scratch.hpp); when the one band
+        // and the rows fit together, one pass keeps both.
         // Only the columns' parts below the diagonal: the measure is symmetric in the pair, so each
         // pair is looked at once, from its lower row (half the entries to hold and spill).
         const TransposePlan plan =
-            plan_transpose(checks.lower_col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
+            plan_transpose(checks.lower_col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8), checks.upper_entries());
         FfmReader reader(first);
         PatchReciprocity patch(areas, ColumnPart::below_diagonal);
         Progress bar(fmt::format("reciprocity ({} pass{} over {}, {} band{})", plan.passes, plan.passes == 1 ? "" : "es",

@@ -58,6 +58,7 @@ void RowStreamChecks::add(std::uint32_t i, RowView r) {
         g[scene_.patches[r.col[k]].object] += p.area * static_cast<double>(r.val[k]);
         ++col_counts_[r.col[k]];
         lower_col_counts_[r.col[k]] += r.col[k] < i;
+        upper_entries_ += r.col[k] > i;
     }
     row_counts_.push_back(static_cast<std::uint32_t>(r.col.size()));
 }

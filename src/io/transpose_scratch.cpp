@@ -135,7 +135,8 @@ ScratchDir::~ScratchDir() {
     std::filesystem::remove_all(path_, ec);
 }
 
-TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries) {
+TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries,
+                             std::uint64_t kept_row_entries) {
     const auto n = static_cast<std::uint32_t>(col_counts.size());
     TransposePlan plan;
     plan.bands.push_back(0);
@@ -152,6 +153,10 @@ TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uin
     // One band is collected in memory by the first pass; more are spilled, kMaxOpenBands a pass.
     plan.passes = 1 + (b <= 1 ? 0 : (b + kMaxOpenBands - 1) / kMaxOpenBands);
     if (b == 1) plan.passes = 2;
+    if (b == 1 && held <= budget_entries && kept_row_entries <= budget_entries - held) {
+        plan.passes = 1;
+        plan.keep_rows = true;
+    }
     return plan;
 }
 
@@ -166,8 +171,39 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
                                        : static_cast<std::size_t>(std::lower_bound(r.col.begin(), r.col.end(), i) - r.col.begin());
     };
     const std::size_t bands = plan.band_count();
+    // The part of row i that f is given: whole, or right of the diagonal.
+    const auto given = [part](std::uint32_t i, RowView r) {
+        if (part == ColumnPart::all) return r;
+        const auto k = static_cast<std::size_t>(std::upper_bound(r.col.begin(), r.col.end(), i) - r.col.begin());
+        return RowView{r.col.subspan(k), r.val.subspan(k)};
+    };
     TransposeFigures figures;
     Band band;
+    if (plan.keep_rows) {  // the band and the rows f is given fit together: one pass keeps both
+        FFCUBE_CHECK(bands == 1);
+        band.reset(0, starts[1], col_counts);
+        std::vector<std::uint64_t> ptr{0};
+        std::vector<std::uint32_t> rows, col;
+        std::vector<float> val;
+        pass([&](std::uint32_t i, RowView r) {
+            if (progress) progress->add();
+            const std::size_t m = held(i, r);
+            for (std::size_t k = 0; k < m; ++k) band.add(i, r.col[k], r.val[k]);
+            const RowView g = given(i, r);
+            rows.push_back(i);
+            col.insert(col.end(), g.col.begin(), g.col.end());
+            val.insert(val.end(), g.val.begin(), g.val.end());
+            ptr.push_back(col.size());
+        });
+        band.check_full();
+        ++figures.passes;
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            const std::size_t b = ptr[k], e = ptr[k + 1];
+            f(rows[k], RowView{std::span<const std::uint32_t>(col).subspan(b, e - b), std::span<const float>(val).subspan(b, e - b)},
+              band.column(rows[k]));
+        }
+        return figures;
+    }
     if (bands == 1) {  // everything fits: the first pass collects the columns in memory
         band.reset(0, starts[1], col_counts);
         pass([&](std::uint32_t i, RowView r) {
@@ -223,7 +259,7 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
             load_band(band_path(scratch_dir, b), band);
             loaded = true;
         }
-        f(i, r, band.column(i));
+        f(i, given(i, r), band.column(i));
     });
     ++figures.passes;
     return figures;

@@ -48,6 +48,8 @@ public:
     const std::vector<std::uint32_t>& col_counts() const { return col_counts_; }
     // Per column c, its entries below the diagonal (rows i > c): ColumnPart::below_diagonal's counts.
     const std::vector<std::uint32_t>& lower_col_counts() const { return lower_col_counts_; }
+    // Entries right of the diagonal (F_ij, j > i): the rows ColumnPart::below_diagonal gives.
+    std::uint64_t upper_entries() const { return upper_entries_; }
 
 private:
     const Scene& scene_;
@@ -56,6 +58,7 @@ private:
     std::vector<std::vector<double>> g_;  // Σ A_i F_ij per object pair, not yet divided
     std::vector<double> area_;            // per object, of the rows seen
     std::vector<std::uint32_t> row_counts_, col_counts_, lower_col_counts_;
+    std::uint64_t upper_entries_ = 0;
 };
 
 // One pass over a matrix: calls its argument with every row, in order (e.g. FfmReader::for_each_row).

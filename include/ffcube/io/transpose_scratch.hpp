@@ -43,19 +43,27 @@ inline constexpr std::size_t kMaxOpenBands = 64;  // scratch files written by on
 struct TransposePlan {
     std::vector<std::uint32_t> bands;  // first column of each band, then n
     std::size_t passes = 0;            // passes over the matrix
+    // One band, and the rows f is given fit beside it: one pass keeps both (passes 1).
+    bool keep_rows = false;
     std::size_t band_count() const { return bands.empty() ? 0 : bands.size() - 1; }
 };
 // Bands of consecutive columns holding at most budget_entries entries each (at least one column).
 // Memory while a band is loaded: 8 bytes per entry (u32 row, float value) and 16 per column; while
 // spilling, a 64 KiB buffer per open file (at most kMaxOpenBands).
-TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries);
+// kept_row_entries: the entries of the rows f is given (ColumnPart::below_diagonal: those right of
+// the diagonal); when they and the one band fit in budget_entries together, one pass over the
+// matrix keeps both (plan.keep_rows) instead of reading it twice.
+TransposePlan plan_transpose(std::span<const std::uint32_t> col_counts, std::uint64_t budget_entries,
+                             std::uint64_t kept_row_entries = UINT64_MAX);
 
 struct TransposeFigures {
     std::size_t passes = 0;            // passes made over the matrix (plan.passes)
     std::uint64_t scratch_bytes = 0;   // written to scratch files
 };
 // part: every F_ki of column i, or those below the diagonal (formfactor/checks.hpp ColumnPart).
-// Calls f with every row i of the matrix `pass` goes over and its column i, in row order.
+// Calls f with every row i of the matrix `pass` goes over and its column i, in row order. With
+// ColumnPart::below_diagonal, f's row is the row's entries right of the diagonal (j > i) and the
+// column F_ki for k > i: each pair (i, k) once, at row min(i, k).
 // col_counts: the entries per column (RowStreamChecks::col_counts, or lower_col_counts for
 // ColumnPart::below_diagonal), as the plan was made from.
 // Scratch files go to scratch_dir and are removed as soon as read. progress, when given, is
