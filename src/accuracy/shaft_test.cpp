@@ -16,20 +16,30 @@ namespace ffcube::accuracy {
 
 namespace {
 
-// Whether the projections of the hull points and of q on `axis` overlap by at most tol.
-bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, double tol) {
-    double hlo = INFINITY, hhi = -INFINITY, qlo = INFINITY, qhi = -INFINITY;
+// The projection [lo, hi] of the hull points on `axis`.
+std::pair<double, double> hull_extent(const Vec3& axis, std::span<const Vec3> hull) {
+    double hlo = INFINITY, hhi = -INFINITY;
     for (const Vec3& v : hull) {
         const double d = glm::dot(axis, v);
         hlo = std::min(hlo, d);
         hhi = std::max(hhi, d);
     }
+    return {hlo, hhi};
+}
+
+// Whether the hull's projection on `axis` (extent) and q's overlap by at most tol.
+bool separated(const Vec3& axis, std::pair<double, double> extent, const Poly& q, double tol) {
+    double qlo = INFINITY, qhi = -INFINITY;
     for (std::size_t k = 0; k < q.n; ++k) {
         const double d = glm::dot(axis, q.v[k]);
         qlo = std::min(qlo, d);
         qhi = std::max(qhi, d);
     }
-    return hhi <= qlo + tol || qhi <= hlo + tol;
+    return extent.second <= qlo + tol || qhi <= extent.first + tol;
+}
+
+bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, double tol) {
+    return separated(axis, hull_extent(axis, hull), q, tol);
 }
 
 }  // namespace
@@ -91,6 +101,10 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
                 const Vec3 nrm = glm::cross(hull[b] - hull[a], hull[c] - hull[a]);
                 if (glm::dot(nrm, nrm) > 1e-24 * scale * scale * scale * scale) axes.push_back(glm::normalize(nrm));
             }
+    // Their hull extents too (the same numbers separated() computed per candidate before).
+    std::vector<std::pair<double, double>>& extent = scratch.axis_extent;
+    extent.clear();
+    for (const Vec3& axis : axes) extent.push_back(hull_extent(axis, hull));
     std::vector<Vec3>& seg = scratch.segments;
     seg.clear();
     for (std::size_t a = 0; a < m; ++a)
@@ -102,7 +116,7 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
         if (qi == i || qi == j) return true;
         const Poly& q = patches.polys[qi];
         bool sep = separated(scene.patches[qi].normal, hull, q, tol);
-        for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], hull, q, tol);
+        for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], extent[a], q, tol);
         for (std::size_t e = 0; !sep && e < q.n; ++e) {
             const Vec3 edge = q.v[(e + 1) % q.n] - q.v[e];
             for (std::size_t s = 0; !sep && s < seg.size(); ++s) {

@@ -14,6 +14,7 @@ namespace ffcube::accuracy {
 // Reused across calls (no heap allocation once grown).
 struct ShaftScratch {
     std::vector<Vec3> axes;
+    std::vector<std::pair<double, double>> axis_extent;  // the hull's projection on each of axes
     std::vector<Vec3> segments;
 };
 
