@@ -113,8 +113,8 @@ public:
     const std::vector<double>& prefix_sums() const { return prefix_; }
     // Σ ΔF over the pixels [a, b) of segment s (s.begin ≤ a ≤ b ≤ s.end).
     double run_sum(const RowSegment& s, std::size_t a, std::size_t b) const {
-        const double* t = prefix_.data() + s.prefix - s.begin;
-        return t[b] - t[a];
+        const double* t = prefix_.data() + s.prefix;
+        return t[b - s.begin] - t[a - s.begin];
     }
 
     // The atlas pixel that a direction (hemicube local frame, need not be unit) falls in, or
