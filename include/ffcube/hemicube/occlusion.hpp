@@ -5,11 +5,11 @@
 //
 // Depth is the hemicube's (gl/hemicube_worker.cpp): reversed Z with an infinite far plane, so a
 // point at distance d along the face's forward axis has depth near / d; larger is nearer, 0 is
-// nothing drawn.
+// nothing drawn. Fragments exist only for d >= near (glClipControl ZERO_TO_ONE, no depth clamp:
+// depth above 1 is clipped).
 #pragma once
 
 #include <cstdint>
-#include <optional>
 #include <span>
 #include <vector>
 
@@ -17,40 +17,55 @@
 
 namespace ffcube {
 
-// Minimum depth per tile of kTile × kTile pixels of one face's viewport.
-class FaceDepthTiles {
+// A min-depth pyramid of one face's viewport (HiZ): level 0 is the pixels, each level above
+// holds the minimum of (up to) 2 × 2 cells of the one below, up to a single cell. A cell's
+// minimum is over the face's own pixels only (cells on the right or top edge of an odd-sized
+// level have fewer children).
+class FaceDepthPyramid {
 public:
-    static constexpr int kTile = 8;
-
     // depth: the whole atlas, row-major, atlas_width pixels a row, row 0 at the bottom (as
     // glReadPixels returns it); vp: the face's viewport in it.
     void build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp);
 
-    // Whether every pixel of the rectangle [x0, x1] × [y0, y1] (face pixels, inclusive, within
-    // the viewport) holds a depth greater than d. Looks at the minima of the tiles the rectangle
-    // meets: a superset of its pixels, so true is never wrong.
+    // Whether every pixel of the rectangle [x0, x1] × [y0, y1] (face pixels, inclusive, clipped
+    // to the viewport) holds a depth greater than d: exactly what a scan of its pixels answers.
+    // It descends from the coarsest level at which the rectangle meets at most 2 × 2 cells: a
+    // cell whose minimum is above d answers for all its pixels, a cell wholly inside the
+    // rectangle whose minimum is not answers false, and only a cell that straddles the
+    // rectangle's edge with a minimum not above d is split into its children.
     bool covers(int x0, int y0, int x1, int y1, double d) const;
 
+    int width() const { return w_.empty() ? 0 : w_[0]; }
+    int height() const { return h_.empty() ? 0 : h_[0]; }
+
 private:
-    int tiles_x_ = 0, tiles_y_ = 0;
+    bool cell_covers(int k, int cx, int cy, int x0, int y0, int x1, int y1, double d) const;
+
+    std::vector<int> w_, h_;                // each level's size in cells
+    std::vector<std::size_t> offset_;       // each level's first cell in min_
     std::vector<float> min_;
 };
 
 // Where a convex polygon can show on a face: the rectangle of face pixels that may hold one of
-// its fragments, and the largest depth any of its points can have.
+// its fragments, and the largest depth any of its points there can have.
 struct FaceFootprint {
-    int x0, y0, x1, y1;  // inclusive, clamped to the viewport
-    double max_depth;    // near / (the least distance along forward of its corners)
+    int x0, y0, x1, y1;  // inclusive, clamped to the viewport; x0 > x1 or y0 > y1: no pixel
+    double max_depth;    // near / (the least distance along forward of the clipped polygon)
 };
 
-// The footprint of the polygon with these corners (hemicube local frame, eye at the origin) on
-// face f drawn with near plane `near`; nullopt when a corner lies less than 1e-6 of its distance
-// from the eye in front of the face's eye plane, or behind it (its projection is unbounded: no
-// footprint, never culled). The rectangle is the projected corners' bounding box grown by one
-// pixel on each side: the rasterizer snaps vertices to a fraction of a pixel and samples pixel
-// centres, so every pixel it fills lies inside. A rectangle that misses the viewport comes back
-// with x0 > x1 or y0 > y1.
-std::optional<FaceFootprint> face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near);
+// The footprint of the convex planar polygon with these corners (hemicube local frame, eye at
+// the origin) on face f drawn with near plane `near`. The polygon is first clipped
+// (Sutherland–Hodgman, in the face's frame) to what can make a fragment: the near plane
+// (forward·v >= near; GL clips depth above 1) and the face's frustum widened by one pixel on
+// each side (pixel centres lie half a pixel inside the viewport; the widening takes the
+// rasterizer's snapping and the float rounding of GL's own clipping). A polygon crossing the
+// face's eye plane thus gets a bounded footprint; one wholly outside gets none (x0 > x1).
+// The rectangle is the clipped polygon's projected bounding box grown by one pixel on each
+// side: the rasterizer snaps vertices to a fraction of a pixel and samples pixel centres, so
+// every pixel it fills lies inside. max_depth = near / the least forward distance of the
+// clipped polygon's vertices (distance is linear on the polygon: its minimum is at a vertex);
+// a polygon reaching the near plane gets 1, the largest depth there is, and is never culled.
+FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near);
 
 // The relative depth margin of the test (hidden_behind): a piece is culled only when its nearest
 // possible depth is below (1 − kOcclusionMargin) × the occluders' least depth over its footprint.
@@ -63,9 +78,9 @@ inline constexpr double kOcclusionMargin = 1e-2;
 
 // Whether a polygon with this footprint is hidden on the face: every pixel it may fill already
 // holds a depth nearer than any of its points by the margin.
-inline bool hidden_behind(const FaceDepthTiles& tiles, const FaceFootprint& fp) {
+inline bool hidden_behind(const FaceDepthPyramid& depth, const FaceFootprint& fp) {
     if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return true;  // it fills no pixel of this face
-    return tiles.covers(fp.x0, fp.y0, fp.x1, fp.y1, fp.max_depth / (1.0 - kOcclusionMargin));
+    return depth.covers(fp.x0, fp.y0, fp.x1, fp.y1, fp.max_depth / (1.0 - kOcclusionMargin));
 }
 
 }  // namespace ffcube
