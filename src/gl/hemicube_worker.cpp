@@ -803,7 +803,8 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
         }
         for (std::size_t f = 0; f < 5; ++f) {
             if (!(d.faces & (1u << f))) continue;
-            if (hidden_behind(depth_pyramid_[f], face_footprint(faces[f], corners_, near))) {
+            FaceFootprint fp = face_footprint(faces[f], corners_, near, false);
+            if (hidden_behind(depth_pyramid_[f], fp)) {
                 d.faces = static_cast<std::uint8_t>(d.faces & ~(1u << f));
                 ++st.pieces_occluded[f];
             }

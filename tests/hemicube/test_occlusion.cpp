@@ -41,7 +41,7 @@ TEST(OcclusionFootprint, HoldsEveryPixelTheClippedPolygonFillsAndBoundsItsDepth)
     const double near = 0.05;
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-1, 1), w(0, 1);
-    std::size_t filled = 0, crossing_bounded = 0, crossing_culled_rect = 0, empty = 0;
+    std::size_t filled = 0, crossing_bounded = 0, crossing_culled_rect = 0, empty = 0, with_edges = 0;
     for (int t = 0; t < 400; ++t) {
         const double scale = 0.2 * std::pow(50.0, w(rng));
         std::vector<Vec3> tri;
@@ -52,6 +52,7 @@ TEST(OcclusionFootprint, HoldsEveryPixelTheClippedPolygonFillsAndBoundsItsDepth)
             for (const Vec3& v : tri) crosses = crosses || glm::dot(v, f.forward) <= 0;
             const bool none = fp.x0 > fp.x1 || fp.y0 > fp.y1;
             empty += none;
+            with_edges += fp.edges > 0;
             if (crosses && !none) {
                 ++crossing_bounded;
                 // Smaller than the whole face: something a tile scan could now cull.
@@ -72,6 +73,21 @@ TEST(OcclusionFootprint, HoldsEveryPixelTheClippedPolygonFillsAndBoundsItsDepth)
                     EXPECT_TRUE(x >= fp.x0 && x <= fp.x1 && y >= fp.y0 && y <= fp.y1)
                         << "pixel (" << x << ", " << y << ") outside [" << fp.x0 << ", " << fp.x1 << "] × [" << fp.y0
                         << ", " << fp.y1 << "]";
+                    // Every half-plane holds the pixel's centre (they carry a one-pixel
+                    // margin; here the test needs none).
+                    for (int e = 0; e < fp.edges; ++e) {
+                        const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                        EXPECT_LE(nx * (x + 0.5) + ny * (y + 0.5), c - 1.0 + 1e-9) << "edge " << e << " of triangle " << t;
+                    }
+                    // The probe pixel, if any, is one of the footprint's: inside the
+                    // rectangle and every half-plane.
+                    if (fp.probe_x >= 0) {
+                        EXPECT_TRUE(fp.probe_x >= fp.x0 && fp.probe_x <= fp.x1 && fp.probe_y >= fp.y0 && fp.probe_y <= fp.y1);
+                        for (int e = 0; e < fp.edges; ++e) {
+                            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                            EXPECT_LE(nx * (fp.probe_x + 0.5) + ny * (fp.probe_y + 0.5), c);
+                        }
+                    }
                     // The bound is near / (least distance of the clipped polygon): 1e-12
                     // relative is the rounding of the two computations of d.
                     EXPECT_LE(near / d, fp.max_depth * (1 + 1e-12));
@@ -85,6 +101,7 @@ TEST(OcclusionFootprint, HoldsEveryPixelTheClippedPolygonFillsAndBoundsItsDepth)
     EXPECT_GT(crossing_bounded, 400u);  // 831 with seed 7
     EXPECT_GT(crossing_culled_rect, 300u);  // 724 of 831 with seed 7
     EXPECT_GT(empty, 0u);
+    EXPECT_GT(with_edges, 500u);
 }
 
 // A polygon wholly nearer than the near plane fills nothing; one reaching it gets depth 1 (the
@@ -145,6 +162,35 @@ TEST(OcclusionPyramid, EqualsAScanOfTheRectanglesPixels) {
                                        double(any), 0.5 * exact, w(rng)}) {
                     ASSERT_EQ(pyr.covers(x0, y0, x1, y1, d), double(exact) > d)
                         << "rect [" << x0 << ", " << x1 << "] × [" << y0 << ", " << y1 << "] d " << d << " min " << exact;
+                }
+            }
+            // With half-planes (random lines through the rectangle, either side): the scan
+            // keeps the pixels whose centres satisfy them all.
+            std::uniform_real_distribution<double> ang(0, 6.283185307179586);
+            for (int t = 0; t < 300; ++t) {
+                FaceFootprint fp{};
+                fp.x0 = xs(rng), fp.x1 = xs(rng), fp.y0 = ys(rng), fp.y1 = ys(rng);
+                if (fp.x0 > fp.x1) std::swap(fp.x0, fp.x1);
+                if (fp.y0 > fp.y1) std::swap(fp.y0, fp.y1);
+                fp.edges = 1 + t % 4;
+                for (int e = 0; e < fp.edges; ++e) {
+                    const double a = ang(rng);
+                    const double cx = fp.x0 + w(rng) * (fp.x1 - fp.x0 + 1), cy = fp.y0 + w(rng) * (fp.y1 - fp.y0 + 1);
+                    fp.edge[static_cast<std::size_t>(e)] = {std::cos(a), std::sin(a), std::cos(a) * cx + std::sin(a) * cy + 0.5};
+                }
+                float exact = INFINITY;
+                for (int y = fp.y0; y <= fp.y1; ++y)
+                    for (int x = fp.x0; x <= fp.x1; ++x) {
+                        bool in = true;
+                        for (int e = 0; e < fp.edges; ++e) {
+                            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                            in = in && nx * (x + 0.5) + ny * (y + 0.5) <= c;
+                        }
+                        if (in) exact = std::min(exact, depth[static_cast<std::size_t>(vp.y + y) * aw + vp.x + x]);
+                    }
+                for (const double d : {double(exact), std::nextafter(double(exact), 0.0), 0.5 * exact, w(rng)}) {
+                    if (std::isinf(exact) && d == exact) continue;
+                    ASSERT_EQ(pyr.covers(fp, d), double(exact) > d) << "footprint " << t << " d " << d << " min " << exact;
                 }
             }
             EXPECT_TRUE(pyr.covers(1, 1, 0, 0, 1.0));  // an empty rectangle

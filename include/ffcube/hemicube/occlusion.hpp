@@ -9,6 +9,7 @@
 // depth above 1 is clipped).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -16,6 +17,26 @@
 #include "ffcube/hemicube/layout.hpp"
 
 namespace ffcube {
+
+// Where a convex polygon can show on a face: the rectangle of face pixels that may hold one of
+// its fragments, and the largest depth any of its points there can have. Optionally also
+// half-planes in face pixel coordinates (column, row; pixel (x, y) has its centre at
+// (x + 0.5, y + 0.5)) that every pixel centre it may fill satisfies: nx·col + ny·row <= c
+// (c includes the one-pixel margin). Without them the rectangle alone bounds it.
+struct FaceFootprint {
+    static constexpr int kMaxEdges = 8;
+    int x0, y0, x1, y1;  // inclusive, clamped to the viewport; x0 > x1 or y0 > y1: no pixel
+    double max_depth;    // near / (the least distance along forward of the clipped polygon)
+    int edges = 0;
+    std::array<std::array<double, 3>, kMaxEdges> edge;  // (nx, ny, c); the first `edges` set
+    // A pixel of the footprint that the query looks at first (outside the rectangle: none).
+    int probe_x = -1, probe_y = -1;
+    // The clipped polygon's projected vertices (column, row), for add_half_planes; none when it
+    // has more than kMaxVerts.
+    static constexpr int kMaxVerts = 16;
+    int verts = 0;
+    std::array<std::array<double, 2>, kMaxVerts> vert;  // the first `verts` set
+};
 
 // A min-depth pyramid of one face's viewport (HiZ): level 0 is the pixels, each level above
 // holds the minimum of (up to) 2 × 2 cells of the one below, up to a single cell. A cell's
@@ -34,27 +55,27 @@ public:
     // rectangle whose minimum is not answers false, and only a cell that straddles the
     // rectangle's edge with a minimum not above d is split into its children.
     bool covers(int x0, int y0, int x1, int y1, double d) const;
+    // The same over the pixels of the footprint's rectangle whose centres satisfy all its
+    // half-planes (a cell that no such centre can lie in is skipped; one wholly inside them all
+    // is answered by its minimum). Its probe pixel, which must be one of those, is looked at
+    // first (a visible piece's query usually ends there).
+    bool covers(const FaceFootprint& fp, double d) const;
 
     int width() const { return w_.empty() ? 0 : w_[0]; }
     int height() const { return h_.empty() ? 0 : h_[0]; }
 
 private:
     bool cell_covers(int k, int cx, int cy, int x0, int y0, int x1, int y1, double d) const;
+    bool cell_covers_fp(int k, int cx, int cy, const FaceFootprint& fp, double d) const;
 
     std::vector<int> w_, h_;                // each level's size in cells
     std::vector<std::size_t> offset_;       // each level's first cell in min_
     std::vector<float> min_;
 };
 
-// Where a convex polygon can show on a face: the rectangle of face pixels that may hold one of
-// its fragments, and the largest depth any of its points there can have.
-struct FaceFootprint {
-    int x0, y0, x1, y1;  // inclusive, clamped to the viewport; x0 > x1 or y0 > y1: no pixel
-    double max_depth;    // near / (the least distance along forward of the clipped polygon)
-};
-
 // The footprint of the convex planar polygon with these corners (hemicube local frame, eye at
-// the origin) on face f drawn with near plane `near`. The polygon is first clipped
+// the origin) on face f drawn with near plane `near`; with its edges' half-planes
+// (add_half_planes) when `edges`. The polygon is first clipped
 // (Sutherland–Hodgman, in the face's frame) to what can make a fragment: the near plane
 // (forward·v >= near; GL clips depth above 1) and the face's frustum widened by one pixel on
 // each side (pixel centres lie half a pixel inside the viewport; the widening takes the
@@ -65,7 +86,16 @@ struct FaceFootprint {
 // every pixel it fills lies inside. max_depth = near / the least forward distance of the
 // clipped polygon's vertices (distance is linear on the polygon: its minimum is at a vertex);
 // a polygon reaching the near plane gets 1, the largest depth there is, and is never culled.
-FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near);
+FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near, bool edges = true);
+
+// Adds the half-planes of the footprint's edges, for a rectangle larger than 4 × 4 pixels
+// (smaller ones gain little) with its vertices kept; false when it adds none. The perspective
+// projection maps the clipped polygon (convex, planar, in front of the eye) onto the convex hull
+// of its projected vertices; a filled pixel centre lies within a fraction of a pixel of it (the
+// rasterizer's snapping), so within one pixel of every supporting line. Each edge's line gets
+// the side and the offset that hold every projected vertex (so the half-plane holds the hull
+// whatever the rounding or the orientation), then one pixel more.
+bool add_half_planes(FaceFootprint& fp);
 
 // The relative depth margin of the test (hidden_behind): a piece is culled only when its nearest
 // possible depth is below (1 − kOcclusionMargin) × the occluders' least depth over its footprint.
@@ -78,9 +108,9 @@ inline constexpr double kOcclusionMargin = 1e-2;
 
 // Whether a polygon with this footprint is hidden on the face: every pixel it may fill already
 // holds a depth nearer than any of its points by the margin.
-inline bool hidden_behind(const FaceDepthPyramid& depth, const FaceFootprint& fp) {
-    if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return true;  // it fills no pixel of this face
-    return depth.covers(fp.x0, fp.y0, fp.x1, fp.y1, fp.max_depth / (1.0 - kOcclusionMargin));
-}
+// Cheapest first: the probe pixel (a visible piece usually ends there), the rectangle, then
+// (when the rectangle is not covered) the rectangle cut by the edges' half-planes, which it adds
+// to fp.
+bool hidden_behind(const FaceDepthPyramid& depth, FaceFootprint& fp);
 
 }  // namespace ffcube
