@@ -11,115 +11,65 @@
 
 namespace ffcube {
 
-void FaceDepthPyramid::build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp) {
+void FaceDepthRows::build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp) {
     FFCUBE_CHECK_MSG(vp.x >= 0 && vp.y >= 0 && vp.width > 0 && vp.height > 0 && vp.x + vp.width <= atlas_width &&
                          static_cast<std::size_t>(vp.y + vp.height) * static_cast<std::size_t>(atlas_width) <= depth.size(),
-                     "FaceDepthPyramid: the viewport lies outside the depth image");
-    w_.assign(1, vp.width);
-    h_.assign(1, vp.height);
-    offset_.assign(1, 0);
-    std::size_t total = static_cast<std::size_t>(vp.width) * static_cast<std::size_t>(vp.height);
-    while (w_.back() > 1 || h_.back() > 1) {
-        offset_.push_back(total);
-        w_.push_back((w_.back() + 1) / 2);
-        h_.push_back((h_.back() + 1) / 2);
-        total += static_cast<std::size_t>(w_.back()) * static_cast<std::size_t>(h_.back());
-    }
-    min_.resize(total);
-    for (int y = 0; y < vp.height; ++y) {
+                     "FaceDepthRows: the viewport lies outside the depth image");
+    w_ = vp.width;
+    h_ = vp.height;
+    levels_ = 32 - __builtin_clz(static_cast<unsigned>(w_));  // 2^(levels − 1) <= w
+    plane_ = static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_);
+    min_.resize(plane_ * static_cast<std::size_t>(levels_));
+    for (int y = 0; y < h_; ++y) {
         const float* row = depth.data() + static_cast<std::size_t>(vp.y + y) * static_cast<std::size_t>(atlas_width) + vp.x;
-        std::copy(row, row + vp.width, min_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * vp.width));
+        std::copy(row, row + w_, min_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * w_));
     }
-    for (std::size_t k = 1; k < w_.size(); ++k) {
-        const int cw = w_[k - 1], ch = h_[k - 1];
-        const float* child = min_.data() + offset_[k - 1];
-        float* cell = min_.data() + offset_[k];
-        for (int y = 0; y < h_[k]; ++y) {
-            const float* r0 = child + static_cast<std::size_t>(2 * y) * cw;
-            const float* r1 = 2 * y + 1 < ch ? r0 + cw : r0;  // an odd top row: its cells have one child row
-            for (int x = 0; x < w_[k]; ++x) {
-                const int x1 = 2 * x + 1 < cw ? 2 * x + 1 : 2 * x;
-                cell[static_cast<std::size_t>(y) * w_[k] + x] = std::min(std::min(r0[2 * x], r0[x1]), std::min(r1[2 * x], r1[x1]));
-            }
+    for (int k = 1; k < levels_; ++k) {
+        const int half = 1 << (k - 1), n = w_ - (1 << k) + 1;  // runs of 2^k that fit
+        for (int y = 0; y < h_; ++y) {
+            const float* src = min_.data() + static_cast<std::size_t>(k - 1) * plane_ + static_cast<std::size_t>(y) * w_;
+            float* dst = min_.data() + static_cast<std::size_t>(k) * plane_ + static_cast<std::size_t>(y) * w_;
+            for (int x = 0; x < n; ++x) dst[x] = std::min(src[x], src[x + half]);
         }
     }
 }
 
-bool FaceDepthPyramid::cell_covers(int k, int cx, int cy, int x0, int y0, int x1, int y1, double d) const {
-    if (static_cast<double>(min_[offset_[k] + static_cast<std::size_t>(cy) * w_[k] + cx]) > d) return true;
-    if (k == 0) return false;  // a pixel of the rectangle not nearer than d
-    const int px0 = cx << k, px1 = std::min(((cx + 1) << k) - 1, w_[0] - 1);
-    const int py0 = cy << k, py1 = std::min(((cy + 1) << k) - 1, h_[0] - 1);
-    // Wholly inside: the pixel that sets its minimum is one of the rectangle's.
-    if (px0 >= x0 && px1 <= x1 && py0 >= y0 && py1 <= y1) return false;
-    const int c = k - 1;
-    const int ccx0 = std::max(2 * cx, x0 >> c), ccx1 = std::min({2 * cx + 1, w_[c] - 1, x1 >> c});
-    const int ccy0 = std::max(2 * cy, y0 >> c), ccy1 = std::min({2 * cy + 1, h_[c] - 1, y1 >> c});
-    for (int yy = ccy0; yy <= ccy1; ++yy)
-        for (int xx = ccx0; xx <= ccx1; ++xx)
-            if (!cell_covers(c, xx, yy, x0, y0, x1, y1, d)) return false;
-    return true;
-}
-
-bool FaceDepthPyramid::covers(int x0, int y0, int x1, int y1, double d) const {
-    if (w_.empty()) return false;
+bool FaceDepthRows::covers(int x0, int y0, int x1, int y1, double d) const {
+    if (w_ == 0) return false;
     x0 = std::max(x0, 0);
     y0 = std::max(y0, 0);
-    x1 = std::min(x1, w_[0] - 1);
-    y1 = std::min(y1, h_[0] - 1);
+    x1 = std::min(x1, w_ - 1);
+    y1 = std::min(y1, h_ - 1);
     if (x0 > x1 || y0 > y1) return true;
-    // The finest level at which the rectangle meets at most 2 × 2 cells.
-    int k = 0;
-    while ((x1 >> k) - (x0 >> k) > 1 || (y1 >> k) - (y0 >> k) > 1) ++k;
-    for (int cy = y0 >> k; cy <= y1 >> k; ++cy)
-        for (int cx = x0 >> k; cx <= x1 >> k; ++cx)
-            if (!cell_covers(k, cx, cy, x0, y0, x1, y1, d)) return false;
+    for (int y = y0; y <= y1; ++y)
+        if (!run_covers(y, x0, x1, d)) return false;
     return true;
 }
 
-bool FaceDepthPyramid::cell_covers_fp(int k, int cx, int cy, const FaceFootprint& fp, double d) const {
-    if (static_cast<double>(min_[offset_[k] + static_cast<std::size_t>(cy) * w_[k] + cx]) > d) return true;
-    const int px0 = cx << k, px1 = std::min(((cx + 1) << k) - 1, w_[0] - 1);
-    const int py0 = cy << k, py1 = std::min(((cy + 1) << k) - 1, h_[0] - 1);
-    // The pixel centres of the cell's part of the rectangle: [X0, X1] × [Y0, Y1].
-    const double X0 = std::max(px0, fp.x0) + 0.5, X1 = std::min(px1, fp.x1) + 0.5;
-    const double Y0 = std::max(py0, fp.y0) + 0.5, Y1 = std::min(py1, fp.y1) + 0.5;
-    bool inside = true;  // every such centre satisfies every half-plane
-    for (int e = 0; e < fp.edges; ++e) {
-        const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
-        const double lo = nx * (nx > 0 ? X0 : X1) + ny * (ny > 0 ? Y0 : Y1);
-        if (lo > c) return true;  // no centre of the polygon's pixels here
-        inside = inside && nx * (nx > 0 ? X1 : X0) + ny * (ny > 0 ? Y1 : Y0) <= c;
+bool FaceDepthRows::covers(const FaceFootprint& fp, double d) const {
+    if (w_ == 0) return false;
+    const int x0 = std::max(fp.x0, 0), x1 = std::min(fp.x1, w_ - 1);
+    const int y0 = std::max(fp.y0, 0), y1 = std::min(fp.y1, h_ - 1);
+    if (x0 > x1 || y0 > y1) return true;
+    for (int y = y0; y <= y1; ++y) {
+        // The centres X = x + 0.5 of this row with nx X <= c − ny Y for every half-plane.
+        const double Y = y + 0.5;
+        double lo = x0 + 0.5, hi = x1 + 0.5;
+        for (int e = 0; e < fp.edges; ++e) {
+            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+            const double r = c - ny * Y;
+            if (nx > 0)
+                hi = std::min(hi, r / nx);
+            else if (nx < 0)
+                lo = std::max(lo, r / nx);
+            else if (r < 0)
+                hi = -INFINITY;  // a horizontal line with this row outside
+        }
+        if (!(lo <= hi)) continue;  // no centre of this row
+        const double xl = std::ceil(lo - 0.5), xh = std::floor(hi - 0.5);
+        if (xl > xh) continue;
+        if (!run_covers(y, static_cast<int>(xl), static_cast<int>(xh), d)) return false;
     }
-    if (k == 0) return false;  // a pixel of the footprint not nearer than d
-    // Wholly inside: the pixel that sets its minimum is one of the footprint's.
-    if (inside && px0 >= fp.x0 && px1 <= fp.x1 && py0 >= fp.y0 && py1 <= fp.y1) return false;
-    const int c = k - 1;
-    const int ccx0 = std::max(2 * cx, fp.x0 >> c), ccx1 = std::min({2 * cx + 1, w_[c] - 1, fp.x1 >> c});
-    const int ccy0 = std::max(2 * cy, fp.y0 >> c), ccy1 = std::min({2 * cy + 1, h_[c] - 1, fp.y1 >> c});
-    for (int yy = ccy0; yy <= ccy1; ++yy)
-        for (int xx = ccx0; xx <= ccx1; ++xx)
-            if (!cell_covers_fp(c, xx, yy, fp, d)) return false;
-    return true;
-}
-
-bool FaceDepthPyramid::covers(const FaceFootprint& fp_in, double d) const {
-    if (w_.empty()) return false;
-    FaceFootprint fp = fp_in;
-    fp.x0 = std::max(fp.x0, 0);
-    fp.y0 = std::max(fp.y0, 0);
-    fp.x1 = std::min(fp.x1, w_[0] - 1);
-    fp.y1 = std::min(fp.y1, h_[0] - 1);
-    if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return true;
-    // The probe first: a pixel of the footprint, often one that shows the polygon or the sky.
-    if (fp.probe_x >= fp.x0 && fp.probe_x <= fp.x1 && fp.probe_y >= fp.y0 && fp.probe_y <= fp.y1 &&
-        !(static_cast<double>(min_[static_cast<std::size_t>(fp.probe_y) * w_[0] + fp.probe_x]) > d))
-        return false;
-    int k = 0;
-    while ((fp.x1 >> k) - (fp.x0 >> k) > 1 || (fp.y1 >> k) - (fp.y0 >> k) > 1) ++k;
-    for (int cy = fp.y0 >> k; cy <= fp.y1 >> k; ++cy)
-        for (int cx = fp.x0 >> k; cx <= fp.x1 >> k; ++cx)
-            if (!cell_covers_fp(k, cx, cy, fp, d)) return false;
     return true;
 }
 
@@ -182,7 +132,7 @@ FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, d
     fp.max_depth = 0.0;
     if (n == 0) return fp;  // no point of it can make a fragment on this face
     double dmin = INFINITY, cx0 = INFINITY, cx1 = -INFINITY, cy0 = INFINITY, cy1 = -INFINITY, mx = 0, my = 0;
-    std::array<glm::dvec2, kCap> proj;
+    const bool keep = n <= static_cast<std::size_t>(FaceFootprint::kMaxVerts);
     const double kx = w / (fr.right - fr.left), ky = h / (fr.top - fr.bottom);
     for (std::size_t k = 0; k < n; ++k) {
         const P& p = poly[k];
@@ -198,7 +148,7 @@ FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, d
         cy1 = std::max(cy1, row);
         mx += col;
         my += row;
-        proj[k] = glm::dvec2(col, row);
+        if (keep) fp.vert[k] = {col, row};
     }
     // Grown by one pixel, then clamped (as doubles first, against any rounding far outside).
     const auto lo = [](double c, double size) { return static_cast<int>(std::clamp(std::floor(c) - 1, -1.0, size)); };
@@ -217,10 +167,7 @@ FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, d
         fp.probe_x = static_cast<int>(pxd);
         fp.probe_y = static_cast<int>(pyd);
     }
-    if (n <= static_cast<std::size_t>(FaceFootprint::kMaxVerts)) {
-        fp.verts = static_cast<int>(n);
-        for (std::size_t k = 0; k < n; ++k) fp.vert[k] = {proj[k].x, proj[k].y};
-    }
+    fp.verts = keep ? static_cast<int>(n) : 0;
     if (edges) add_half_planes(fp);
     return fp;
 }
@@ -250,7 +197,7 @@ bool add_half_planes(FaceFootprint& fp) {
     return fp.edges > 0;
 }
 
-bool hidden_behind(const FaceDepthPyramid& depth, FaceFootprint& fp) {
+bool hidden_behind(const FaceDepthRows& depth, FaceFootprint& fp) {
     if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return true;  // it fills no pixel of this face
     const double d = fp.max_depth / (1.0 - kOcclusionMargin);
     if (fp.probe_x >= 0 && !depth.covers(fp.probe_x, fp.probe_y, fp.probe_x, fp.probe_y, d)) return false;

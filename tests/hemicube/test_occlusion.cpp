@@ -1,7 +1,7 @@
 // The CPU half of occlusion culling (hemicube/occlusion.hpp), against brute force: a polygon's
 // footprint holds every pixel whose centre's ray meets the polygon at or beyond the near plane
 // (what the rasterizer fills, without its snapping) and bounds the depth there, also for
-// polygons that cross a face's eye plane; the depth pyramid answers exactly what a scan of the
+// polygons that cross a face's eye plane; the row minima answer exactly what a scan of the
 // rectangle's pixels answers.
 #include <gtest/gtest.h>
 
@@ -121,8 +121,8 @@ TEST(OcclusionFootprint, NearPlane) {
 
 // Random depth images with holes (0: nothing drawn) and runs of equal values; rectangles of every
 // size on viewports of odd and even sizes; thresholds at, just below and just above pixel
-// values: the pyramid's answer equals the scan's every time.
-TEST(OcclusionPyramid, EqualsAScanOfTheRectanglesPixels) {
+// values: the row minima's answer equals the scan's every time.
+TEST(OcclusionRows, EqualsAScanOfTheRectanglesPixels) {
     std::mt19937_64 rng(3);
     const int aw = 80, ah = 70;
     std::vector<float> depth(static_cast<std::size_t>(aw) * ah);
@@ -142,7 +142,7 @@ TEST(OcclusionPyramid, EqualsAScanOfTheRectanglesPixels) {
                     for (int x = x0; x <= x1; ++x) depth[static_cast<std::size_t>(y) * aw + x] = v;
             }
             for (int h = 0; h < image; ++h) depth[std::uniform_int_distribution<std::size_t>(0, depth.size() - 1)(rng)] = h % 2 ? 0.0f : 0.05f;
-            FaceDepthPyramid pyr;
+            FaceDepthRows pyr;
             pyr.build(depth, aw, vp);
             ASSERT_EQ(pyr.width(), vp.width);
             ASSERT_EQ(pyr.height(), vp.height);
@@ -198,17 +198,20 @@ TEST(OcclusionPyramid, EqualsAScanOfTheRectanglesPixels) {
     }
 }
 
-TEST(OcclusionPyramid, HiddenBehindNeedsTheMargin) {
+TEST(OcclusionRows, HiddenBehindNeedsTheMargin) {
     const HemicubeLayout lay(16);
     const FaceSpec& top = lay.face(HemicubeFace::Top);
     std::vector<float> depth(static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height(), 0.5f);
-    FaceDepthPyramid pyr;
+    FaceDepthRows pyr;
     pyr.build(depth, lay.atlas_width(), top.viewport);
-    FaceFootprint fp{2, 2, 5, 5, 0.5 * (1 - kOcclusionMargin) * 0.999};
+    FaceFootprint fp{};
+    fp.x0 = fp.y0 = 2;
+    fp.x1 = fp.y1 = 5;
+    fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 0.999;
     EXPECT_TRUE(hidden_behind(pyr, fp));
     fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 1.001;  // within the margin of the occluders
     EXPECT_FALSE(hidden_behind(pyr, fp));
-    fp = FaceFootprint{3, 0, 2, 5, 1.0};  // misses the face: no pixel to fill
+    fp.x0 = 3, fp.x1 = 2;  // misses the face: no pixel to fill
     EXPECT_TRUE(hidden_behind(pyr, fp));
 }
 

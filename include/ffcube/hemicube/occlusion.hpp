@@ -9,6 +9,7 @@
 // depth above 1 is clipped).
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <span>
@@ -38,38 +39,39 @@ struct FaceFootprint {
     std::array<std::array<double, 2>, kMaxVerts> vert;  // the first `verts` set
 };
 
-// A min-depth pyramid of one face's viewport (HiZ): level 0 is the pixels, each level above
-// holds the minimum of (up to) 2 × 2 cells of the one below, up to a single cell. A cell's
-// minimum is over the face's own pixels only (cells on the right or top edge of an odd-sized
-// level have fewer children).
-class FaceDepthPyramid {
+// The minimum depth over any run of pixels of a row of one face's viewport, in O(1): per row a
+// sparse table, level k holding the minimum of the 2^k pixels starting at each x (level 0 the
+// pixels); a run [x0, x1] is the union of the two level-k runs starting at x0 and at
+// x1 + 1 − 2^k, k the largest with 2^k <= its length.
+class FaceDepthRows {
 public:
     // depth: the whole atlas, row-major, atlas_width pixels a row, row 0 at the bottom (as
     // glReadPixels returns it); vp: the face's viewport in it.
     void build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp);
 
     // Whether every pixel of the rectangle [x0, x1] × [y0, y1] (face pixels, inclusive, clipped
-    // to the viewport) holds a depth greater than d: exactly what a scan of its pixels answers.
-    // It descends from the coarsest level at which the rectangle meets at most 2 × 2 cells: a
-    // cell whose minimum is above d answers for all its pixels, a cell wholly inside the
-    // rectangle whose minimum is not answers false, and only a cell that straddles the
-    // rectangle's edge with a minimum not above d is split into its children.
+    // to the viewport) holds a depth greater than d: exactly what a scan of its pixels answers,
+    // two table entries a row.
     bool covers(int x0, int y0, int x1, int y1, double d) const;
-    // The same over the pixels of the footprint's rectangle whose centres satisfy all its
-    // half-planes (a cell that no such centre can lie in is skipped; one wholly inside them all
-    // is answered by its minimum). Its probe pixel, which must be one of those, is looked at
-    // first (a visible piece's query usually ends there).
+    // The same over the pixels of the footprint's rectangle whose centres (x + 0.5, y + 0.5)
+    // satisfy all its half-planes: on each row they make one run (the half-planes are convex),
+    // whose ends are solved from the half-planes (a centre on a half-plane's line may fall
+    // either way by rounding: the lines lie a pixel outside what the polygon can fill).
     bool covers(const FaceFootprint& fp, double d) const;
 
-    int width() const { return w_.empty() ? 0 : w_[0]; }
-    int height() const { return h_.empty() ? 0 : h_[0]; }
+    int width() const { return w_; }
+    int height() const { return h_; }
 
 private:
-    bool cell_covers(int k, int cx, int cy, int x0, int y0, int x1, int y1, double d) const;
-    bool cell_covers_fp(int k, int cx, int cy, const FaceFootprint& fp, double d) const;
+    bool run_covers(int y, int x0, int x1, double d) const {
+        const int len = x1 - x0 + 1;
+        const int k = 31 - __builtin_clz(static_cast<unsigned>(len));
+        const float* t = min_.data() + static_cast<std::size_t>(k) * plane_ + static_cast<std::size_t>(y) * w_;
+        return static_cast<double>(std::min(t[x0], t[x1 + 1 - (1 << k)])) > d;
+    }
 
-    std::vector<int> w_, h_;                // each level's size in cells
-    std::vector<std::size_t> offset_;       // each level's first cell in min_
+    int w_ = 0, h_ = 0, levels_ = 0;
+    std::size_t plane_ = 0;  // w_ × h_: one level
     std::vector<float> min_;
 };
 
@@ -111,6 +113,6 @@ inline constexpr double kOcclusionMargin = 1e-2;
 // Cheapest first: the probe pixel (a visible piece usually ends there), the rectangle, then
 // (when the rectangle is not covered) the rectangle cut by the edges' half-planes, which it adds
 // to fp.
-bool hidden_behind(const FaceDepthPyramid& depth, FaceFootprint& fp);
+bool hidden_behind(const FaceDepthRows& depth, FaceFootprint& fp);
 
 }  // namespace ffcube
