@@ -105,7 +105,11 @@ bool add_half_planes(FaceFootprint& fp);
 // coordinates, so a fragment may lie a few float ulps (about 1e-7 each) times the triangle's
 // conditioning nearer than the exact max_depth; 1e-2 leaves a factor 1e5 for that (slivers of
 // aspect up to ~1e5), and a piece just 1% behind a facade is rare (what hides a piece in a city
-// is a building in between, tens of percent nearer).
+// is a building in between, tens of percent nearer). A triangle that crosses the near plane is
+// clipped by GL in float first (its new vertices lie on the near plane, at depth 1), which adds
+// the same kind of rounding, relative to its clip coordinates, to that conditioning; the item
+// buffers of the cities, whose ground and facade triangles cross the faces' eye planes, are
+// bitwise those drawn without culling (docs/benchmarks.md).
 inline constexpr double kOcclusionMargin = 1e-2;
 
 // Whether a polygon with this footprint is hidden on the face: every pixel it may fill already
