@@ -17,7 +17,7 @@ void FaceDepthRows::build(std::span<const float> depth, int atlas_width, const A
                      "FaceDepthRows: the viewport lies outside the depth image");
     w_ = vp.width;
     h_ = vp.height;
-    levels_ = 32 - __builtin_clz(static_cast<unsigned>(w_));  // 2^(levels − 1) <= w
+    levels_ = std::bit_width(static_cast<unsigned>(w_));  // 2^(levels − 1) <= w
     plane_ = static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_);
     min_.resize(plane_ * static_cast<std::size_t>(levels_));
     for (int y = 0; y < h_; ++y) {

@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -65,7 +66,7 @@ public:
 private:
     bool run_covers(int y, int x0, int x1, double d) const {
         const int len = x1 - x0 + 1;
-        const int k = 31 - __builtin_clz(static_cast<unsigned>(len));
+        const int k = std::bit_width(static_cast<unsigned>(len)) - 1;
         const float* t = min_.data() + static_cast<std::size_t>(k) * plane_ + static_cast<std::size_t>(y) * w_;
         return static_cast<double>(std::min(t[x0], t[x1 + 1 - (1 << k)])) > d;
     }
