@@ -752,9 +752,11 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
 }
 
 // Occlusion culling: the front pieces the worker's last hemicube showed are drawn first, depth
-// only (in a street of a city: the facades around); the depth image is read back, and a piece
-// whose footprint on a face (hemicube/occlusion.hpp) is wholly covered by nearer occluder pixels,
-// by a margin, is left out of that face. Exact: a piece left out has every fragment behind the
+// only (in a street of a city: the facades around); the depth image is read back into a min-depth
+// table per face (row minima), and a piece whose footprint on a face (hemicube/occlusion.hpp: the rectangle
+// of its part that can make a fragment there, clipped to the near plane and the face's frustum)
+// has every pixel nearer than the piece, by a margin, is left out of that face (the table
+// answers exactly what a scan of the rectangle's pixels would). Exact: a piece left out has every fragment behind the
 // depth those occluders leave, and the occluder that sets a pixel's depth is never left out
 // itself (it would have to lie behind its own depth), so in the full drawing that follows every
 // pixel ends at least as near, and the left-out piece could not have won one. The item buffer is
@@ -803,7 +805,7 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
     const HemicubeLayout& lay = layout_of(res);
     gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_DEPTH_COMPONENT, GL_FLOAT, depth_.data());
     const std::span<const float> depth(depth_.data(), static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height());
-    for (std::size_t f = 0; f < 5; ++f) tiles_[f].build(depth, lay.atlas_width(), faces[f].viewport);
+    for (std::size_t f = 0; f < 5; ++f) depth_rows_[f].build(depth, lay.atlas_width(), faces[f].viewport);
     for (Drawn& d : drawn_) {
         if (d.occluder) continue;  // drawn, and in the depth image
         const std::uint32_t base = pieces_.first[d.g];
@@ -814,8 +816,8 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
         }
         for (std::size_t f = 0; f < 5; ++f) {
             if (!(d.faces & (1u << f))) continue;
-            const std::optional<FaceFootprint> fp = face_footprint(faces[f], corners_, near);
-            if (fp && hidden_behind(tiles_[f], *fp)) {
+            FaceFootprint fp = face_footprint(faces[f], corners_, near, false);
+            if (hidden_behind(depth_rows_[f], fp)) {
                 d.faces = static_cast<std::uint8_t>(d.faces & ~(1u << f));
                 ++st.pieces_occluded[f];
             }

@@ -127,7 +127,7 @@ private:
     std::vector<std::uint32_t> seen_;      // per piece: == seen_stamp_ when the last hemicube showed it
     std::uint32_t seen_stamp_ = 1, last_stamp_ = 0;
     std::vector<float> depth_;
-    std::array<FaceDepthTiles, 5> tiles_;
+    std::array<FaceDepthRows, 5> depth_rows_;
     std::vector<Vec3> corners_;
     std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
     std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;

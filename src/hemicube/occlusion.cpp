@@ -1,74 +1,208 @@
 #include "ffcube/hemicube/occlusion.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 #include "ffcube/core/error.hpp"
 
 namespace ffcube {
 
-void FaceDepthTiles::build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp) {
+void FaceDepthRows::build(std::span<const float> depth, int atlas_width, const AtlasViewport& vp) {
     FFCUBE_CHECK_MSG(vp.x >= 0 && vp.y >= 0 && vp.width > 0 && vp.height > 0 && vp.x + vp.width <= atlas_width &&
                          static_cast<std::size_t>(vp.y + vp.height) * static_cast<std::size_t>(atlas_width) <= depth.size(),
-                     "FaceDepthTiles: the viewport lies outside the depth image");
-    tiles_x_ = (vp.width + kTile - 1) / kTile;
-    tiles_y_ = (vp.height + kTile - 1) / kTile;
-    min_.assign(static_cast<std::size_t>(tiles_x_) * static_cast<std::size_t>(tiles_y_), INFINITY);
-    for (int y = 0; y < vp.height; ++y) {
+                     "FaceDepthRows: the viewport lies outside the depth image");
+    w_ = vp.width;
+    h_ = vp.height;
+    levels_ = std::bit_width(static_cast<unsigned>(w_));  // 2^(levels − 1) <= w
+    plane_ = static_cast<std::size_t>(w_) * static_cast<std::size_t>(h_);
+    min_.resize(plane_ * static_cast<std::size_t>(levels_));
+    for (int y = 0; y < h_; ++y) {
         const float* row = depth.data() + static_cast<std::size_t>(vp.y + y) * static_cast<std::size_t>(atlas_width) + vp.x;
-        float* tile_row = min_.data() + static_cast<std::size_t>(y / kTile) * static_cast<std::size_t>(tiles_x_);
-        for (int tx = 0; tx < tiles_x_; ++tx) {
-            const int end = std::min(vp.width, (tx + 1) * kTile);
-            float m = tile_row[tx];
-            for (int x = tx * kTile; x < end; ++x) m = std::min(m, row[x]);
-            tile_row[tx] = m;
+        std::copy(row, row + w_, min_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(y) * w_));
+    }
+    for (int k = 1; k < levels_; ++k) {
+        const int half = 1 << (k - 1), n = w_ - (1 << k) + 1;  // runs of 2^k that fit
+        for (int y = 0; y < h_; ++y) {
+            const float* src = min_.data() + static_cast<std::size_t>(k - 1) * plane_ + static_cast<std::size_t>(y) * w_;
+            float* dst = min_.data() + static_cast<std::size_t>(k) * plane_ + static_cast<std::size_t>(y) * w_;
+            for (int x = 0; x < n; ++x) dst[x] = std::min(src[x], src[x + half]);
         }
     }
 }
 
-bool FaceDepthTiles::covers(int x0, int y0, int x1, int y1, double d) const {
+bool FaceDepthRows::covers(int x0, int y0, int x1, int y1, double d) const {
+    if (w_ == 0) return false;
+    x0 = std::max(x0, 0);
+    y0 = std::max(y0, 0);
+    x1 = std::min(x1, w_ - 1);
+    y1 = std::min(y1, h_ - 1);
     if (x0 > x1 || y0 > y1) return true;
-    const int tx0 = std::max(0, x0 / kTile), tx1 = std::min(tiles_x_ - 1, x1 / kTile);
-    const int ty0 = std::max(0, y0 / kTile), ty1 = std::min(tiles_y_ - 1, y1 / kTile);
-    for (int ty = ty0; ty <= ty1; ++ty) {
-        const float* row = min_.data() + static_cast<std::size_t>(ty) * static_cast<std::size_t>(tiles_x_);
-        for (int tx = tx0; tx <= tx1; ++tx)
-            if (!(static_cast<double>(row[tx]) > d)) return false;
+    for (int y = y0; y <= y1; ++y)
+        if (!run_covers(y, x0, x1, d)) return false;
+    return true;
+}
+
+bool FaceDepthRows::covers(const FaceFootprint& fp, double d) const {
+    if (w_ == 0) return false;
+    const int x0 = std::max(fp.x0, 0), x1 = std::min(fp.x1, w_ - 1);
+    const int y0 = std::max(fp.y0, 0), y1 = std::min(fp.y1, h_ - 1);
+    if (x0 > x1 || y0 > y1) return true;
+    for (int y = y0; y <= y1; ++y) {
+        // The centres X = x + 0.5 of this row with nx X <= c − ny Y for every half-plane.
+        const double Y = y + 0.5;
+        double lo = x0 + 0.5, hi = x1 + 0.5;
+        for (int e = 0; e < fp.edges; ++e) {
+            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+            const double r = c - ny * Y;
+            if (nx > 0)
+                hi = std::min(hi, r / nx);
+            else if (nx < 0)
+                lo = std::max(lo, r / nx);
+            else if (r < 0)
+                hi = -INFINITY;  // a horizontal line with this row outside
+        }
+        if (!(lo <= hi)) continue;  // no centre of this row
+        const double xl = std::ceil(lo - 0.5), xh = std::floor(hi - 0.5);
+        if (xl > xh) continue;
+        if (!run_covers(y, static_cast<int>(xl), static_cast<int>(xh), d)) return false;
     }
     return true;
 }
 
-std::optional<FaceFootprint> face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near) {
-    if (corners.empty()) return std::nullopt;
+FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near, bool edges) {
     const FaceFrustum& fr = f.frustum;
     const double w = f.viewport.width, h = f.viewport.height;
-    double dmin = INFINITY, cx0 = INFINITY, cx1 = -INFINITY, cy0 = INFINITY, cy1 = -INFINITY;
+    // A polygon with more corners than the buffers hold (a piece with many T-vertices): the
+    // whole face at depth 1, never culled.
+    constexpr std::size_t kCap = 40;
+    FaceFootprint fp;  // its arrays left unset (only their first `edges`, `verts` are read)
+    if (corners.size() + 5 > kCap) {
+        fp.x0 = fp.y0 = 0;
+        fp.x1 = f.viewport.width - 1;
+        fp.y1 = f.viewport.height - 1;
+        fp.max_depth = 1.0;
+        return fp;
+    }
+    const double sx = (fr.right - fr.left) / w, sy = (fr.top - fr.bottom) / h;
+    // The frustum widened by one pixel: a = right·v, b = up·v, d = forward·v inside when
+    // d >= near and left − sx <= a / d <= right + sx, bottom − sy <= b / d <= top + sy.
+    const double L = fr.left - sx, R = fr.right + sx, B = fr.bottom - sy, T = fr.top + sy;
+    using P = glm::dvec3;  // (a, b, d)
+    const auto plane = [&](int i, const P& p) {
+        switch (i) {
+            case 0: return p.z - near;
+            case 1: return p.x - L * p.z;
+            case 2: return R * p.z - p.x;
+            case 3: return p.y - B * p.z;
+            default: return T * p.z - p.y;
+        }
+    };
+    std::array<P, kCap> buf[2];
+    P* poly = buf[0].data();
+    std::size_t n = 0;
+    bool inside = true;
     for (const Vec3& v : corners) {
-        const double d = glm::dot(v, f.forward);
-        // A corner on or behind the face's eye plane (or all but on it): the projection is
-        // unbounded or ill-conditioned; this polygon is never culled on this face.
-        if (!(d > 1e-6 * glm::length(v))) return std::nullopt;
+        const P p(glm::dot(v, f.right), glm::dot(v, f.up), glm::dot(v, f.forward));
+        inside = inside && p.z >= near && p.x >= L * p.z && p.x <= R * p.z && p.y >= B * p.z && p.y <= T * p.z;
+        poly[n++] = p;
+    }
+    // Sutherland–Hodgman against each plane in turn (only when a corner lies outside one: the
+    // clipped polygon of one wholly inside is itself). The polygon is convex and planar (pieces
+    // are: scene/mesher.cpp), so the result is exactly its part inside every plane; each plane
+    // adds at most one vertex.
+    for (int i = 0; i < 5 && !inside && n > 0; ++i) {
+        P* next = poly == buf[0].data() ? buf[1].data() : buf[0].data();
+        std::size_t m = 0;
+        for (std::size_t k = 0; k < n; ++k) {
+            const P& a = poly[k];
+            const P& b = poly[k + 1 == n ? 0 : k + 1];
+            const double ga = plane(i, a), gb = plane(i, b);
+            if (ga >= 0) next[m++] = a;
+            if ((ga >= 0) != (gb >= 0)) next[m++] = a + (ga / (ga - gb)) * (b - a);
+        }
+        poly = next;
+        n = m;
+    }
+    fp.x0 = fp.y0 = 0;
+    fp.x1 = fp.y1 = -1;
+    fp.max_depth = 0.0;
+    if (n == 0) return fp;  // no point of it can make a fragment on this face
+    double dmin = INFINITY, cx0 = INFINITY, cx1 = -INFINITY, cy0 = INFINITY, cy1 = -INFINITY, mx = 0, my = 0;
+    const bool keep = n <= static_cast<std::size_t>(FaceFootprint::kMaxVerts);
+    const double kx = w / (fr.right - fr.left), ky = h / (fr.top - fr.bottom);
+    for (std::size_t k = 0; k < n; ++k) {
+        const P& p = poly[k];
+        // d >= near up to the rounding of an intersection point on the near plane: the
+        // projection is bounded (by the widened frustum, up to that rounding).
+        const double d = std::max(p.z, near);
         dmin = std::min(dmin, d);
-        const double col = (glm::dot(v, f.right) / d - fr.left) / (fr.right - fr.left) * w;
-        const double row = (glm::dot(v, f.up) / d - fr.bottom) / (fr.top - fr.bottom) * h;
+        const double col = (p.x / d - fr.left) * kx;
+        const double row = (p.y / d - fr.bottom) * ky;
         cx0 = std::min(cx0, col);
         cx1 = std::max(cx1, col);
         cy0 = std::min(cy0, row);
         cy1 = std::max(cy1, row);
+        mx += col;
+        my += row;
+        if (keep) fp.vert[k] = {col, row};
     }
-    // Grown by one pixel, then clamped (as doubles first: a corner just in front of the eye
-    // plane projects far beyond int's range).
+    // Grown by one pixel, then clamped (as doubles first, against any rounding far outside).
     const auto lo = [](double c, double size) { return static_cast<int>(std::clamp(std::floor(c) - 1, -1.0, size)); };
     const auto hi = [](double c, double size) { return static_cast<int>(std::clamp(std::floor(c) + 1, -1.0, size)); };
-    FaceFootprint fp{};
     fp.x0 = std::max(0, lo(cx0, w));
     fp.y0 = std::max(0, lo(cy0, h));
     fp.x1 = std::min(f.viewport.width - 1, hi(cx1, w));
     fp.y1 = std::min(f.viewport.height - 1, hi(cy1, h));
     fp.max_depth = near / dmin;
+    if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return fp;
+    // The probe: the pixel under the projected vertices' mean, a point of the polygon's image
+    // (its centre within 0.71 pixel of it, so inside every half-plane below), if it lies on the
+    // face; the query looks at it first.
+    const double pxd = std::floor(mx / static_cast<double>(n)), pyd = std::floor(my / static_cast<double>(n));
+    if (pxd >= fp.x0 && pxd <= fp.x1 && pyd >= fp.y0 && pyd <= fp.y1) {
+        fp.probe_x = static_cast<int>(pxd);
+        fp.probe_y = static_cast<int>(pyd);
+    }
+    fp.verts = keep ? static_cast<int>(n) : 0;
+    if (edges) add_half_planes(fp);
     return fp;
+}
+
+bool add_half_planes(FaceFootprint& fp) {
+    const int n = fp.verts;
+    if (fp.edges > 0) return true;
+    if (n < 3 || (fp.x1 - fp.x0 < 4 && fp.y1 - fp.y0 < 4)) return false;
+    for (int k = 0; k < n && fp.edges < FaceFootprint::kMaxEdges; ++k) {
+        const auto& a = fp.vert[static_cast<std::size_t>(k)];
+        const auto& b = fp.vert[static_cast<std::size_t>(k + 1 == n ? 0 : k + 1)];
+        const double ex = b[0] - a[0], ey = b[1] - a[1];
+        const double len2 = ex * ex + ey * ey;
+        if (!(len2 > 1e-6)) continue;  // a degenerate edge (a clipped corner): no direction
+        const double inv = 1.0 / std::sqrt(len2);
+        const double nx = ey * inv, ny = -ex * inv;
+        double plus = -INFINITY, minus = -INFINITY;
+        for (int j = 0; j < n; ++j) {
+            const auto& v = fp.vert[static_cast<std::size_t>(j)];
+            const double t = nx * (v[0] - a[0]) + ny * (v[1] - a[1]);
+            plus = std::max(plus, t);
+            minus = std::max(minus, -t);
+        }
+        const double sgn = plus <= minus ? 1.0 : -1.0;
+        fp.edge[static_cast<std::size_t>(fp.edges++)] = {sgn * nx, sgn * ny, sgn * (nx * a[0] + ny * a[1]) + std::min(plus, minus) + 1.0};
+    }
+    return fp.edges > 0;
+}
+
+bool hidden_behind(const FaceDepthRows& depth, FaceFootprint& fp) {
+    if (fp.x0 > fp.x1 || fp.y0 > fp.y1) return true;  // it fills no pixel of this face
+    const double d = fp.max_depth / (1.0 - kOcclusionMargin);
+    if (fp.probe_x >= 0 && !depth.covers(fp.probe_x, fp.probe_y, fp.probe_x, fp.probe_y, d)) return false;
+    if (depth.covers(fp.x0, fp.y0, fp.x1, fp.y1, d)) return true;
+    return add_half_planes(fp) && depth.covers(fp, d);
 }
 
 }  // namespace ffcube

@@ -1,6 +1,8 @@
 // The CPU half of occlusion culling (hemicube/occlusion.hpp), against brute force: a polygon's
-// footprint holds the pixel of every point of it (pixel_of_direction, the layout's own rule) and
-// bounds its depth; the tiles' answer agrees with the minimum over every pixel.
+// footprint holds every pixel whose centre's ray meets the polygon at or beyond the near plane
+// (what the rasterizer fills, without its snapping) and bounds the depth there, also for
+// polygons that cross a face's eye plane; the row minima answer exactly what a scan of the
+// rectangle's pixels answers.
 #include <gtest/gtest.h>
 
 #include <glm/geometric.hpp>
@@ -13,91 +15,204 @@
 namespace ffcube {
 namespace {
 
-TEST(OcclusionTiles, FootprintHoldsEveryPointOfThePolygonAndBoundsItsDepth) {
-    const HemicubeLayout lay(64);
-    const double near = 1e-3;
+// The point where the ray from the eye (the origin) along dir meets triangle t, if it does
+// (Möller–Trumbore, no tolerance: the test below only uses hits well inside by a margin).
+std::optional<Vec3> ray_hit(const Vec3& dir, const std::vector<Vec3>& t) {
+    const Vec3 e1 = t[1] - t[0], e2 = t[2] - t[0];
+    const Vec3 p = glm::cross(dir, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-300) return std::nullopt;
+    const Vec3 s = -t[0];
+    const double u = glm::dot(s, p) / det;
+    const Vec3 q = glm::cross(s, e1);
+    const double v = glm::dot(dir, q) / det;
+    const double tt = glm::dot(e2, q) / det;
+    // Inside by 1e-9 in barycentrics: a centre on an edge may or may not be filled either way,
+    // and the footprint's one-pixel growth covers the edge (rounding of this test aside).
+    if (u < 1e-9 || v < 1e-9 || u + v > 1 - 1e-9 || tt <= 0) return std::nullopt;
+    return tt * dir;
+}
+
+// Random triangles all around the eye (many crossing the side faces' eye planes and the
+// hemicube plane), every pixel centre of every face tested: the rasterization of the exact
+// triangle, clipped by the near plane, lies within the footprint and within its depth bound.
+TEST(OcclusionFootprint, HoldsEveryPixelTheClippedPolygonFillsAndBoundsItsDepth) {
+    const HemicubeLayout lay(32);
+    const double near = 0.05;
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> u(-1, 1), w(0, 1);
-    std::size_t checked = 0, unbounded = 0;
-    for (int t = 0; t < 2000; ++t) {
-        // A random triangle in the hemisphere above the eye, 0.2–20 away.
-        const double scale = 0.2 * std::pow(100.0, w(rng));
+    std::size_t filled = 0, crossing_bounded = 0, crossing_culled_rect = 0, empty = 0, with_edges = 0;
+    for (int t = 0; t < 400; ++t) {
+        const double scale = 0.2 * std::pow(50.0, w(rng));
         std::vector<Vec3> tri;
-        for (int k = 0; k < 3; ++k) tri.emplace_back(scale * u(rng), scale * u(rng), scale * w(rng) + 0.01);
+        for (int k = 0; k < 3; ++k) tri.emplace_back(scale * u(rng), scale * u(rng), scale * (1.2 * w(rng) - 0.2));
         for (const FaceSpec& f : lay.faces()) {
-            const std::optional<FaceFootprint> fp = face_footprint(f, tri, near);
-            if (!fp) {
-                ++unbounded;
-                continue;
+            const FaceFootprint fp = face_footprint(f, tri, near);
+            bool crosses = false;
+            for (const Vec3& v : tri) crosses = crosses || glm::dot(v, f.forward) <= 0;
+            const bool none = fp.x0 > fp.x1 || fp.y0 > fp.y1;
+            empty += none;
+            with_edges += fp.edges > 0;
+            if (crosses && !none) {
+                ++crossing_bounded;
+                // Smaller than the whole face: something a tile scan could now cull.
+                if (fp.max_depth < 1 && (fp.x1 - fp.x0 + 1) * (fp.y1 - fp.y0 + 1) < f.viewport.width * f.viewport.height)
+                    ++crossing_culled_rect;
             }
-            for (int s = 0; s < 50; ++s) {
-                double a = w(rng), b = w(rng);
-                if (a + b > 1) a = 1 - a, b = 1 - b;
-                const Vec3 p = tri[0] + a * (tri[1] - tri[0]) + b * (tri[2] - tri[0]);
-                const auto px = lay.pixel_of_direction(p);
-                if (!px || px->face != f.face) continue;
-                const int x = px->x - f.viewport.x, y = px->y - f.viewport.y;
-                ++checked;
-                EXPECT_TRUE(x >= fp->x0 && x <= fp->x1 && y >= fp->y0 && y <= fp->y1)
-                    << "pixel (" << x << ", " << y << ") outside [" << fp->x0 << ", " << fp->x1 << "] × [" << fp->y0
-                    << ", " << fp->y1 << "]";
-                // Depth near / (distance along forward) of the point is at most the bound.
-                EXPECT_LE(near / glm::dot(p, f.forward), fp->max_depth * (1 + 1e-12));
-            }
+            const FaceFrustum& fr = f.frustum;
+            const double sx = (fr.right - fr.left) / f.viewport.width, sy = (fr.top - fr.bottom) / f.viewport.height;
+            for (int y = 0; y < f.viewport.height; ++y)
+                for (int x = 0; x < f.viewport.width; ++x) {
+                    const Vec3 dir = HemicubeLayout::face_direction(f, fr.left + (x + 0.5) * sx, fr.bottom + (y + 0.5) * sy);
+                    const std::optional<Vec3> p = ray_hit(dir, tri);
+                    if (!p) continue;
+                    const double d = glm::dot(*p, f.forward);
+                    if (d < near) continue;  // clipped by GL: no fragment
+                    ++filled;
+                    ASSERT_FALSE(none) << "triangle " << t << " face " << int(f.face) << " fills (" << x << ", " << y << ")";
+                    EXPECT_TRUE(x >= fp.x0 && x <= fp.x1 && y >= fp.y0 && y <= fp.y1)
+                        << "pixel (" << x << ", " << y << ") outside [" << fp.x0 << ", " << fp.x1 << "] × [" << fp.y0
+                        << ", " << fp.y1 << "]";
+                    // Every half-plane holds the pixel's centre (they carry a one-pixel
+                    // margin; here the test needs none).
+                    for (int e = 0; e < fp.edges; ++e) {
+                        const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                        EXPECT_LE(nx * (x + 0.5) + ny * (y + 0.5), c - 1.0 + 1e-9) << "edge " << e << " of triangle " << t;
+                    }
+                    // The probe pixel, if any, is one of the footprint's: inside the
+                    // rectangle and every half-plane.
+                    if (fp.probe_x >= 0) {
+                        EXPECT_TRUE(fp.probe_x >= fp.x0 && fp.probe_x <= fp.x1 && fp.probe_y >= fp.y0 && fp.probe_y <= fp.y1);
+                        for (int e = 0; e < fp.edges; ++e) {
+                            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                            EXPECT_LE(nx * (fp.probe_x + 0.5) + ny * (fp.probe_y + 0.5), c);
+                        }
+                    }
+                    // The bound is near / (least distance of the clipped polygon): 1e-12
+                    // relative is the rounding of the two computations of d.
+                    EXPECT_LE(near / d, fp.max_depth * (1 + 1e-12));
+                }
         }
     }
-    EXPECT_GT(checked, 20000u);
-    EXPECT_GT(unbounded, 0u);  // triangles reaching behind a side face's eye plane get none
+    EXPECT_GT(filled, 100000u);
+    // Triangles crossing a face's eye plane now get a bounded footprint (before: never culled),
+    // often smaller than the face with depth below 1; and some miss a face's frustum altogether
+    // (across a corner, which the per-plane outcodes do not catch).
+    EXPECT_GT(crossing_bounded, 400u);  // 831 with seed 7
+    EXPECT_GT(crossing_culled_rect, 300u);  // 724 of 831 with seed 7
+    EXPECT_GT(empty, 0u);
+    EXPECT_GT(with_edges, 500u);
 }
 
-TEST(OcclusionTiles, TilesAgreeWithTheMinimumOverEveryPixel) {
-    const HemicubeLayout lay(40);  // 20-pixel side faces: tiles cut by the viewport's edge
-    std::vector<float> depth(static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height());
+// A polygon wholly nearer than the near plane fills nothing; one reaching it gets depth 1 (the
+// largest there is: never culled).
+TEST(OcclusionFootprint, NearPlane) {
+    const HemicubeLayout lay(16);
+    const FaceSpec& top = lay.face(HemicubeFace::Top);
+    const double near = 0.1;
+    const std::vector<Vec3> small{{-0.01, -0.01, 0.05}, {0.01, -0.01, 0.05}, {0.0, 0.01, 0.05}};
+    const FaceFootprint a = face_footprint(top, small, near);
+    EXPECT_TRUE(a.x0 > a.x1 || a.y0 > a.y1);
+    const std::vector<Vec3> through{{-0.01, -0.01, 0.05}, {0.01, -0.01, 0.05}, {0.0, 0.01, 1.0}};
+    const FaceFootprint b = face_footprint(top, through, near);
+    EXPECT_LE(b.x0, b.x1);
+    EXPECT_DOUBLE_EQ(b.max_depth, 1.0);
+}
+
+// Random depth images with holes (0: nothing drawn) and runs of equal values; rectangles of every
+// size on viewports of odd and even sizes; thresholds at, just below and just above pixel
+// values: the row minima's answer equals the scan's every time.
+TEST(OcclusionRows, EqualsAScanOfTheRectanglesPixels) {
     std::mt19937_64 rng(3);
-    std::uniform_real_distribution<float> d(0.1f, 1.0f);
-    for (float& v : depth) v = d(rng);
-    depth[5 * lay.atlas_width() + 7] = 0.0f;  // one pixel where nothing was drawn
-    for (const FaceSpec& f : lay.faces()) {
-        FaceDepthTiles tiles;
-        tiles.build(depth, lay.atlas_width(), f.viewport);
-        std::uniform_int_distribution<int> xs(0, f.viewport.width - 1), ys(0, f.viewport.height - 1);
-        for (int t = 0; t < 500; ++t) {
-            int x0 = xs(rng), x1 = xs(rng), y0 = ys(rng), y1 = ys(rng);
-            if (x0 > x1) std::swap(x0, x1);
-            if (y0 > y1) std::swap(y0, y1);
-            float exact = 2;  // min over the rectangle's pixels
-            for (int y = y0; y <= y1; ++y)
-                for (int x = x0; x <= x1; ++x)
-                    exact = std::min(exact, depth[static_cast<std::size_t>(f.viewport.y + y) * lay.atlas_width() + f.viewport.x + x]);
-            const double below = 0.5 * exact;
-            // Never true when some pixel is not nearer than the test depth.
-            EXPECT_FALSE(tiles.covers(x0, y0, x1, y1, exact));
-            // True for a small enough depth whenever the rectangle is a union of whole tiles
-            // (otherwise the tiles' minimum may come from pixels outside it).
-            const int k = FaceDepthTiles::kTile;
-            const bool whole = x0 % k == 0 && y0 % k == 0 && ((x1 + 1) % k == 0 || x1 == f.viewport.width - 1) &&
-                               ((y1 + 1) % k == 0 || y1 == f.viewport.height - 1);
-            if (whole) {
-                EXPECT_EQ(tiles.covers(x0, y0, x1, y1, below), exact > 0);
+    const int aw = 80, ah = 70;
+    std::vector<float> depth(static_cast<std::size_t>(aw) * ah);
+    std::uniform_real_distribution<float> dv(0.1f, 1.0f);
+    std::uniform_real_distribution<double> w(0, 1);
+    for (const AtlasViewport vp : {AtlasViewport{0, 0, 64, 64}, AtlasViewport{64, 0, 16, 8}, AtlasViewport{3, 5, 37, 19},
+                                   AtlasViewport{10, 20, 1, 1}, AtlasViewport{0, 1, 64, 32}, AtlasViewport{7, 3, 33, 65}}) {
+        for (int image = 0; image < 6; ++image) {
+            // Large blocks of one value (occluders), a few holes and single-pixel dips.
+            const float base = dv(rng);
+            for (float& v : depth) v = base;
+            for (int b = 0; b < 8; ++b) {
+                std::uniform_int_distribution<int> xs(0, aw - 1), ys(0, ah - 1);
+                const int x0 = xs(rng), y0 = ys(rng), x1 = std::min(aw - 1, x0 + xs(rng) / 3), y1 = std::min(ah - 1, y0 + ys(rng) / 3);
+                const float v = image % 2 ? dv(rng) : base * 1.5f;
+                for (int y = y0; y <= y1; ++y)
+                    for (int x = x0; x <= x1; ++x) depth[static_cast<std::size_t>(y) * aw + x] = v;
             }
+            for (int h = 0; h < image; ++h) depth[std::uniform_int_distribution<std::size_t>(0, depth.size() - 1)(rng)] = h % 2 ? 0.0f : 0.05f;
+            FaceDepthRows pyr;
+            pyr.build(depth, aw, vp);
+            ASSERT_EQ(pyr.width(), vp.width);
+            ASSERT_EQ(pyr.height(), vp.height);
+            std::uniform_int_distribution<int> xs(0, vp.width - 1), ys(0, vp.height - 1);
+            for (int t = 0; t < 400; ++t) {
+                int x0 = xs(rng), x1 = xs(rng), y0 = ys(rng), y1 = ys(rng);
+                if (x0 > x1) std::swap(x0, x1);
+                if (y0 > y1) std::swap(y0, y1);
+                if (t % 3 == 0) x1 = std::min(vp.width - 1, x0 + t % 5), y1 = std::min(vp.height - 1, y0 + t % 4);  // small
+                float exact = INFINITY;
+                for (int y = y0; y <= y1; ++y)
+                    for (int x = x0; x <= x1; ++x)
+                        exact = std::min(exact, depth[static_cast<std::size_t>(vp.y + y) * aw + vp.x + x]);
+                // Thresholds around the exact minimum and around a random pixel's value.
+                const float any = depth[static_cast<std::size_t>(vp.y + ys(rng)) * aw + vp.x + xs(rng)];
+                for (const double d : {double(exact), std::nextafter(double(exact), 0.0), std::nextafter(double(exact), 2.0),
+                                       double(any), 0.5 * exact, w(rng)}) {
+                    ASSERT_EQ(pyr.covers(x0, y0, x1, y1, d), double(exact) > d)
+                        << "rect [" << x0 << ", " << x1 << "] × [" << y0 << ", " << y1 << "] d " << d << " min " << exact;
+                }
+            }
+            // With half-planes (random lines through the rectangle, either side): the scan
+            // keeps the pixels whose centres satisfy them all.
+            std::uniform_real_distribution<double> ang(0, 6.283185307179586);
+            for (int t = 0; t < 300; ++t) {
+                FaceFootprint fp{};
+                fp.x0 = xs(rng), fp.x1 = xs(rng), fp.y0 = ys(rng), fp.y1 = ys(rng);
+                if (fp.x0 > fp.x1) std::swap(fp.x0, fp.x1);
+                if (fp.y0 > fp.y1) std::swap(fp.y0, fp.y1);
+                fp.edges = 1 + t % 4;
+                for (int e = 0; e < fp.edges; ++e) {
+                    const double a = ang(rng);
+                    const double cx = fp.x0 + w(rng) * (fp.x1 - fp.x0 + 1), cy = fp.y0 + w(rng) * (fp.y1 - fp.y0 + 1);
+                    fp.edge[static_cast<std::size_t>(e)] = {std::cos(a), std::sin(a), std::cos(a) * cx + std::sin(a) * cy + 0.5};
+                }
+                float exact = INFINITY;
+                for (int y = fp.y0; y <= fp.y1; ++y)
+                    for (int x = fp.x0; x <= fp.x1; ++x) {
+                        bool in = true;
+                        for (int e = 0; e < fp.edges; ++e) {
+                            const auto& [nx, ny, c] = fp.edge[static_cast<std::size_t>(e)];
+                            in = in && nx * (x + 0.5) + ny * (y + 0.5) <= c;
+                        }
+                        if (in) exact = std::min(exact, depth[static_cast<std::size_t>(vp.y + y) * aw + vp.x + x]);
+                    }
+                for (const double d : {double(exact), std::nextafter(double(exact), 0.0), 0.5 * exact, w(rng)}) {
+                    if (std::isinf(exact) && d == exact) continue;
+                    ASSERT_EQ(pyr.covers(fp, d), double(exact) > d) << "footprint " << t << " d " << d << " min " << exact;
+                }
+            }
+            EXPECT_TRUE(pyr.covers(1, 1, 0, 0, 1.0));  // an empty rectangle
         }
-        // Nothing drawn anywhere in a tile: never covered.
-        EXPECT_TRUE(tiles.covers(1, 1, 0, 0, 1.0));  // an empty rectangle
     }
 }
 
-TEST(OcclusionTiles, HiddenBehindNeedsTheMargin) {
+TEST(OcclusionRows, HiddenBehindNeedsTheMargin) {
     const HemicubeLayout lay(16);
     const FaceSpec& top = lay.face(HemicubeFace::Top);
     std::vector<float> depth(static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height(), 0.5f);
-    FaceDepthTiles tiles;
-    tiles.build(depth, lay.atlas_width(), top.viewport);
-    FaceFootprint fp{2, 2, 5, 5, 0.5 * (1 - kOcclusionMargin) * 0.999};
-    EXPECT_TRUE(hidden_behind(tiles, fp));
+    FaceDepthRows pyr;
+    pyr.build(depth, lay.atlas_width(), top.viewport);
+    FaceFootprint fp{};
+    fp.x0 = fp.y0 = 2;
+    fp.x1 = fp.y1 = 5;
+    fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 0.999;
+    EXPECT_TRUE(hidden_behind(pyr, fp));
     fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 1.001;  // within the margin of the occluders
-    EXPECT_FALSE(hidden_behind(tiles, fp));
-    fp = FaceFootprint{3, 0, 2, 5, 1.0};  // misses the face: no pixel to fill
-    EXPECT_TRUE(hidden_behind(tiles, fp));
+    EXPECT_FALSE(hidden_behind(pyr, fp));
+    fp.x0 = 3, fp.x1 = 2;  // misses the face: no pixel to fill
+    EXPECT_TRUE(hidden_behind(pyr, fp));
 }
 
 }  // namespace
