@@ -157,7 +157,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         const TransposePlan plan =
             plan_transpose(checks.lower_col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8), checks.upper_entries());
         FfmReader reader(first);
-        PatchReciprocity patch(areas, ColumnPart::below_diagonal);
+        PatchReciprocity patch(areas);
         Progress bar(fmt::format("reciprocity ({} pass{} over {}, {} band{})", plan.passes, plan.passes == 1 ? "" : "es",
                                  first.filename().string(), plan.band_count(), plan.band_count() == 1 ? "" : "s"),
                      std::uint64_t(scene.size()) * plan.passes, progress);

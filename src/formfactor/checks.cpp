@@ -130,8 +130,6 @@ void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
     FFCUBE_CHECK(i < areas_.size());
     const double ai = areas_[i];
     std::size_t x = 0, y = 0;
-    if (part_ == ColumnPart::below_diagonal)  // pairs (i, j > i) only: the others were row j's
-        x = static_cast<std::size_t>(std::upper_bound(row.col.begin(), row.col.end(), i) - row.col.begin());
     while (x < row.col.size() || y < column.col.size()) {
         const std::uint32_t jr = x < row.col.size() ? row.col[x] : ~0u, jc = y < column.col.size() ? column.col[y] : ~0u;
         const std::uint32_t j = std::min(jr, jc);

@@ -179,9 +179,10 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
     };
     TransposeFigures figures;
     Band band;
-    if (plan.keep_rows) {  // the band and the rows f is given fit together: one pass keeps both
-        FFCUBE_CHECK(bands == 1);
+    FFCUBE_CHECK(!plan.keep_rows || bands == 1);
+    if (bands == 1) {  // everything fits: the first pass collects the columns in memory
         band.reset(0, starts[1], col_counts);
+        // plan.keep_rows: the rows f is given fit beside the band, and are kept from this pass.
         std::vector<std::uint64_t> ptr{0};
         std::vector<std::uint32_t> rows, col;
         std::vector<float> val;
@@ -189,6 +190,7 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
             if (progress) progress->add();
             const std::size_t m = held(i, r);
             for (std::size_t k = 0; k < m; ++k) band.add(i, r.col[k], r.val[k]);
+            if (!plan.keep_rows) return;
             const RowView g = given(i, r);
             rows.push_back(i);
             col.insert(col.end(), g.col.begin(), g.col.end());
@@ -197,22 +199,14 @@ TransposeFigures for_each_row_and_column(const RowPass& pass, std::span<const st
         });
         band.check_full();
         ++figures.passes;
-        for (std::size_t k = 0; k < rows.size(); ++k) {
-            const std::size_t b = ptr[k], e = ptr[k + 1];
-            f(rows[k], RowView{std::span<const std::uint32_t>(col).subspan(b, e - b), std::span<const float>(val).subspan(b, e - b)},
-              band.column(rows[k]));
+        if (plan.keep_rows) {
+            for (std::size_t k = 0; k < rows.size(); ++k) {
+                const std::size_t b = ptr[k], e = ptr[k + 1];
+                f(rows[k], RowView{std::span<const std::uint32_t>(col).subspan(b, e - b), std::span<const float>(val).subspan(b, e - b)},
+                  band.column(rows[k]));
+            }
+            return figures;
         }
-        return figures;
-    }
-    if (bands == 1) {  // everything fits: the first pass collects the columns in memory
-        band.reset(0, starts[1], col_counts);
-        pass([&](std::uint32_t i, RowView r) {
-            if (progress) progress->add();
-            const std::size_t m = held(i, r);
-            for (std::size_t k = 0; k < m; ++k) band.add(i, r.col[k], r.val[k]);
-        });
-        band.check_full();
-        ++figures.passes;
     }
     for (std::size_t g = 0; bands > 1 && g < bands; g += kMaxOpenBands) {
         const std::size_t ge = std::min(bands, g + kMaxOpenBands);

@@ -142,10 +142,10 @@ TEST(OcclusionRows, EqualsAScanOfTheRectanglesPixels) {
                     for (int x = x0; x <= x1; ++x) depth[static_cast<std::size_t>(y) * aw + x] = v;
             }
             for (int h = 0; h < image; ++h) depth[std::uniform_int_distribution<std::size_t>(0, depth.size() - 1)(rng)] = h % 2 ? 0.0f : 0.05f;
-            FaceDepthRows pyr;
-            pyr.build(depth, aw, vp);
-            ASSERT_EQ(pyr.width(), vp.width);
-            ASSERT_EQ(pyr.height(), vp.height);
+            FaceDepthRows rows;
+            rows.build(depth, aw, vp);
+            ASSERT_EQ(rows.width(), vp.width);
+            ASSERT_EQ(rows.height(), vp.height);
             std::uniform_int_distribution<int> xs(0, vp.width - 1), ys(0, vp.height - 1);
             for (int t = 0; t < 400; ++t) {
                 int x0 = xs(rng), x1 = xs(rng), y0 = ys(rng), y1 = ys(rng);
@@ -160,7 +160,7 @@ TEST(OcclusionRows, EqualsAScanOfTheRectanglesPixels) {
                 const float any = depth[static_cast<std::size_t>(vp.y + ys(rng)) * aw + vp.x + xs(rng)];
                 for (const double d : {double(exact), std::nextafter(double(exact), 0.0), std::nextafter(double(exact), 2.0),
                                        double(any), 0.5 * exact, w(rng)}) {
-                    ASSERT_EQ(pyr.covers(x0, y0, x1, y1, d), double(exact) > d)
+                    ASSERT_EQ(rows.covers(x0, y0, x1, y1, d), double(exact) > d)
                         << "rect [" << x0 << ", " << x1 << "] × [" << y0 << ", " << y1 << "] d " << d << " min " << exact;
                 }
             }
@@ -190,10 +190,10 @@ TEST(OcclusionRows, EqualsAScanOfTheRectanglesPixels) {
                     }
                 for (const double d : {double(exact), std::nextafter(double(exact), 0.0), 0.5 * exact, w(rng)}) {
                     if (std::isinf(exact) && d == exact) continue;
-                    ASSERT_EQ(pyr.covers(fp, d), double(exact) > d) << "footprint " << t << " d " << d << " min " << exact;
+                    ASSERT_EQ(rows.covers(fp, d), double(exact) > d) << "footprint " << t << " d " << d << " min " << exact;
                 }
             }
-            EXPECT_TRUE(pyr.covers(1, 1, 0, 0, 1.0));  // an empty rectangle
+            EXPECT_TRUE(rows.covers(1, 1, 0, 0, 1.0));  // an empty rectangle
         }
     }
 }
@@ -202,17 +202,17 @@ TEST(OcclusionRows, HiddenBehindNeedsTheMargin) {
     const HemicubeLayout lay(16);
     const FaceSpec& top = lay.face(HemicubeFace::Top);
     std::vector<float> depth(static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height(), 0.5f);
-    FaceDepthRows pyr;
-    pyr.build(depth, lay.atlas_width(), top.viewport);
+    FaceDepthRows rows;
+    rows.build(depth, lay.atlas_width(), top.viewport);
     FaceFootprint fp{};
     fp.x0 = fp.y0 = 2;
     fp.x1 = fp.y1 = 5;
     fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 0.999;
-    EXPECT_TRUE(hidden_behind(pyr, fp));
+    EXPECT_TRUE(hidden_behind(rows, fp));
     fp.max_depth = 0.5 * (1 - kOcclusionMargin) * 1.001;  // within the margin of the occluders
-    EXPECT_FALSE(hidden_behind(pyr, fp));
+    EXPECT_FALSE(hidden_behind(rows, fp));
     fp.x0 = 3, fp.x1 = 2;  // misses the face: no pixel to fill
-    EXPECT_TRUE(hidden_behind(pyr, fp));
+    EXPECT_TRUE(hidden_behind(rows, fp));
 }
 
 }  // namespace

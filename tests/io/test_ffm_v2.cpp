@@ -376,7 +376,7 @@ TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
         std::filesystem::create_directory(path("scratch"));
         unsigned passes = 0;
         std::uint32_t next = 0;
-        PatchReciprocity patch(areas, part);
+        PatchReciprocity patch(areas);
         const TransposeFigures t = for_each_row_and_column(
             [&](const std::function<void(std::uint32_t, RowView)>& f) {
                 ++passes;

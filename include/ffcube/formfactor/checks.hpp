@@ -73,20 +73,18 @@ enum class ColumnPart { all, below_diagonal };
 
 // ReciprocityStats::patch_max_abs (the same number as reciprocity_stats gives for the matrix in
 // memory) from every row i with its column i, fed in any order: row and column merged by j, a
-// missing entry 0. areas must outlive it. With ColumnPart::below_diagonal the columns hold only
-// F_ki for k > i, and each pair is looked at once, from the row of its lower index: the measure
-// is symmetric in the pair bit for bit (|a − b| = |b − a|, A_i + A_j = A_j + A_i), so the maximum
-// is the same number.
+// missing entry 0. areas must outlive it. Fed ColumnPart::below_diagonal's halves (row i right
+// of the diagonal, column i below it), each pair is looked at once, from the row of its lower
+// index: the measure is symmetric in the pair bit for bit (|a − b| = |b − a|, A_i + A_j =
+// A_j + A_i), so the maximum is the same number.
 class PatchReciprocity {
 public:
-    explicit PatchReciprocity(std::span<const double> areas, ColumnPart part = ColumnPart::all)
-        : areas_(areas), part_(part) {}
+    explicit PatchReciprocity(std::span<const double> areas) : areas_(areas) {}
     void add(std::uint32_t i, RowView row, RowView column);
     double max_abs() const { return worst_; }
 
 private:
     std::span<const double> areas_;
-    ColumnPart part_;
     double worst_ = 0.0;
 };
 
