@@ -19,6 +19,13 @@
 // float rounding): for affine pieces (triangles; quads that are parallelograms, kind 5) the vertex
 // parameter is already the cell coordinate, and the patch is its floor; other quads carry plane
 // coordinates and need the inverse bilinear map.
+#ifndef SINGLE_CELL
+#define SINGLE_CELL 0
+#endif
+#if SINGLE_CELL && !BACK_PASS
+flat in uint v_id;
+layout(location = 0) out uint o_id;
+#else
 struct Grid {
     vec2 q1, q2, q3;  // corners 1..3 in the piece's plane coordinates (corner 0 at the origin)
     uint count;       // 4: quad grid of nu × nv cells (5: a parallelogram); 3: triangle of nu² similar cells
@@ -30,6 +37,7 @@ in vec2 v_param;
 flat in uint v_grid;
 flat in uvec4 v_info;  // kind (3, 4 or 5), nu, nv, first patch
 layout(location = 0) out uint o_id;
+
 
 float cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
@@ -48,6 +56,7 @@ vec2 inverse_bilinear(vec2 h) {
     float u = abs(den.x) > abs(den.y) ? (h.x - f.x * v) / den.x : (h.y - f.y * v) / den.y;
     return vec2(u, v);
 }
+#endif
 
 #if BACK_PASS
 // How far the pixel centre lies outside its piece, in parts of the piece (≤ 0: inside).
@@ -72,6 +81,9 @@ void main() {
     if (outside() > kOutside) discard;
     o_id = 0xFFFFFFFFu;
 }
+#elif SINGLE_CELL
+// Every piece is one patch (SINGLE_CELL, item.vert): the vertex shader passes 1 + its patch.
+void main() { o_id = v_id; }
 #else
 void main() {
     uint kind = v_info.x, nu = v_info.y, nv = v_info.z;

@@ -8,6 +8,18 @@ layout(location = 1) in vec2 a_param;     // cell coordinates (affine pieces) or
 layout(location = 2) in uint a_grid;      // index of the piece (static)
 layout(location = 3) in uvec4 a_info;     // the piece's kind, nu, nv, first patch (static)
 uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, infinite far plane)
+// SINGLE_CELL 1: every piece is one patch (defined by the program that loads this shader, for
+// the front pass only): the fragment writes its piece's patch, and nothing else is interpolated.
+#ifndef SINGLE_CELL
+#define SINGLE_CELL 0
+#endif
+#if SINGLE_CELL
+flat out uint v_id;
+void main() {
+    v_id = a_info.w + 1u;
+    gl_Position = u_face * vec4(a_position, 1.0);
+}
+#else
 out vec2 v_param;
 flat out uint v_grid;
 flat out uvec4 v_info;
@@ -17,3 +29,4 @@ void main() {
     v_info = a_info;
     gl_Position = u_face * vec4(a_position, 1.0);
 }
+#endif

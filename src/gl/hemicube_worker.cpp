@@ -14,6 +14,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/hemicube/frame.hpp"
+#include "ffcube/hemicube/outcode.hpp"
 #include "ffcube/hemicube/runs.hpp"
 #include "gl/gl_api.hpp"
 #include "gl/sample_agreement.hpp"
@@ -87,9 +88,13 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     const std::string kinds = fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
                                           pieces.has_kind[4] ? 1 : 0);
     std::string back_frag = frag;
-    frag.insert(eol, kinds);
+    // Scenes of one patch per piece: the front pass interpolates nothing (item.vert).
+    const std::string single = fmt::format("#define SINGLE_CELL {}\n", pieces.single_cell ? 1 : 0);
+    frag.insert(eol, kinds + single);
     back_frag.insert(eol, kinds + "#define BACK_PASS 1\n");
-    program_ = gl::make_program(gl, "item shader", shaders::item_vert, frag);
+    std::string vert(shaders::item_vert);
+    vert.insert(vert.find('\n') + 1, single);
+    program_ = gl::make_program(gl, "item shader", vert, frag);
     // The back pass's own program: its discard (item.frag) would cost the front pass early depth tests.
     back_program_ = gl::make_program(gl, "item shader (back faces)", shaders::item_vert, back_frag);
     target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
@@ -637,14 +642,7 @@ void Worker::cull(HemicubeStats& st) {
             const float* c = &local_[(base + k) * 3];
             const float x = c[0], y = c[1], z = c[2];
             behind = behind && z <= 0;
-            // Outcodes against the planes x = ±z, y = ±z (top face) and y = ±x, x = ±y,
-            // z = 0, z = ±x, z = ±y (side faces): a bit set for every corner means the
-            // piece misses each face that has that plane.
-            const bool out[13] = {x > z,  -x > z, y > z,  -y > z, z < 0,  y > x,  -y > x,
-                                  y > -x, -y > -x, z > x, z > -x, z > y, z > -y};
-            unsigned code = 0;
-            for (unsigned b = 0; b < 13; ++b) code |= static_cast<unsigned>(out[b]) << b;
-            all &= code;
+            all &= face_outcode(x, y, z);
         }
         if (behind) {
             ++st.pieces_behind;

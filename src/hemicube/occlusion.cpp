@@ -73,6 +73,20 @@ bool FaceDepthRows::covers(const FaceFootprint& fp, double d) const {
     return true;
 }
 
+namespace {
+// A unit axis vector, ±e_axis (axis −1: not one).
+struct AxisPick {
+    int axis = -1;
+    double sign = 0;
+    double of(const Vec3& v) const { return sign * v[axis]; }
+};
+AxisPick axis_pick(const Vec3& a) {
+    for (int k = 0; k < 3; ++k)
+        if ((a[k] == 1.0 || a[k] == -1.0) && a[(k + 1) % 3] == 0.0 && a[(k + 2) % 3] == 0.0) return {k, a[k]};
+    return {};
+}
+}  // namespace
+
 FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, double near, bool edges) {
     const FaceFrustum& fr = f.frustum;
     const double w = f.viewport.width, h = f.viewport.height;
@@ -105,8 +119,12 @@ FaceFootprint face_footprint(const FaceSpec& f, std::span<const Vec3> corners, d
     P* poly = buf[0].data();
     std::size_t n = 0;
     bool inside = true;
+    // The layout's faces look along the local frame's axes (HemicubeLayout): a component each,
+    // signed, is the same value as the dot product (the other terms are exact zeros).
+    const AxisPick ar = axis_pick(f.right), au = axis_pick(f.up), af = axis_pick(f.forward);
+    const bool picks = ar.axis >= 0 && au.axis >= 0 && af.axis >= 0;
     for (const Vec3& v : corners) {
-        const P p(glm::dot(v, f.right), glm::dot(v, f.up), glm::dot(v, f.forward));
+        const P p = picks ? P(ar.of(v), au.of(v), af.of(v)) : P(glm::dot(v, f.right), glm::dot(v, f.up), glm::dot(v, f.forward));
         inside = inside && p.z >= near && p.x >= L * p.z && p.x <= R * p.z && p.y >= B * p.z && p.y <= T * p.z;
         poly[n++] = p;
     }

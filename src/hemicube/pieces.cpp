@@ -219,6 +219,7 @@ ScenePieces prepare_pieces(std::span<const PatchGrid> grids) {
         }
         const bool affine = kind != 4;
         sp.has_kind[kind] = true;
+        if (pg.nu != 1 || pg.nv != 1) sp.single_cell = false;
         const auto add_slot = [&](const Vec3& p) {
             const Vec3 d = p - pg.corners[0];
             const double x = glm::dot(d, e1), y = glm::dot(d, e2);

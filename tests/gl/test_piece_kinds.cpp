@@ -34,6 +34,7 @@
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/hemicube/frame.hpp"
 #include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/pieces.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -359,6 +360,7 @@ void run_receivers(const std::vector<Kind>& kinds, const std::string& label) {
             EXPECT_GE(g.count == 4 ? g.nu * g.nv : g.nu * g.nu, 12u) << label << ": receivers of several cells";
         }
     ASSERT_EQ(have, want) << label;
+    ASSERT_FALSE(prepare_pieces(s.grids).single_cell) << label << ": the shader's cell lookup is what is tested";
     const std::uint32_t sender = 0;
     ASSERT_EQ(s.patches[sender].object, object_of(s, "sender"));
     ASSERT_EQ(s.grids[0].nu * s.grids[0].nv, 1u);
@@ -388,6 +390,27 @@ TEST(PieceKinds, AffinePiecesOnlyMapPixelsToTheirCells) {
 
 TEST(PieceKinds, GeneralQuadWithoutTrianglesMapsPixelsToItsCells) {
     run_receivers({Kind::General, Kind::Parallelogram}, "bilinear+parallelogram");
+}
+
+// Every piece one patch (a mesh read with --no-subdivide): the front pass's shaders are compiled
+// with SINGLE_CELL 1 (shaders/item.vert), which passes the patch per vertex and interpolates
+// nothing; every pixel must still name the patch the CPU ray hits, and every entry match Lambert.
+TEST(PieceKinds, OnePatchPerPieceMapsPixelsToTheirPatches) {
+    std::vector<NamedPolygon> polys{{"sender", {kSender[0], kSender[1], kSender[2], kSender[3]}}};
+    for (const Kind k : {Kind::Parallelogram, Kind::Rectangle, Kind::General, Kind::Triangle}) polys.push_back(receiver(k));
+    const Scene s = test::make_scene(polys, 10.0);  // a maximum edge above every receiver's size
+    ASSERT_EQ(s.size(), polys.size());
+    ASSERT_TRUE(prepare_pieces(s.grids).single_cell);
+    for (const std::uint64_t seed : {0x5eedull, 0x1234567ull}) {
+        HemicubeOptions o;
+        o.resolution = 256;
+        o.threads = 1;
+        o.seed = seed;
+        HemicubeRowProvider provider(s, o);
+        const RowCheck rc = check_row(s, provider, o, 0, "one patch per piece");
+        std::printf("[ one patch per piece, seed %llx ] worst |F - exact| = %.3g = %.3f of its tolerance; row sum %.6f\n",
+                    static_cast<unsigned long long>(seed), rc.worst_abs, rc.worst_ratio, rc.row_sum);
+    }
 }
 
 TEST(PieceKinds, AllKindsTogetherMapPixelsToTheirCells) {

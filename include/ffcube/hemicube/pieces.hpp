@@ -42,6 +42,10 @@ struct ScenePieces {
     std::vector<std::uint32_t> grid;   // 1 per vertex slot
     std::vector<std::uint32_t> info;   // 4 per vertex slot: its piece's kind, nu, nv, first patch
     std::array<bool, 6> has_kind{};    // some piece is of this kind (3, 4 or 5)
+    // Every piece is one patch (a mesh read with --no-subdivide, one patch per facet): the front
+    // pass's shaders then pass the patch per vertex and interpolate nothing (SINGLE_CELL in
+    // shaders/item.vert), which is most of a small triangle's cost in llvmpipe's setup.
+    bool single_cell = true;
     std::vector<std::uint32_t> first;  // per piece, plus one at the end: its first vertex slot
     // Per piece, plus one at the end: its range in 'tris'. An empty range means the piece is
     // drawn as its corners say: (c0, c1, c2), and (c0, c2, c3) for a quad.
