@@ -26,27 +26,21 @@
 flat in uint v_id;
 layout(location = 0) out uint o_id;
 #else
-struct Grid {
-    vec2 q1, q2, q3;  // corners 1..3 in the piece's plane coordinates (corner 0 at the origin)
-    uint count;       // 4: quad grid of nu × nv cells (5: a parallelogram); 3: triangle of nu² similar cells
-    uint nu, nv;
-    uint first;       // index of the first patch of the piece
-};
-layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
 in vec2 v_param;
-flat in uint v_grid;
 flat in uvec4 v_info;  // kind (3, 4 or 5), nu, nv, first patch
+#if HAS_BILINEAR
+flat in vec2 v_q1, v_q2, v_q3;  // corners 1..3 in the piece's plane coordinates (corner 0 at the origin)
+#endif
 layout(location = 0) out uint o_id;
-
 
 float cross2(vec2 a, vec2 b) { return a.x * b.y - a.y * b.x; }
 
+#if HAS_BILINEAR
 // Quad kind 4: (u, v) ∈ [0, 1]² of plane point h (inverse bilinear).
 vec2 inverse_bilinear(vec2 h) {
     // p = u(1-v) q1 + uv q2 + (1-u)v q3: solve k2 v² + k1 v + k0 = 0 (Quilez's inverse
     // bilinear), with the cancellation-free root for near-parallelograms (k2 → 0).
-    Grid g = grids[v_grid];
-    vec2 e = g.q1, f = g.q3, gg = g.q2 - g.q1 - g.q3;
+    vec2 e = v_q1, f = v_q3, gg = v_q2 - v_q1 - v_q3;
     float k2 = cross2(gg, f), k1 = cross2(e, f) + cross2(h, gg), k0 = cross2(h, e);
     float disc = sqrt(max(k1 * k1 - 4.0 * k0 * k2, 0.0));
     float q = -0.5 * (k1 + (k1 >= 0.0 ? disc : -disc));
@@ -56,6 +50,9 @@ vec2 inverse_bilinear(vec2 h) {
     float u = abs(den.x) > abs(den.y) ? (h.x - f.x * v) / den.x : (h.y - f.y * v) / den.y;
     return vec2(u, v);
 }
+#else
+vec2 inverse_bilinear(vec2 h) { return vec2(0.0); }  // no piece of the scene needs it
+#endif
 #endif
 
 #if BACK_PASS

@@ -20,13 +20,30 @@ void main() {
     gl_Position = u_face * vec4(a_position, 1.0);
 }
 #else
+#ifndef HAS_BILINEAR
+#define HAS_BILINEAR 1
+#endif
 out vec2 v_param;
-flat out uint v_grid;
 flat out uvec4 v_info;
+#if HAS_BILINEAR
+// The piece's corners in its plane coordinates (see item.frag), read here once per vertex and
+// passed flat: a read of the buffer per pixel (a gather in llvmpipe) cost as much as the rest
+// of the drawing (docs/benchmarks.md, "The bilinear pieces' corners as flat varyings").
+struct Grid {
+    vec2 q1, q2, q3;
+    uint count, nu, nv, first;
+};
+layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
+flat out vec2 v_q1, v_q2, v_q3;
+#endif
 void main() {
     v_param = a_param;
-    v_grid = a_grid;
     v_info = a_info;
+#if HAS_BILINEAR
+    v_q1 = grids[a_grid].q1;
+    v_q2 = grids[a_grid].q2;
+    v_q3 = grids[a_grid].q3;
+#endif
     gl_Position = u_face * vec4(a_position, 1.0);
 }
 #endif

@@ -92,11 +92,12 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     const std::string single = fmt::format("#define SINGLE_CELL {}\n", pieces.single_cell ? 1 : 0);
     frag.insert(eol, kinds + single);
     back_frag.insert(eol, kinds + "#define BACK_PASS 1\n");
-    std::string vert(shaders::item_vert);
-    vert.insert(vert.find('\n') + 1, single);
+    std::string vert(shaders::item_vert), back_vert(shaders::item_vert);
+    vert.insert(vert.find('\n') + 1, kinds + single);
+    back_vert.insert(back_vert.find('\n') + 1, kinds);
     program_ = gl::make_program(gl, "item shader", vert, frag);
     // The back pass's own program: its discard (item.frag) would cost the front pass early depth tests.
-    back_program_ = gl::make_program(gl, "item shader (back faces)", shaders::item_vert, back_frag);
+    back_program_ = gl::make_program(gl, "item shader (back faces)", back_vert, back_frag);
     target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
     half_target_ = gl::make_item_target(gl, half_layout_.atlas_width(), half_layout_.atlas_height());
     if (opt.fine_sub_resolution != HemicubeOptions::FineSubResolution::half)
