@@ -1,6 +1,7 @@
 // ffcube formfactors: headless precomputation of the form-factor matrix.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <optional>
@@ -96,6 +97,13 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     // file (fast compression: it is read twice and removed).
     const bool first_is_output = ffm && !enforce;
     const std::filesystem::path first = first_is_output ? std::filesystem::path(o.output) : scratch.path() / "computed.ffm";
+    const std::vector<double> areas = patch_areas(scene);
+    // Reciprocity while the rows come, when the entries waiting for their column's row stay
+    // within min(--stats-memory, 64 MiB) at 16 bytes each (scenes to about 10k patches): then
+    // no pass over the file follows. Beyond, it gives up and frees them, and the file is read.
+    constexpr std::uint64_t kLiveReciprocityBytes = std::uint64_t{64} << 20;
+    std::optional<StreamedPatchReciprocity> live;
+    if (!enforce) live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
     {
         FfmWriter writer(first, scene, written, first_is_output ? FfmWriterOptions{} : FfmWriterOptions{1u << 20, 1});
         Stopwatch watch, piece;
@@ -107,6 +115,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
                 for (const auto& sink : sinks) sink->append_row(row);
             writing += piece.seconds();
             checks.add(i, row);
+            if (live) live->add(i, row);
             sums[i] = row.sum();
         });
         f.seconds = watch.seconds();
@@ -121,7 +130,6 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         if (first_is_output) report_ffm(writer);
     }
     Stopwatch watch;
-    const std::vector<double> areas = patch_areas(scene);
     const RowStreamChecks* final_checks = &checks;
     std::optional<RowStreamChecks> out_checks;
     if (enforce) {
@@ -147,7 +155,17 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
         f.nnz = nnz;
         final_checks = &*out_checks;
         f.reciprocity.patch_max_abs = e.patch_max_abs;  // computed with the enforced rows
+    } else if (live && live->complete()) {
+        if (progress)
+            info("reciprocity: checked while the rows came ({:.1f} MiB held at most), no pass over {}",
+                 static_cast<double>(live->peak_entries()) * 8 / (1 << 20), first.filename().string());
+        f.reciprocity.patch_max_abs = live->max_abs();
+        report.set("reciprocity.passes", 0);
+        report.set("reciprocity.bands", 0);
+        report.set("reciprocity.scratch_bytes", 0);
+        report.set("reciprocity.in_stream_peak_entries", live->peak_entries());
     } else {
+        live.reset();
         // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
         // per entry held): a pass over the file spills the bands to scratch files, a second reads
         // the rows again with the bands one at a time (io/transpose_scratch.hpp); when the one band

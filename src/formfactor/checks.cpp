@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 #include <vector>
+#if defined(__GLIBC__)  // after a libc header has defined it
+#include <malloc.h>
+#endif
 
 #include "ffcube/core/error.hpp"
 
@@ -140,6 +143,46 @@ void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
         // only F_ji > 0, checked there from row j, gives the same |difference| here).
         worst_ = std::max(worst_, std::abs(ai * fij - aj * fji) / (0.5 * (ai + aj)));
     }
+}
+
+StreamedPatchReciprocity::StreamedPatchReciprocity(std::span<const double> areas, std::uint64_t max_entries)
+    : areas_(areas), max_entries_(max_entries), check_(areas), rows_(areas.size()), vals_(areas.size()) {}
+
+void StreamedPatchReciprocity::give_up() {
+    failed_ = true;
+    std::vector<std::vector<std::uint32_t>>().swap(rows_);
+    std::vector<std::vector<float>>().swap(vals_);
+    held_ = 0;
+#if defined(__GLIBC__)
+    // The lists were many small blocks: hand the freed heap back, so that the passes over the
+    // file that follow start from the memory the run had before (the 1 GB bound at 100k patches).
+    malloc_trim(0);
+#endif
+}
+
+void StreamedPatchReciprocity::add(std::uint32_t i, RowView row) {
+    if (failed_) return;
+    if (i != next_ || i >= areas_.size()) {
+        give_up();
+        return;
+    }
+    ++next_;
+    // Row i left of the diagonal with column i above it (every row k < i has come).
+    const auto left = static_cast<std::size_t>(std::lower_bound(row.col.begin(), row.col.end(), i) - row.col.begin());
+    check_.add(i, RowView{row.col.first(left), row.val.first(left)}, RowView{rows_[i], vals_[i]});
+    held_ -= rows_[i].size();
+    std::vector<std::uint32_t>().swap(rows_[i]);
+    std::vector<float>().swap(vals_[i]);
+    // Right of the diagonal (past i itself): each entry waits in its column for that column's row.
+    for (std::size_t x = left; x < row.col.size(); ++x) {
+        const std::uint32_t j = row.col[x];
+        if (j == i) continue;
+        rows_[j].push_back(i);
+        vals_[j].push_back(row.val[x]);
+        ++held_;
+    }
+    peak_ = std::max(peak_, held_);
+    if (held_ > max_entries_) give_up();
 }
 
 }  // namespace ffcube

@@ -138,12 +138,14 @@ TEST(MemoryCli, StreamedEnforcePeakDoesNotGrowWithTheEntries) {
     EXPECT_LT(hi.peak, 192.0 * 1024 * 1024 + 1024.0 * 2000 + growth);
 }
 
-// The streamed run's statistics, computed from the stream and by passes over the written file,
-// are the in-memory run's to the last bit, and its .ffm holds the in-memory matrix.
+// The streamed run's statistics, computed from the stream and by passes over the written file
+// (--stats-memory 1) or while the rows come (the default budget), are the in-memory run's to the
+// last bit, and its .ffm holds the in-memory matrix.
 TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
     test::TempDir dir;
     const std::string scene = test::example("cube.obj");
-    for (const auto& [out, extra] : {std::pair{"s.ffm", "--stats-memory 1"}, std::pair{"m.ffm", "--ffm-version 1"}}) {
+    for (const auto& [out, extra] :
+         {std::pair{"s.ffm", "--stats-memory 1"}, std::pair{"m.ffm", "--ffm-version 1"}, std::pair{"l.ffm", ""}}) {
         const auto r = test::run_ffcube(fmt::format("formfactors {} --patches 1500 --resolution 48 -q {} -o {} --report {}.json",
                                                     scene, extra, dir / out, dir / out));
         ASSERT_EQ(r.code, 0) << r.output;
@@ -156,6 +158,11 @@ TEST(MemoryCli, StreamedStatisticsEqualTheInMemoryOnes) {
     EXPECT_EQ(s["reciprocity"]["passes"].get<int>(), 2);
     for (const char* k : {"min", "max", "mean"}) EXPECT_EQ(s["row_sums"][k], m["row_sums"][k]) << k;
     for (const char* k : {"patch_max_abs", "object_max_rel"}) EXPECT_EQ(s["reciprocity"][k], m["reciprocity"][k]) << k;
+    const auto l = nlohmann::json::parse(test::read_text(dir / "l.ffm.json"));
+    EXPECT_EQ(l["reciprocity"]["passes"].get<int>(), 0);  // checked while the rows came
+    EXPECT_GT(l["reciprocity"]["in_stream_peak_entries"].get<double>(), 0.0);
+    EXPECT_GT(m["reciprocity"]["patch_max_abs"].get<double>(), 0.0);
+    EXPECT_EQ(l["reciprocity"]["patch_max_abs"], m["reciprocity"]["patch_max_abs"]);
     const FfmFile a = read_ffm(dir / "s.ffm"), b = read_ffm(dir / "m.ffm");
     EXPECT_EQ(a.version, 2u);
     EXPECT_EQ(b.version, 1u);

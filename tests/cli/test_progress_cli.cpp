@@ -46,13 +46,20 @@ TEST(ProgressCli, EveryPhaseShowsItsLine) {
         << r.output;
     EXPECT_TRUE(std::regex_search(r.output, std::regex(R"(scaling iteration \d+ .*converged)"))) << r.output;
 
-    // Without --enforce: the reciprocity check's passes over the written file.
+    // Without --enforce: the reciprocity check while the rows come. About 1.2e5 entries, of
+    // which fewer than the 65,536 that 1 MiB holds (16 bytes each) wait for their column's row
+    // at any time: no pass over the file follows, and the line says so.
     r = test::run_ffcube_env(env, "formfactors " + cube + " --stats-memory 1 -o " + (dir / "F.ffm"));
     ASSERT_EQ(r.code, 0) << r.output;
     expect_bar(r.output, "rows: ");
-    // About 1.2e5 entries: the columns below the diagonal and the rows right of it fit in the
-    // 131,072 entries of 1 MiB together, so one pass keeps both (io/transpose_scratch.hpp).
-    expect_bar(r.output, "reciprocity (1 pass over F.ffm, ");
+    EXPECT_NE(r.output.find("ffcube: reciprocity: checked while the rows came ("), std::string::npos) << r.output;
+    EXPECT_EQ(r.output.find("reciprocity (1 pass"), std::string::npos) << r.output;
+    // The cube at 0.125: 1,536 patches, about 2e6 entries, some 5e5 of them waiting at the middle
+    // rows: past 1 MiB, so the check gives up and reads the file, by bands of 131,072 entries.
+    const std::string fine = test::example("closed_cube.stl") + " --max-patch-edge 0.125 --resolution 16";
+    r = test::run_ffcube_env(env, "formfactors " + fine + " --stats-memory 1 -o " + (dir / "F2.ffm"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    expect_bar(r.output, "reciprocity (2 passes over F2.ffm, ");
 
     // The matrix in memory (--ffm-version 1): its enforcement, its reciprocity and its writing.
     r = test::run_ffcube_env(env, "formfactors " + cube + " --ffm-version 1 --enforce reciprocity -o " + (dir / "G.ffm"));

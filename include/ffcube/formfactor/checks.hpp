@@ -88,4 +88,33 @@ private:
     double worst_ = 0.0;
 };
 
+// PatchReciprocity while the rows stream (rows 0, 1, ... in order, as they are written): row j's
+// entries left of the diagonal are paired with column j's entries above it, F_kj for k < j,
+// which the rows before j left here; entries right of the diagonal wait for their column's row,
+// and a column is let go once its row has come. Each pair is looked at once, from its higher
+// index (the measure is symmetric bit for bit: the same maximum as the pass over the file). It
+// holds the waiting entries (8 bytes each, up to twice that with the vectors' slack): at most
+// max_entries of them, beyond which, or when a row comes out of order, it gives up and frees
+// them (complete() false: the caller reads the file instead).
+class StreamedPatchReciprocity {
+public:
+    StreamedPatchReciprocity(std::span<const double> areas, std::uint64_t max_entries);
+    void add(std::uint32_t i, RowView row);
+    // Every row 0 .. n − 1 came, in order, within the budget: max_abs() is the matrix's.
+    bool complete() const { return !failed_ && next_ == areas_.size(); }
+    double max_abs() const { return check_.max_abs(); }
+    std::uint64_t peak_entries() const { return peak_; }
+
+private:
+    void give_up();
+    std::span<const double> areas_;
+    std::uint64_t max_entries_;
+    PatchReciprocity check_;
+    std::vector<std::vector<std::uint32_t>> rows_;  // per column j: the rows k < j with F_kj > 0 so far
+    std::vector<std::vector<float>> vals_;          // ... and their F_kj
+    std::uint64_t held_ = 0, peak_ = 0;
+    std::uint32_t next_ = 0;
+    bool failed_ = false;
+};
+
 }  // namespace ffcube
