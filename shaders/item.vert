@@ -5,7 +5,6 @@
 // (subtracted in double on the CPU), so only the fixed face projection is applied here.
 layout(location = 0) in vec3 a_position;  // per hemicube
 layout(location = 1) in vec2 a_param;     // cell coordinates (affine pieces) or plane coordinates (static)
-layout(location = 2) in uint a_grid;      // index of the piece (static)
 layout(location = 3) in uvec4 a_info;     // the piece's kind, nu, nv, first patch (static)
 uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, infinite far plane)
 // SINGLE_CELL 1: every piece is one patch (defined by the program that loads this shader, for
@@ -26,23 +25,21 @@ void main() {
 out vec2 v_param;
 flat out uvec4 v_info;
 #if HAS_BILINEAR
-// The piece's corners in its plane coordinates (see item.frag), read here once per vertex and
-// passed flat: a read of the buffer per pixel (a gather in llvmpipe) cost as much as the rest
-// of the drawing (docs/benchmarks.md, "The bilinear pieces' corners as flat varyings").
-struct Grid {
-    vec2 q1, q2, q3;
-    uint count, nu, nv, first;
-};
-layout(std430, binding = 0) readonly buffer Grids { Grid grids[]; };
+// The piece's corners 1..3 in its plane coordinates (see item.frag), per vertex (static), passed
+// on flat: a read of a buffer per pixel (a gather in llvmpipe) cost as much as the rest of the
+// drawing (docs/benchmarks.md, "The bilinear pieces' corners as flat varyings").
+layout(location = 2) in vec2 a_q1;
+layout(location = 4) in vec2 a_q2;
+layout(location = 5) in vec2 a_q3;
 flat out vec2 v_q1, v_q2, v_q3;
 #endif
 void main() {
     v_param = a_param;
     v_info = a_info;
 #if HAS_BILINEAR
-    v_q1 = grids[a_grid].q1;
-    v_q2 = grids[a_grid].q2;
-    v_q3 = grids[a_grid].q3;
+    v_q1 = a_q1;
+    v_q2 = a_q2;
+    v_q3 = a_q3;
 #endif
     gl_Position = u_face * vec4(a_position, 1.0);
 }

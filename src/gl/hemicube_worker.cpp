@@ -108,7 +108,6 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     grid_vbo_ = gl::make_buffer(gl);
     info_vbo_ = gl::make_buffer(gl);
     ebo_ = gl::make_buffer(gl);
-    ssbo_ = gl::make_buffer(gl);
     const std::size_t slots = pieces.pos.size();
     gl.BindVertexArray(vao_.id());
     gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
@@ -121,21 +120,32 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
                   GL_STATIC_DRAW);
     gl.EnableVertexAttribArray(1);
     gl.VertexAttribPointer(1, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), nullptr);
-    gl.BindBuffer(GL_ARRAY_BUFFER, grid_vbo_.id());
-    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.grid.size() * sizeof(std::uint32_t)),
-                  pieces.grid.data(), GL_STATIC_DRAW);
-    gl.EnableVertexAttribArray(2);
-    gl.VertexAttribIPointer(2, 1, GL_UNSIGNED_INT, sizeof(std::uint32_t), nullptr);
+    if (pieces.has_kind[4]) {
+        // General quads' corners 1..3 in their plane (GpuGrid q1, q2, q3) per vertex slot, for the
+        // inverse bilinear map (item.vert passes them flat: a read per pixel from a buffer, a
+        // gather in llvmpipe, cost as much as the rest of the drawing).
+        std::vector<float> q(pieces.grid.size() * 6);
+        for (std::size_t v = 0; v < pieces.grid.size(); ++v) {
+            const GpuGrid& g = pieces.gpu[pieces.grid[v]];
+            std::copy(g.q1, g.q1 + 2, &q[v * 6]);
+            std::copy(g.q2, g.q2 + 2, &q[v * 6 + 2]);
+            std::copy(g.q3, g.q3 + 2, &q[v * 6 + 4]);
+        }
+        gl.BindBuffer(GL_ARRAY_BUFFER, grid_vbo_.id());
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(q.size() * sizeof(float)), q.data(), GL_STATIC_DRAW);
+        gl.EnableVertexAttribArray(2);
+        gl.VertexAttribPointer(2, 2, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+        gl.EnableVertexAttribArray(4);
+        gl.VertexAttribPointer(4, 2, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(2 * sizeof(float)));
+        gl.EnableVertexAttribArray(5);
+        gl.VertexAttribPointer(5, 2, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<const void*>(4 * sizeof(float)));
+    }
     gl.BindBuffer(GL_ARRAY_BUFFER, info_vbo_.id());
     gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.info.size() * sizeof(std::uint32_t)),
                   pieces.info.data(), GL_STATIC_DRAW);
     gl.EnableVertexAttribArray(3);
     gl.VertexAttribIPointer(3, 4, GL_UNSIGNED_INT, 4 * sizeof(std::uint32_t), nullptr);
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
-    gl.BindBuffer(GL_SHADER_STORAGE_BUFFER, ssbo_.id());
-    gl.BufferData(GL_SHADER_STORAGE_BUFFER, static_cast<GLsizeiptr>(pieces.gpu.size() * sizeof(GpuGrid)),
-                  pieces.gpu.data(), GL_STATIC_DRAW);
-    gl.BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, ssbo_.id());
     gl.UseProgram(back_program_.id());
     u_back_face_ = gl.GetUniformLocation(back_program_.id(), "u_face");
     gl.UseProgram(program_.id());

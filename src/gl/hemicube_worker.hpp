@@ -114,7 +114,7 @@ private:
     gl::Program program_, back_program_;
     gl::ItemTarget target_, half_target_, quarter_target_;
     gl::VertexArray vao_;
-    gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_, ssbo_;
+    gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_;  // grid_vbo_: general quads' corners
     GLint u_face_ = -1, u_back_face_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> visit_;  // per piece: == visit_stamp_ when it may be in front (PieceBvh)

@@ -24,8 +24,10 @@
 
 namespace ffcube {
 
-// What the fragment shader reads per piece (std430 layout of 'struct Grid' in shaders/item.frag).
-// kind: 3 triangle, 4 general quad (plane coordinates, inverse bilinear), 5 parallelogram.
+// A piece as the item shader sees it: its corners 1..3 in its plane (corner 0 at the origin; the
+// GL worker gives a general quad's to every vertex slot of it, shaders/item.vert), its kind
+// (3 triangle, 4 general quad: plane coordinates, inverse bilinear, 5 parallelogram), its cells
+// and first patch.
 struct GpuGrid {
     float q1[2], q2[2], q3[2];
     std::uint32_t count, nu, nv, first;
