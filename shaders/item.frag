@@ -22,6 +22,11 @@
 #ifndef SINGLE_CELL
 #define SINGLE_CELL 0
 #endif
+// ONLY_KIND 3, 4 or 5: the front pass draws each kind of piece with its own program, which
+// computes only that kind's patch lookup (0: every kind present, chosen per piece).
+#ifndef ONLY_KIND
+#define ONLY_KIND 0
+#endif
 #if SINGLE_CELL && !BACK_PASS
 flat in uint v_id;
 layout(location = 0) out uint o_id;
@@ -86,7 +91,7 @@ void main() {
     uint kind = v_info.x, nu = v_info.y, nv = v_info.z;
     vec2 p = v_param;
     uint cell;
-    if (HAS_TRIANGLES != 0 && kind == 3u) {
+    if (ONLY_KIND == 3 || (ONLY_KIND == 0 && HAS_TRIANGLES != 0 && kind == 3u)) {
         // p = (s, t): k × the barycentric coordinates of corners 1 and 2.
         float k = float(nu);
         float s = clamp(p.x, 0.0, k), t = clamp(p.y, 0.0, k);
@@ -94,7 +99,7 @@ void main() {
         if (i + j > int(nu) - 1) i = int(nu) - 1 - j;  // rounding past the hypotenuse
         bool inverted = (s - float(i)) + (t - float(j)) > 1.0 && i + j + 1 < int(nu);
         cell = uint(j * (2 * int(nu) - j) + 2 * i + (inverted ? 1 : 0));
-    } else if (HAS_BILINEAR == 0 || kind == 5u) {
+    } else if (ONLY_KIND == 5 || (ONLY_KIND == 0 && (HAS_BILINEAR == 0 || kind == 5u))) {
         // p = (u nu, v nv).
         int i = clamp(int(floor(p.x)), 0, int(nu) - 1);
         int j = clamp(int(floor(p.y)), 0, int(nv) - 1);

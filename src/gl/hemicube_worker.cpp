@@ -88,14 +88,32 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     const std::string kinds = fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
                                           pieces.has_kind[4] ? 1 : 0);
     std::string back_frag = frag;
-    // Scenes of one patch per piece: the front pass interpolates nothing (item.vert).
-    const std::string single = fmt::format("#define SINGLE_CELL {}\n", pieces.single_cell ? 1 : 0);
-    frag.insert(eol, kinds + single);
     back_frag.insert(eol, kinds + "#define BACK_PASS 1\n");
-    std::string vert(shaders::item_vert), back_vert(shaders::item_vert);
-    vert.insert(vert.find('\n') + 1, kinds + single);
+    std::string back_vert(shaders::item_vert);
     back_vert.insert(back_vert.find('\n') + 1, kinds);
-    program_ = gl::make_program(gl, "item shader", vert, frag);
+    // The front pass: scenes of one patch per piece get one program that interpolates nothing
+    // (SINGLE_CELL, item.vert); others one program per kind of piece they have (ONLY_KIND,
+    // item.frag), each computing only its own kind's lookup, drawn one after the other.
+    const auto front = [&](const std::string& defines, const std::string& name) {
+        std::string f = frag, v(shaders::item_vert);
+        f.insert(eol, defines);
+        v.insert(v.find('\n') + 1, defines);
+        return gl::make_program(gl, name, v, f);
+    };
+    group_of_kind_.fill(0);
+    if (pieces.single_cell) {
+        programs_[0] = front(kinds + "#define SINGLE_CELL 1\n", "item shader");
+        groups_ = 1;
+    } else {
+        for (const std::uint32_t kind : {3u, 5u, 4u}) {
+            if (!pieces.has_kind[kind]) continue;
+            group_of_kind_[kind] = groups_;
+            programs_[groups_++] = front(fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n#define ONLY_KIND {}\n",
+                                                     kind == 3 ? 1 : 0, kind == 4 ? 1 : 0, kind),
+                                         fmt::format("item shader (pieces of kind {})", kind));
+        }
+        if (groups_ == 0) programs_[groups_++] = front(kinds, "item shader");  // no piece at all
+    }
     // The back pass's own program: its discard (item.frag) would cost the front pass early depth tests.
     back_program_ = gl::make_program(gl, "item shader (back faces)", back_vert, back_frag);
     target_ = gl::make_item_target(gl, layout.atlas_width(), layout.atlas_height());
@@ -148,8 +166,8 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     gl.BindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo_.id());
     gl.UseProgram(back_program_.id());
     u_back_face_ = gl.GetUniformLocation(back_program_.id(), "u_face");
-    gl.UseProgram(program_.id());
-    u_face_ = gl.GetUniformLocation(program_.id(), "u_face");
+    for (std::uint32_t k = 0; k < groups_; ++k) u_face_[k] = gl.GetUniformLocation(programs_[k].id(), "u_face");
+    gl.UseProgram(programs_[0].id());
     // All state the item pass needs is set here and never changed: nothing leaks in or out.
     gl.BindFramebuffer(GL_FRAMEBUFFER, target_.fbo.id());
     gl.Enable(GL_DEPTH_TEST);
@@ -701,7 +719,7 @@ void Worker::build_lists(bool occluders_only, HemicubeStats* st) {
         for (std::size_t f = 0; f < 5; ++f) {
             if (!(d.faces & (1u << f))) continue;
             if (st) ++st->pieces_drawn[f];
-            auto& l = lists_[f + (d.back ? 5 : 0)];
+            auto& l = lists_[f + (d.back ? kBackLists : 5 * group_of_kind_[pieces_.gpu[d.g].count])];
             if (tri_begin == tri_end) {
                 l.insert(l.end(), {base, base + 1, base + 2});
                 if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
@@ -734,30 +752,34 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
     // snaps vertices to its subpixel grid, which can turn a sliver (a triangle seen almost
     // edge-on, or a small one beside a T-vertex) over, and a front piece would then show a
     // back-face pixel.
-    std::size_t first_index = 0;
-    for (int pass = 0; pass < passes; ++pass) {
-        if (pass == 1) {
-            gl.Enable(GL_POLYGON_OFFSET_FILL);
-            gl.PolygonOffset(0.0f, -64.0f);
-            gl.UseProgram(back_program_.id());  // discards centres outside the piece (item.frag)
+    // The lists lie back to back in the element buffer (upload_lists), in lists_'s order.
+    std::array<std::size_t, kLists> first{};
+    for (std::size_t k = 1; k < kLists; ++k) first[k] = first[k - 1] + lists_[k - 1].size();
+    const auto draw = [&](std::size_t list0, GLint u_face) {
+        for (std::size_t f = 0; f < 5; ++f) {
+            const std::size_t count = lists_[list0 + f].size();
+            if (count == 0) continue;
+            const FaceSpec& fs = faces[f];
+            const auto m = face_matrix(fs, near);
+            gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
+            gl.UniformMatrix4fv(u_face, 1, GL_FALSE, m.data());
+            gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
+                            reinterpret_cast<const void*>(first[list0 + f] * sizeof(std::uint32_t)));
         }
-        for (int f = 0; f < 5; ++f) {
-            const FaceSpec& fs = faces[static_cast<std::size_t>(f)];
-            const std::size_t count = lists_[pass * 5 + f].size();
-            if (count > 0) {
-                const auto m = face_matrix(fs, near);
-                gl.Viewport(fs.viewport.x, fs.viewport.y, fs.viewport.width, fs.viewport.height);
-                gl.UniformMatrix4fv(pass == 0 ? u_face_ : u_back_face_, 1, GL_FALSE, m.data());
-                gl.DrawElements(GL_TRIANGLES, static_cast<GLsizei>(count), GL_UNSIGNED_INT,
-                                reinterpret_cast<const void*>(first_index * sizeof(std::uint32_t)));
-            }
-            first_index += count;
-        }
+    };
+    // Front pieces, a program per kind of piece (their lookups differ), then the back ones.
+    for (std::uint32_t k = 0; k < groups_; ++k) {
+        if (groups_ > 1) gl.UseProgram(programs_[k].id());
+        draw(5 * k, u_face_[k]);
     }
     if (passes > 1) {
+        gl.Enable(GL_POLYGON_OFFSET_FILL);
+        gl.PolygonOffset(0.0f, -64.0f);
+        gl.UseProgram(back_program_.id());  // discards centres outside the piece (item.frag)
+        draw(kBackLists, u_back_face_);
         gl.Disable(GL_POLYGON_OFFSET_FILL);
-        gl.UseProgram(program_.id());
     }
+    if (passes > 1 || groups_ > 1) gl.UseProgram(programs_[0].id());
 }
 
 // Occlusion culling: the front pieces the worker's last hemicube showed are drawn first, depth
@@ -803,7 +825,7 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
     for (const auto& [score, k] : scores_) drawn_[k].occluder = true;
     build_lists(true, nullptr);
     std::size_t occluders = 0;
-    for (int f = 0; f < 5; ++f) occluders += lists_[f].size();
+    for (std::size_t k = 0; k < kBackLists; ++k) occluders += lists_[k].size();
     if (occluders == 0) return;
     upload_lists();
     const GLfloat zero_depth = 0.0f;

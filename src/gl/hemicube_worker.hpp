@@ -111,16 +111,24 @@ private:
     // row throw that class of error, from inside the worker (thread or process). 0: unset.
     int test_fail_ = 0;
     std::array<FaceSpec, 5> face_m_, half_face_m_, quarter_face_m_;
-    gl::Program program_, back_program_;
+    // Front pass: one program per group of pieces (groups_ of them: one for a scene of one patch
+    // per piece, else one per kind of piece present), group_of_kind_[kind] (3, 4 or 5) its group.
+    std::array<gl::Program, 3> programs_;
+    std::uint32_t groups_ = 0;
+    std::array<std::uint32_t, 6> group_of_kind_{};
+    gl::Program back_program_;
     gl::ItemTarget target_, half_target_, quarter_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_;  // grid_vbo_: general quads' corners
-    GLint u_face_ = -1, u_back_face_ = -1;
+    std::array<GLint, 3> u_face_{-1, -1, -1};
+    GLint u_back_face_ = -1;
     std::vector<float> local_;
     std::vector<std::uint32_t> visit_;  // per piece: == visit_stamp_ when it may be in front (PieceBvh)
     std::uint32_t visit_stamp_ = 0;
     std::vector<Drawn> drawn_;                          // cull()'s pieces, in piece order
-    std::vector<std::uint32_t> lists_[10], all_idx_;  // per face: front pieces [0, 5), back [5, 10)
+    // Index lists per face: front pieces of group k at [5k, 5k + 5), back pieces at [kBackLists, kLists).
+    static constexpr std::size_t kBackLists = 15, kLists = 20;
+    std::vector<std::uint32_t> lists_[kLists], all_idx_;
     // Occlusion culling (occlude()): the pieces that showed in this worker's last hemicube are
     // drawn first, as occluders, and what lies wholly behind them is left out.
     std::vector<std::uint32_t> piece_of_;  // per patch: its piece
