@@ -1,7 +1,7 @@
 // The item shader's patch lookup for every kind of mesher piece: triangles (kind 3) and
 // parallelogram quads (GPU kind 5) take the floor of their interpolated cell coordinates, other
-// quads (kind 4) solve the inverse bilinear map; the shader is compiled without the triangle or
-// bilinear path when no piece needs it. T-vertices (a corner of one piece inside another's edge)
+// quads (kind 4) solve the inverse bilinear map; each kind present is drawn by its own program,
+// compiled with only its own lookup (ONLY_KIND). T-vertices (a corner of one piece inside another's edge)
 // add vertex slots whose parameters must follow the same rule.
 //
 // Two independent references:
@@ -347,6 +347,15 @@ void expect_shift_detectable(const Scene& s, const RowCheck& rc, std::uint32_t o
 
 const Vec3 kSender[4] = {{-0.01, -0.01, 0}, {0.01, -0.01, 0}, {0.01, 0.01, 0}, {-0.01, 0.01, 0}};
 
+// One thread (the row in this process), N = 256, the rotation of this seed.
+HemicubeOptions row_options(std::uint64_t seed) {
+    HemicubeOptions o;
+    o.resolution = 256;
+    o.threads = 1;
+    o.seed = seed;
+    return o;
+}
+
 void run_receivers(const std::vector<Kind>& kinds, const std::string& label) {
     std::vector<NamedPolygon> polys{{"sender", {kSender[0], kSender[1], kSender[2], kSender[3]}}};
     for (const Kind k : kinds) polys.push_back(receiver(k));
@@ -366,10 +375,7 @@ void run_receivers(const std::vector<Kind>& kinds, const std::string& label) {
     ASSERT_EQ(s.grids[0].nu * s.grids[0].nv, 1u);
 
     for (const std::uint64_t seed : {0x5eedull, 0x1234567ull}) {
-        HemicubeOptions o;
-        o.resolution = 256;
-        o.threads = 1;
-        o.seed = seed;
+        const HemicubeOptions o = row_options(seed);
         HemicubeRowProvider provider(s, o);
         const RowCheck rc = check_row(s, provider, o, sender, label);
         for (const Kind k : kinds) expect_shift_detectable(s, rc, object_of(s, receiver(k).object));
@@ -402,10 +408,7 @@ TEST(PieceKinds, OnePatchPerPieceMapsPixelsToTheirPatches) {
     ASSERT_EQ(s.size(), polys.size());
     ASSERT_TRUE(prepare_pieces(s.grids).single_cell);
     for (const std::uint64_t seed : {0x5eedull, 0x1234567ull}) {
-        HemicubeOptions o;
-        o.resolution = 256;
-        o.threads = 1;
-        o.seed = seed;
+        const HemicubeOptions o = row_options(seed);
         HemicubeRowProvider provider(s, o);
         const RowCheck rc = check_row(s, provider, o, 0, "one patch per piece");
         std::printf("[ one patch per piece, seed %llx ] worst |F - exact| = %.3g = %.3f of its tolerance; row sum %.6f\n",
