@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "ffcube/scene/scene.hpp"
 
@@ -22,8 +23,12 @@ struct RowErrorModel {
     // square for a sampled row (the 2 × 2 rule's residual); 0 when the inner provider samples
     // the whole sender (the ray caster).
     double midpoint(std::uint32_t j, double f) const;
+    // The same from r² = |c_j − c_i|² (the caller has it).
+    double midpoint_at(double r2, double f) const;
     // The inner provider's noise on an entry of value f.
     double noise(double f) const;
+    // noise(f[a]) into out[a] for every a, the same bits (two at a time where SSE2 is there).
+    void noise(std::span<const double> f, double* out) const;
 };
 
 }  // namespace ffcube::accuracy

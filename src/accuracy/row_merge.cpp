@@ -11,12 +11,14 @@ std::uint64_t merge_row(const SparseRow& inner, std::span<const std::pair<std::u
     out.row.val.reserve(inner.nnz() + exact.size());
     out.is_exact.reserve(inner.nnz() + exact.size());
     std::uint64_t rescaled = 0;
+    out.noise.resize(inner.nnz());
+    error.noise(inner.val, out.noise.data());
     std::size_t a = 0, b = 0;
     while (a < inner.nnz() || b < exact.size()) {
         if (b == exact.size() || (a < inner.nnz() && inner.col[a] < exact[b].first)) {
             const SenderQuadrature::Entry e = quadrature.rescale(inner.col[a], inner.val[a]);
             rescaled += e.rescaled;
-            estimate += e.systematic + error.noise(inner.val[a]);
+            estimate += e.systematic + out.noise[a];
             if (e.value > 0) {
                 out.row.col.push_back(inner.col[a]);
                 out.row.val.push_back(e.value);

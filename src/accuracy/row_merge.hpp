@@ -17,6 +17,7 @@ namespace ffcube::accuracy {
 struct MergedRow {
     SparseRow row;
     std::vector<std::uint8_t> is_exact;  // per entry of row: 1 for an analytic value
+    std::vector<double> noise;           // scratch: the inner row's noise terms
     void clear() {
         row.clear();
         is_exact.clear();

@@ -12,9 +12,11 @@
 
 #include "accuracy/patch_set.hpp"
 #include "accuracy/rebalance.hpp"
+#include "accuracy/row_error.hpp"
 #include "accuracy/row_merge.hpp"
 #include "accuracy/shaft_test.hpp"
 #include "accuracy/spatial_grid.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 #include "support/scenes.hpp"
 #include "support/segments.hpp"
 
@@ -275,6 +277,67 @@ TEST(RowMerge, ExactColumnsReplaceAndZerosDrop) {
     EXPECT_EQ(out.row.val, (std::vector<double>{0.1, 0.05, 0.25, 0.125, 0.4}));
     EXPECT_EQ(out.is_exact, (std::vector<std::uint8_t>{0, 1, 1, 1, 0}));
     EXPECT_EQ(estimate, 0.0);  // no quadrature, no noise model: the kept entries add nothing
+}
+
+// A row's noise terms two at a time (SSE2) are the scalar ones, bit for bit: values over twelve
+// decades, odd and even lengths, each model (pixels, rays, both).
+TEST(RowError, NoiseOfARowIsTheScalarsBitForBit) {
+    const Scene s = test::make_scene({test::square_z("low", 0, true), test::square_z("high", 1, false)}, 0.5);
+    Rng rng(11);
+    for (const auto& [dF, rays] : {std::pair{1e-5, 0.0}, std::pair{0.0, 4096.0}, std::pair{3e-6, 100.0}}) {
+        const accuracy::RowErrorModel error{s, s.patches[0], dF, rays, false, true};
+        for (std::size_t n : {0u, 1u, 2u, 7u, 64u}) {
+            std::vector<double> f(n), out(n, -1.0);
+            for (double& v : f) v = std::pow(10.0, rng(-12, 0));
+            error.noise(f, out.data());
+            for (std::size_t a = 0; a < n; ++a) EXPECT_EQ(out[a], error.noise(f[a])) << "dF " << dF << " rays " << rays;
+        }
+    }
+}
+
+// The sender quadrature's far entries (6 to 64 sizes: the point kernel), computed two points at a
+// time, are the scalar statement of the rule bit for bit: the ratio of the 2 × 2 rule's kernel
+// sum to the centroid's, applied when within 25% of 1. Random facets (quads and triangles, sizes
+// over two decades, arbitrary orientations: kernels that vanish behind either plane included).
+TEST(SenderQuadrature, PointKernelRatiosAreTheScalarRuleBitForBit) {
+    const Scene s = random_scene(5, 300);
+    const accuracy::PatchSet ps(s);
+    const NearFieldOptions options;
+    std::size_t checked = 0, applied = 0;
+    std::vector<Vec3> qp, pts;
+    std::vector<double> qw, wts;
+    for (std::uint32_t i = 0; i < s.size(); i += 7) {
+        const Patch& pi = s.patches[i];
+        const accuracy::RowErrorModel error{s, pi, 1e-5, 0, false, true};
+        const accuracy::SenderQuadrature rule(ps, options, i, error, true, qp, qw);
+        patch_quadrature(ps.polys[i].span(), 2, pts, wts);
+        for (std::uint32_t j = 0; j < s.size(); ++j) {
+            const Patch& pj = s.patches[j];
+            const double d = glm::length(pj.centroid - pi.centroid), size = std::max(pi.size, pj.size);
+            if (j == i || d < 6.0 * size || d >= options.quadrature_k * size) continue;
+            const auto kernel = [&](const Vec3& x) {
+                const Vec3 r = pj.centroid - x;
+                const double r2 = glm::dot(r, r);
+                return std::max(0.0, glm::dot(pi.normal, r)) * std::max(0.0, -glm::dot(pj.normal, r)) / (r2 * r2);
+            };
+            const double f = 0.01, mid = kernel(pi.centroid);
+            double expected = f;
+            if (mid > 0) {
+                double q = 0;
+                for (std::size_t k = 0; k < pts.size(); ++k) q += wts[k] * kernel(pts[k]);
+                const double ratio = q / mid;
+                if (std::abs(ratio - 1.0) <= 0.25) expected = f * ratio;
+            }
+            const accuracy::SenderQuadrature::Entry e = rule.rescale(j, f);
+            EXPECT_EQ(e.value, expected) << "row " << i << " column " << j;
+            ++checked;
+            applied += e.rescaled;
+        }
+    }
+    // Both branches are exercised: rescaled entries, and ones left alone (kernel 0 at the centre).
+    EXPECT_GT(checked, 1000u);
+    EXPECT_GT(applied, 100u);
+    EXPECT_LT(applied, checked);
 }
 
 }  // namespace
