@@ -1,9 +1,32 @@
 #version 450 core
 // Item-buffer vertex shader. A whole mesher piece (a quad split into a grid of patches, or a
 // triangle split into similar triangles) is drawn at once; the fragment shader finds the patch.
-// Positions arrive already relative to the hemicube eye and in the hemicube's local frame
-// (subtracted in double on the CPU), so only the fixed face projection is applied here.
+// A vertex's position relative to the hemicube eye in the hemicube's local frame, then the fixed
+// face projection. WORLD_POSITIONS 1: the world positions are uploaded once, as doubles, and the
+// eye and frame come per hemicube in a uniform block; the subtraction and the three dot products
+// are done in double here, `precise` (no fused multiply-add, no reordering), in the order the CPU
+// does them for culling (glm::dot: x, y, then z), and rounded once to float: the same bits as the
+// CPU's, so what is drawn is what was culled. WORLD_POSITIONS 0: the CPU uploads those floats
+// every hemicube.
+#ifndef WORLD_POSITIONS
+#define WORLD_POSITIONS 0
+#endif
+#if WORLD_POSITIONS
+layout(location = 0) in dvec3 a_world;  // static
+layout(std140, binding = 1) uniform HemicubeEye {
+    dvec4 u_eye, u_tangent, u_bitangent, u_normal;  // .xyz used
+};
+vec3 local_position() {
+    precise dvec3 d = a_world - u_eye.xyz;
+    precise double x = d.x * u_tangent.x + d.y * u_tangent.y + d.z * u_tangent.z;
+    precise double y = d.x * u_bitangent.x + d.y * u_bitangent.y + d.z * u_bitangent.z;
+    precise double z = d.x * u_normal.x + d.y * u_normal.y + d.z * u_normal.z;
+    return vec3(float(x), float(y), float(z));
+}
+#else
 layout(location = 0) in vec3 a_position;  // per hemicube
+vec3 local_position() { return a_position; }
+#endif
 layout(location = 1) in vec2 a_param;     // cell coordinates (affine pieces) or plane coordinates (static)
 layout(location = 3) in uvec4 a_info;     // the piece's kind, nu, nv, first patch (static)
 uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, infinite far plane)
@@ -16,7 +39,7 @@ uniform mat4 u_face;  // projection × view of one hemicube face (reversed-Z, in
 flat out uint v_id;
 void main() {
     v_id = a_info.w + 1u;
-    gl_Position = u_face * vec4(a_position, 1.0);
+    gl_Position = u_face * vec4(local_position(), 1.0);
 }
 #else
 #ifndef HAS_BILINEAR
@@ -41,6 +64,6 @@ void main() {
     v_q2 = a_q2;
     v_q3 = a_q3;
 #endif
-    gl_Position = u_face * vec4(a_position, 1.0);
+    gl_Position = u_face * vec4(local_position(), 1.0);
 }
 #endif

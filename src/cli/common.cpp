@@ -137,6 +137,11 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "touches the sender; docs/accuracy.md). half (default): N/2; three-eighths: 3N/8; quarter: N/4 "
                     "(cheaper, noisier rows: docs/benchmarks.md)",
                     "half");
+    add_word_option(app, "--vertex-upload", o.vertex_upload, parse_vertex_upload, {"once", "per-hemicube"},
+                    "hemicube: once (default): the scene's world positions go to the GL once, as doubles, and the "
+                    "vertex shader makes each hemicube's eye-relative positions; per-hemicube: the CPU uploads them "
+                    "every hemicube. The same rows either way (docs/architecture.md, \"Vertex data\")",
+                    "once");
     app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
                    "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
         ->default_val(24.0);

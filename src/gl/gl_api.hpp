@@ -25,7 +25,7 @@
     X(UseProgram) X(GetUniformLocation) X(Uniform1i) X(Uniform1ui) X(Uniform1f) X(Uniform3f)      \
     X(UniformMatrix4fv) X(DrawElements) X(DrawArrays) X(PolygonMode) X(LineWidth) X(BlendFunc)   \
     X(ClearColor) X(ClearDepth) X(Clear) X(CullFace) X(FrontFace) X(PolygonOffset) X(TexImage2D)  \
-    X(TexSubImage2D) X(BlitFramebuffer) X(GetTexImage) X(BindBufferBase)
+    X(TexSubImage2D) X(BlitFramebuffer) X(GetTexImage) X(BindBufferBase) X(VertexAttribLPointer)
 
 namespace ffcube::gl {
 

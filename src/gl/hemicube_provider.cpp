@@ -38,6 +38,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.partly_enclosed_rows += b.partly_enclosed_rows;
     a.range_limited_rows += b.range_limited_rows;
     a.pieces_out_of_range += b.pieces_out_of_range;
+    a.upload_vertex_bytes += b.upload_vertex_bytes;
+    a.upload_index_bytes += b.upload_index_bytes;
     a.pieces_considered += b.pieces_considered;
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;

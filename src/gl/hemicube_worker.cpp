@@ -87,17 +87,19 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     const std::size_t eol = frag.find('\n') + 1;
     const std::string kinds = fmt::format("#define HAS_TRIANGLES {}\n#define HAS_BILINEAR {}\n", pieces.has_kind[3] ? 1 : 0,
                                           pieces.has_kind[4] ? 1 : 0);
+    world_positions_ = opt.vertex_upload == HemicubeOptions::VertexUpload::once;
+    const std::string positions = world_positions_ ? "#define WORLD_POSITIONS 1\n" : "";
     std::string back_frag = frag;
     back_frag.insert(eol, kinds + "#define BACK_PASS 1\n");
     std::string back_vert(shaders::item_vert);
-    back_vert.insert(back_vert.find('\n') + 1, kinds);
+    back_vert.insert(back_vert.find('\n') + 1, kinds + positions);
     // The front pass: scenes of one patch per piece get one program that interpolates nothing
     // (SINGLE_CELL, item.vert); others one program per kind of piece they have (ONLY_KIND,
     // item.frag), each computing only its own kind's lookup, drawn one after the other.
     const auto front = [&](const std::string& defines, const std::string& name) {
         std::string f = frag, v(shaders::item_vert);
         f.insert(eol, defines);
-        v.insert(v.find('\n') + 1, defines);
+        v.insert(v.find('\n') + 1, defines + positions);
         return gl::make_program(gl, name, v, f);
     };
     group_of_kind_.fill(0);
@@ -129,10 +131,22 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     const std::size_t slots = pieces.pos.size();
     gl.BindVertexArray(vao_.id());
     gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
-    gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * 3 * sizeof(float)), nullptr,
-                  GL_STREAM_DRAW);
     gl.EnableVertexAttribArray(0);
-    gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+    if (world_positions_) {
+        // The vertex slots' world positions, once (item.vert, WORLD_POSITIONS).
+        static_assert(sizeof(Vec3) == 3 * sizeof(double));
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * sizeof(Vec3)),
+                      slots ? pieces.pos.data() : nullptr, GL_STATIC_DRAW);
+        gl.VertexAttribLPointer(0, 3, GL_DOUBLE, sizeof(Vec3), nullptr);
+        eye_ubo_ = gl::make_buffer(gl);
+        gl.BindBuffer(GL_UNIFORM_BUFFER, eye_ubo_.id());
+        gl.BufferData(GL_UNIFORM_BUFFER, 16 * sizeof(double), nullptr, GL_STREAM_DRAW);
+        gl.BindBufferBase(GL_UNIFORM_BUFFER, 1, eye_ubo_.id());
+    } else {
+        gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(slots, 1) * 3 * sizeof(float)),
+                      nullptr, GL_STREAM_DRAW);
+        gl.VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+    }
     gl.BindBuffer(GL_ARRAY_BUFFER, static_vbo_.id());
     gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(pieces.param.size() * sizeof(float)), pieces.param.data(),
                   GL_STATIC_DRAW);
@@ -302,11 +316,21 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
                        (res == Res::full ? target_ : res == Res::half ? half_target_ : quarter_target_).fbo.id());
     const std::array<FaceSpec, 5>& faces = res == Res::full ? face_m_ : res == Res::half ? half_face_m_ : quarter_face_m_;
     const double near = HemicubeRowProvider::kNear * pa.size;
-    gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
-    gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
+    if (world_positions_) {
+        // std140: four dvec4s (item.vert's HemicubeEye); the shader makes local_'s floats itself.
+        const double eye_frame[16] = {eye.x, eye.y, eye.z, 0, fr.tangent.x, fr.tangent.y, fr.tangent.z, 0,
+                                      fr.bitangent.x, fr.bitangent.y, fr.bitangent.z, 0, fr.normal.x, fr.normal.y, fr.normal.z, 0};
+        gl.BindBuffer(GL_UNIFORM_BUFFER, eye_ubo_.id());
+        gl.BufferSubData(GL_UNIFORM_BUFFER, 0, sizeof(eye_frame), eye_frame);
+        st.upload_vertex_bytes += sizeof(eye_frame);
+    } else {
+        gl.BindBuffer(GL_ARRAY_BUFFER, vbo_.id());
+        gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
+        st.upload_vertex_bytes += local_.size() * sizeof(float);
+    }
     if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, res, st);
     build_lists(false, &st);
-    upload_lists();
+    upload_lists(st);
     const GLuint zero_id[4] = {0, 0, 0, 0};
     const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
     gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
@@ -731,11 +755,12 @@ void Worker::build_lists(bool occluders_only, HemicubeStats* st) {
 }
 
 // The ten index lists back to back into the element buffer.
-void Worker::upload_lists() {
+void Worker::upload_lists(HemicubeStats& st) {
     all_idx_.clear();
     for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
     gl_.BufferData(GL_ELEMENT_ARRAY_BUFFER, static_cast<GLsizeiptr>(std::max<std::size_t>(all_idx_.size(), 1) * 4),
                    all_idx_.data(), GL_STREAM_DRAW);
+    st.upload_index_bytes += all_idx_.size() * sizeof(std::uint32_t);
 }
 
 // Draws the uploaded lists into the bound target: the front pass, then (passes 2) the back one.
@@ -827,7 +852,7 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
     std::size_t occluders = 0;
     for (std::size_t k = 0; k < kBackLists; ++k) occluders += lists_[k].size();
     if (occluders == 0) return;
-    upload_lists();
+    upload_lists(st);
     const GLfloat zero_depth = 0.0f;
     gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
     gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);

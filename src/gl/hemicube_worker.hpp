@@ -97,7 +97,7 @@ private:
         return res == Res::full ? layout_ : res == Res::half ? half_layout_ : quarter_layout_;
     }
     void build_lists(bool occluders_only, HemicubeStats* st);
-    void upload_lists();
+    void upload_lists(HemicubeStats& st);
     void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes);
 
     const gl::Api& gl_;
@@ -120,6 +120,8 @@ private:
     gl::ItemTarget target_, half_target_, quarter_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_;  // grid_vbo_: general quads' corners
+    gl::Buffer eye_ubo_;  // VertexUpload::once: the eye and frame (item.vert's HemicubeEye)
+    bool world_positions_ = false;  // VertexUpload::once
     std::array<GLint, 3> u_face_{-1, -1, -1};
     GLint u_back_face_ = -1;
     std::vector<float> local_;

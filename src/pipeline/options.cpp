@@ -60,6 +60,12 @@ FineSubResolution parse_fine_sub_hemicubes(std::string_view text) {
     throw InputError(fmt::format("--fine-sub-hemicubes {}: must be half, three-eighths or quarter", text));
 }
 
+VertexUpload parse_vertex_upload(std::string_view text) {
+    if (text == "once") return VertexUpload::once;
+    if (text == "per-hemicube") return VertexUpload::per_hemicube;
+    throw InputError(fmt::format("--vertex-upload {}: must be once or per-hemicube", text));
+}
+
 ContactCuts parse_contact_cuts(std::string_view text) {
     if (text == "auto") return ContactCuts::Auto;
     if (text == "on") return ContactCuts::On;
@@ -147,6 +153,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.sub_hemicube_range = o.sub_hemicube_range;
     h.sub_hemicube_range_k = o.sub_hemicube_range_k;
     h.fine_sub_resolution = o.fine_sub_hemicubes;
+    h.vertex_upload = o.vertex_upload;
     return h;
 }
 

@@ -241,6 +241,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     // Range-limited sub-hemicubes (--sub-hemicube-range auto, on scenes of many pieces).
     r.set("sub_hemicube_rows_range_limited", st.range_limited_rows);
     r.set("left_out.pieces_out_of_range", st.pieces_out_of_range);
+    r.set("upload.vertex_bytes", st.upload_vertex_bytes);
+    r.set("upload.index_bytes", st.upload_index_bytes);
     r.set("rows_not_rendered", st.skipped_rows);
 }
 

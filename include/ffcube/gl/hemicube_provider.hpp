@@ -57,6 +57,14 @@ struct HemicubeOptions {
     // "Senders an occluder touches: 4 × 4 sub-hemicubes"). 2 × 2 rows stay at N/2 either way.
     enum class FineSubResolution { half, three_eighths, quarter };
     FineSubResolution fine_sub_resolution = FineSubResolution::half;
+    // Where a hemicube's eye-relative vertex positions are made (docs/architecture.md, "Vertex
+    // data"): once, the scene's world positions are uploaded as doubles when a worker starts and
+    // the vertex shader subtracts the eye and turns to the hemicube's frame per hemicube (a
+    // uniform block of 128 bytes a hemicube); per_hemicube, the CPU's floats are uploaded every
+    // hemicube (all vertex slots: 12 bytes each). The CPU makes the same floats either way, for
+    // culling; the item buffers are the same bits (tested).
+    enum class VertexUpload { once, per_hemicube };
+    VertexUpload vertex_upload = VertexUpload::once;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -92,6 +100,10 @@ struct HemicubeStats {
     // pieces × hemicubes their range left out (in front of the plane, but out of range).
     std::uint64_t range_limited_rows = 0;
     std::uint64_t pieces_out_of_range = 0;
+    // Bytes sent to the GL per hemicube, summed: vertex data (HemicubeOptions::vertex_upload: the
+    // eye and frame, or every vertex slot's floats) and the index lists.
+    std::uint64_t upload_vertex_bytes = 0;
+    std::uint64_t upload_index_bytes = 0;
 };
 
 class HemicubeRowProvider final : public RowProvider {

@@ -42,6 +42,7 @@ enum class Correction { None, Near };
 using FarFieldMode = NearFieldOptions::FarField;
 using SubHemicubeRange = HemicubeOptions::SubHemicubeRange;
 using FineSubResolution = HemicubeOptions::FineSubResolution;
+using VertexUpload = HemicubeOptions::VertexUpload;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
@@ -79,6 +80,8 @@ struct RowOptions {
     double sub_hemicube_range_k = 24.0;
     // HemicubeOptions::fine_sub_resolution (--fine-sub-hemicubes half|three-eighths|quarter): 4 × 4 rows at N/2, 3N/8 or N/4.
     FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
+    // HemicubeOptions::vertex_upload (--vertex-upload once|per-hemicube): the same rows either way.
+    VertexUpload vertex_upload = VertexUpload::once;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
     // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
@@ -98,6 +101,7 @@ Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
 FineSubResolution parse_fine_sub_hemicubes(std::string_view text);  // half | three-eighths | quarter
+VertexUpload parse_vertex_upload(std::string_view text);  // once | per-hemicube
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 // --exact-visibility: auto | off | K (a number; its range is checked by validate(RowOptions)).
 void parse_exact_visibility(std::string_view text, RowOptions& o);
