@@ -297,8 +297,12 @@ int run(const Options& o) {
     }
     const double seconds = f.seconds;
     report.set("seconds", seconds);
-    report.set(rows.raycast() ? "rows_per_second" : "hemicubes_per_second",
-               static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
+    // Rows of the whole computation per second; and, for the hemicube, this process's hemicubes
+    // (sub-hemicubes count one each) per second. Before 2026-12-05 `hemicubes_per_second` held the
+    // rows' figure.
+    report.set("rows_per_second", static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
+    if (const HemicubeRowProvider* h = rows.hemicube())
+        report.set("hemicubes_per_second", static_cast<double>(h->stats().hemicubes) / std::max(seconds, 1e-9));
     report_row_source(report, rows);
     const RowSumStats& rs = f.row_sums;
     const ReciprocityStats& rec = f.reciprocity;

@@ -1,5 +1,6 @@
 // The `ffcube formfactors` command end to end: outputs agree with each other, runs are
 // reproducible, bad input is refused with a message, a non-zero exit and no output file.
+#include <algorithm>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -62,6 +63,12 @@ TEST(FormfactorsCli, OutputsAgreeAndReportIsComplete) {
     // so by default no hemicube at all), not rendered.
     EXPECT_EQ(report["hemicubes"].get<int>() + report["rows_not_rendered"].get<int>(), 96);
     EXPECT_EQ(report["resolution"], 64);
+    // Rates: rows (patches) and hemicubes drawn, each over the run's seconds (the same double
+    // division, so equal up to the JSON's 17 digits).
+    const double seconds = report["seconds"].get<double>();
+    EXPECT_DOUBLE_EQ(report["rows_per_second"].get<double>(), 96.0 / std::max(seconds, 1e-9));
+    EXPECT_DOUBLE_EQ(report["hemicubes_per_second"].get<double>(), report["hemicubes"].get<double>() / std::max(seconds, 1e-9));
+    EXPECT_TRUE(report["upload"].contains("vertex_bytes"));
     // Closed cube: rows sum to 1 up to float storage (2^-24 per entry).
     EXPECT_NEAR(report["row_sums"]["min"].get<double>(), 1.0, 1e-6);
     for (const char* key : {"meshing", "drawing", "readback", "accumulation", "writing"})
