@@ -1,8 +1,8 @@
 // The `ffcube formfactors` command end to end: outputs agree with each other, runs are
 // reproducible, bad input is refused with a message, a non-zero exit and no output file.
-#include <algorithm>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
