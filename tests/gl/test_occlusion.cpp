@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "support/planned_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -47,18 +48,13 @@ Rows compute(const Scene& s, bool occlusion, RowProvider::RowPlan plan, unsigned
     o.resolution = 64;
     o.threads = threads;
     o.occlusion_culling = occlusion;
-    HemicubeRowProvider provider(s, o);
-    std::vector<std::uint32_t> rows(s.size());
-    std::iota(rows.begin(), rows.end(), 0u);
-    const std::vector<RowProvider::RowPlan> plans(rows.size(), plan);
+    test::AllRows all = test::all_rows(s, o, plan);
     Rows r;
-    r.col.resize(s.size());
-    r.val.resize(s.size());
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t i, const SparseRow& row) {
-        r.col[i] = row.col;
-        r.val[i] = row.val;
-    });
-    r.stats = provider.stats();
+    for (SparseRow& row : all.rows) {
+        r.col.push_back(std::move(row.col));
+        r.val.push_back(std::move(row.val));
+    }
+    r.stats = all.stats;
     return r;
 }
 

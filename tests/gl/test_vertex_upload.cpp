@@ -12,36 +12,21 @@
 // that the floats are the same bits rests on the shader doing the CPU's operations, `precise`.
 #include <gtest/gtest.h>
 
-#include <numeric>
+#include <vector>
 
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "support/planned_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
 namespace {
 
-struct Rows {
-    std::vector<std::vector<std::uint32_t>> col;
-    std::vector<std::vector<double>> val;
-};
-
-Rows compute(const Scene& s, HemicubeOptions::VertexUpload upload, RowProvider::RowPlan plan) {
+std::vector<SparseRow> compute(const Scene& s, HemicubeOptions::VertexUpload upload, RowProvider::RowPlan plan) {
     HemicubeOptions o;
     o.resolution = 64;
     o.threads = 2;
     o.vertex_upload = upload;
-    HemicubeRowProvider provider(s, o);
-    std::vector<std::uint32_t> rows(s.size());
-    std::iota(rows.begin(), rows.end(), 0u);
-    const std::vector<RowProvider::RowPlan> plans(rows.size(), plan);
-    Rows r;
-    r.col.resize(s.size());
-    r.val.resize(s.size());
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t i, const SparseRow& row) {
-        r.col[i] = row.col;
-        r.val[i] = row.val;
-    });
-    return r;
+    return test::all_rows(s, o, plan).rows;
 }
 
 // An open room (floor, three walls) with a trapezoid (a general quad), a tilted triangle, a
@@ -64,13 +49,13 @@ Scene mixed_room(const Vec3& offset) {
 }
 
 void expect_same(const Scene& s, RowProvider::RowPlan plan) {
-    const Rows per = compute(s, HemicubeOptions::VertexUpload::per_hemicube, plan);
-    const Rows once = compute(s, HemicubeOptions::VertexUpload::once, plan);
+    const std::vector<SparseRow> per = compute(s, HemicubeOptions::VertexUpload::per_hemicube, plan);
+    const std::vector<SparseRow> once = compute(s, HemicubeOptions::VertexUpload::once, plan);
     std::size_t nonzero = 0;
     for (std::uint32_t i = 0; i < s.size(); ++i) {
-        ASSERT_EQ(per.col[i], once.col[i]) << "row " << i;
-        ASSERT_EQ(per.val[i], once.val[i]) << "row " << i;
-        nonzero += per.col[i].size();
+        ASSERT_EQ(per[i].col, once[i].col) << "row " << i;
+        ASSERT_EQ(per[i].val, once[i].val) << "row " << i;
+        nonzero += per[i].col.size();
     }
     EXPECT_GT(nonzero, 5 * s.size());  // the rows see the room, not nothing
 }
