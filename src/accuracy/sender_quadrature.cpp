@@ -10,6 +10,7 @@
 #include <emmintrin.h>
 #endif
 
+#include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 
@@ -49,16 +50,16 @@ SenderQuadrature::SenderQuadrature(const PatchSet& patches, const NearFieldOptio
         patch_quadrature(patches.polys[i].span(), 2, points, weights);
         qp_ = points;
         qw_ = weights;
-        // The point kernel's points: the centroid, then the rule's, padded to an even count with
-        // the centroid (point_kernels works two at a time; the padding's values are not used).
-        if (qp_.size() + 1 <= kMaxKernelPoints) {
-            npts_ = qp_.size() + 1;
-            for (std::size_t k = 0; k < kMaxKernelPoints; ++k) {
-                const Vec3& x = (k >= 1 && k <= qp_.size()) ? qp_[k - 1] : pi_.centroid;
-                px_[k] = x.x;
-                py_[k] = x.y;
-                pz_[k] = x.z;
-            }
+        // The point kernel's points: the centroid, then the rule's (the 2 × 2 rule: 3 or 4),
+        // padded to an even count with the centroid (point_kernels works two at a time; the
+        // padding's values are not used).
+        FFCUBE_CHECK(qp_.size() + 1 <= kMaxKernelPoints);
+        npts_ = qp_.size() + 1;
+        for (std::size_t k = 0; k < kMaxKernelPoints; ++k) {
+            const Vec3& x = (k >= 1 && k <= qp_.size()) ? qp_[k - 1] : pi_.centroid;
+            px_[k] = x.x;
+            py_[k] = x.y;
+            pz_[k] = x.z;
         }
     }
 }
@@ -127,18 +128,12 @@ SenderQuadrature::Entry SenderQuadrature::rescale(std::uint32_t j, double f) con
     if (d >= kPointKernelK * size) {
         // Far: the receiver as a point at its centroid (see kPointKernelK); a few flops per
         // point instead of Lambert's contour.
-        double q = 0;
-        if (npts_ > 0) {
-            alignas(16) double kv[kMaxKernelPoints];
-            point_kernels(pj.centroid, pj.normal, kv);
-            const double mid = kv[0];
-            if (!(mid > 0)) return kept();
-            for (std::size_t k = 0; k < nq; ++k) q += qw_[k] * kv[k + 1];
-            return ratio(f, q / mid);
-        }
-        const double mid = point_kernel_scalar(pj.centroid, pj.normal, pi.centroid);
+        alignas(16) double kv[kMaxKernelPoints];
+        point_kernels(pj.centroid, pj.normal, kv);
+        const double mid = kv[0];
         if (!(mid > 0)) return kept();
-        for (std::size_t k = 0; k < nq; ++k) q += qw_[k] * point_kernel_scalar(pj.centroid, pj.normal, qp_[k]);
+        double q = 0;
+        for (std::size_t k = 0; k < nq; ++k) q += qw_[k] * kv[k + 1];
         return ratio(f, q / mid);
     }
     const auto poly = patches_.polys[j].span();

@@ -36,7 +36,7 @@ public:
     Entry rescale(std::uint32_t j, double f) const;
 
 private:
-    static constexpr std::size_t kMaxKernelPoints = 6;  // the centroid and up to 5 rule points (2 × 2: 3 or 4)
+    static constexpr std::size_t kMaxKernelPoints = 6;  // the centroid, the 2 × 2 rule's 3 or 4 points, padding
 
     Entry ratio(double f, double r) const;
     void point_kernels(const Vec3& c, const Vec3& nj, double* out) const;
@@ -50,7 +50,7 @@ private:
     std::span<const Vec3> qp_;
     std::span<const double> qw_;
     // The point kernel's points as columns (point_kernels): [0] the centroid, [1, npts_) the
-    // rule's, the rest padding; npts_ = 0 when the rule has too many points (scalar path).
+    // rule's, the rest padding (needed_ rows only).
     std::size_t npts_ = 0;
     alignas(16) double px_[kMaxKernelPoints] = {}, py_[kMaxKernelPoints] = {}, pz_[kMaxKernelPoints] = {};
 };

@@ -297,12 +297,7 @@ int run(const Options& o) {
     }
     const double seconds = f.seconds;
     report.set("seconds", seconds);
-    // Rows of the whole computation per second; and, for the hemicube, this process's hemicubes
-    // (sub-hemicubes count one each) per second. Before 2026-12-05 `hemicubes_per_second` held the
-    // rows' figure.
-    report.set("rows_per_second", static_cast<double>(scene.size()) / std::max(seconds, 1e-9));
-    if (const HemicubeRowProvider* h = rows.hemicube())
-        report.set("hemicubes_per_second", static_cast<double>(h->stats().hemicubes) / std::max(seconds, 1e-9));
+    report_rates(report, rows, scene.size(), seconds);
     report_row_source(report, rows);
     const RowSumStats& rs = f.row_sums;
     const ReciprocityStats& rec = f.reciprocity;

@@ -248,6 +248,12 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
 
 }  // namespace
 
+void report_rates(Report& r, const RowSource& rows, std::size_t patches, double seconds) {
+    const double s = std::max(seconds, 1e-9);
+    r.set("rows_per_second", static_cast<double>(patches) / s);
+    if (const HemicubeRowProvider* h = rows.hemicube()) r.set("hemicubes_per_second", static_cast<double>(h->stats().hemicubes) / s);
+}
+
 void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     r.set("time.setup", rows.setup_seconds());

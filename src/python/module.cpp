@@ -161,9 +161,7 @@ py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
         F = apply_enforcement(rows, std::move(computed), *scene, report);
         if (want_report) {  // the keys of `ffcube formfactors --report`, but for writing and checkpoints
             report.set("seconds", seconds);
-            report.set("rows_per_second", static_cast<double>(scene->size()) / std::max(seconds, 1e-9));
-            if (const HemicubeRowProvider* h = rows.hemicube())
-                report.set("hemicubes_per_second", static_cast<double>(h->stats().hemicubes) / std::max(seconds, 1e-9));
+            report_rates(report, rows, scene->size(), seconds);
             report_row_source(report, rows);
             report_matrix_checks(report, F, *scene, false);
             report_json = report.dump();

@@ -93,6 +93,11 @@ FfmMetadata row_metadata(const RowOptions& options);
 // counts and per-row error estimates.
 void report_row_source(Report& report, const RowSource& rows);
 
+// The run's rates over its row phase of `seconds`: rows_per_second (every method) and, for the
+// hemicube, this process's hemicubes drawn per second (sub-hemicubes one each). Before 2026-12-05
+// `hemicubes_per_second` held the rows' figure.
+void report_rates(Report& report, const RowSource& rows, std::size_t patches, double seconds);
+
 // --enforce on the finished matrix, with before/after figures in the report ("enforce.*").
 // Closure is refused (InputError) for open scenes, judged on the measuring provider's evidence:
 // a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
