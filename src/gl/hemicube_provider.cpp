@@ -44,6 +44,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.pieces_behind += b.pieces_behind;
     a.pieces_tested += b.pieces_tested;
     a.occlusion_hemicubes += b.occlusion_hemicubes;
+    a.nodes_occluded += b.nodes_occluded;
+    a.pieces_occluded_by_node += b.pieces_occluded_by_node;
     for (std::size_t f = 0; f < 5; ++f) {
         a.pieces_drawn[f] += b.pieces_drawn[f];
         a.pieces_culled[f] += b.pieces_culled[f];

@@ -328,7 +328,7 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
         gl.BufferSubData(GL_ARRAY_BUFFER, 0, static_cast<GLsizeiptr>(local_.size() * sizeof(float)), local_.data());
         st.upload_vertex_bytes += local_.size() * sizeof(float);
     }
-    if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, res, st);
+    if (opt_.occlusion_culling && drawn_.size() >= kOcclusionMinPieces) occlude(faces, near, res, eye, fr, st);
     build_lists(false, &st);
     upload_lists(st);
     const GLuint zero_id[4] = {0, 0, 0, 0};
@@ -818,7 +818,8 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
 // pixel ends at least as near, and the left-out piece could not have won one. The item buffer is
 // bitwise the same as without (test OcclusionCulling.*); the choice of occluders only decides how much
 // is left out, never what the hemicube shows, so rows do not depend on which worker drew what.
-void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, HemicubeStats& st) {
+void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, const Vec3& eye, const HemicubeFrame& fr,
+                     HemicubeStats& st) {
     const gl::Api& gl = gl_;
     // Occluders: front pieces the last hemicube showed (the same surroundings for the next
     // sub-hemicube of a row, often for the next row), and the kOccluderCount front pieces of the
@@ -862,8 +863,26 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
     gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_DEPTH_COMPONENT, GL_FLOAT, depth_.data());
     const std::span<const float> depth(depth_.data(), static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height());
     for (std::size_t f = 0; f < 5; ++f) depth_rows_[f].build(depth, lay.atlas_width(), faces[f].viewport);
+    // Whole nodes of the hierarchy first: a piece under a node hidden on a face is one the test
+    // below would find hidden there too (hide_hidden_nodes), so it is left out without the test.
+    unsigned open = 0;
+    for (const Drawn& d : drawn_)
+        if (!d.occluder) open |= d.faces;
+    if (opt_.occlusion_nodes) st.nodes_occluded += hide_hidden_nodes(pieces_.bvh, faces, depth_rows_, eye, fr, near, open, hidden_);
     for (Drawn& d : drawn_) {
         if (d.occluder) continue;  // drawn, and in the depth image
+        if (opt_.occlusion_nodes) {
+            const unsigned by_node = hidden_.of(d.g) & d.faces;
+            if (by_node != 0) {
+                for (std::size_t f = 0; f < 5; ++f)
+                    if (by_node & (1u << f)) {
+                        ++st.pieces_occluded[f];
+                        ++st.pieces_occluded_by_node;
+                    }
+                d.faces = static_cast<std::uint8_t>(d.faces & ~by_node);
+                if (d.faces == 0) continue;
+            }
+        }
         const std::uint32_t base = pieces_.first[d.g];
         corners_.clear();
         for (std::uint32_t k = 0; k < scene_.grids[d.g].count; ++k) {

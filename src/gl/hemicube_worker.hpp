@@ -92,7 +92,8 @@ private:
     // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
     void hemicube_row(std::uint32_t p, const Vec3& at, Res res, SparseRow& out, HemicubeStats& st);
     void cull(HemicubeStats& st);
-    void occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, HemicubeStats& st);
+    void occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, const Vec3& eye, const HemicubeFrame& fr,
+                 HemicubeStats& st);
     const HemicubeLayout& layout_of(Res res) const {
         return res == Res::full ? layout_ : res == Res::half ? half_layout_ : quarter_layout_;
     }
@@ -138,6 +139,7 @@ private:
     std::uint32_t seen_stamp_ = 1, last_stamp_ = 0;
     std::vector<float> depth_;
     std::array<FaceDepthRows, 5> depth_rows_;
+    HiddenFaces hidden_;  // occlude(): per piece, the faces a hidden hierarchy node leaves it out of
     std::vector<Vec3> corners_;
     std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
     std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;

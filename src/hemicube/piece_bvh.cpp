@@ -64,6 +64,8 @@ std::uint32_t PieceBvh::build(std::span<const BvhBox> boxes, std::vector<Vec3>& 
         cbox = join(cbox, BvhBox{centres[items_[i]], centres[items_[i]]});
     }
     nodes_[at].box = box;
+    nodes_[at].begin = begin;
+    nodes_[at].end = end;
     if (end - begin <= kLeafSize) {
         nodes_[at].first = begin;
         nodes_[at].count = end - begin;

@@ -228,6 +228,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
         r.set(fmt::format("left_out.pieces_occluded_per_face.{}", names[f]), st.pieces_occluded[f]);
     }
     r.set("left_out.occlusion_hemicubes", st.occlusion_hemicubes);
+    r.set("left_out.nodes_occluded", st.nodes_occluded);
+    r.set("left_out.pieces_occluded_by_node", st.pieces_occluded_by_node);
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);

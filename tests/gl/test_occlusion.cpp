@@ -43,11 +43,12 @@ struct Rows {
     HemicubeStats stats;
 };
 
-Rows compute(const Scene& s, bool occlusion, RowProvider::RowPlan plan, unsigned threads) {
+Rows compute(const Scene& s, bool occlusion, RowProvider::RowPlan plan, unsigned threads, bool nodes = true) {
     HemicubeOptions o;
     o.resolution = 64;
     o.threads = threads;
     o.occlusion_culling = occlusion;
+    o.occlusion_nodes = nodes;
     test::AllRows all = test::all_rows(s, o, plan);
     Rows r;
     for (SparseRow& row : all.rows) {
@@ -96,6 +97,26 @@ TEST(OcclusionCulling, RowsDoNotDependOnTheWorkerCount) {
     const Rows two = compute(s, true, RowProvider::RowPlan::centre, 2);
     EXPECT_EQ(one.col, two.col);
     EXPECT_EQ(one.val, two.val);
+}
+
+// Whole hierarchy nodes left out (hemicube/occlusion.hpp, hide_hidden_nodes) only spare the piece
+// tests: on one worker (the same occluders hemicube after hemicube) every face of every piece is
+// left out or drawn exactly as when each piece is tested, and the rows are the same bits.
+TEST(OcclusionCulling, HiddenNodesLeaveOutExactlyThePiecesTheTestsWould) {
+    const Scene s = block_city(8);
+    for (const auto plan : {RowProvider::RowPlan::centre, RowProvider::RowPlan::sampled}) {
+        const Rows each = compute(s, true, plan, 1, false);
+        const Rows nodes = compute(s, true, plan, 1, true);
+        EXPECT_EQ(each.col, nodes.col);
+        EXPECT_EQ(each.val, nodes.val);
+        EXPECT_EQ(each.stats.pieces_occluded, nodes.stats.pieces_occluded);
+        EXPECT_EQ(each.stats.pieces_drawn, nodes.stats.pieces_drawn);
+        EXPECT_EQ(each.stats.nodes_occluded, 0u);
+        // The nodes did the work (else this compares nothing): most of what is left out.
+        EXPECT_GT(nodes.stats.nodes_occluded, 0u);
+        EXPECT_GT(nodes.stats.pieces_occluded_by_node, occluded(nodes.stats) / 4)
+            << nodes.stats.pieces_occluded_by_node << " of " << occluded(nodes.stats);
+    }
 }
 
 }  // namespace

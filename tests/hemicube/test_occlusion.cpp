@@ -215,5 +215,96 @@ TEST(OcclusionRows, HiddenBehindNeedsTheMargin) {
     EXPECT_TRUE(hidden_behind(rows, fp));
 }
 
+
+// Occlusion culling by hierarchy nodes (hide_hidden_nodes) against the piece test it spares:
+// every (piece, face) a hidden node marks is one that hidden_behind finds hidden from the piece's
+// own footprint, made from its corners rounded to float in the hemicube's frame as the worker
+// makes them. Clusters of triangles all around the eye (near it, crossing its planes, far behind
+// walls, just behind a wall's depth by less than and more than the margin), behind depth images
+// of walls at several distances with holes; at the origin and at 1e5 (where a float corner is
+// 2^-24 of 1e5 off); a walk that marks nothing would pass, so the marks must also be many.
+TEST(OcclusionNodes, EveryMarkIsAPieceTheFootprintTestHides) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1, 1), w(0, 1);
+    std::size_t marks = 0, hidden_pieces = 0, nodes = 0;
+    for (const double offset : {0.0, 1e5}) {
+        for (int scene = 0; scene < 12; ++scene) {
+            const HemicubeLayout lay(scene % 2 ? 64 : 32);
+            const double near = 0.01;
+            const Vec3 eye = Vec3(offset, -0.5 * offset, 0.25 * offset) + Vec3(u(rng), u(rng), u(rng));
+            const Vec3 normal = glm::normalize(Vec3(u(rng), u(rng), u(rng)) + (scene % 3 == 0 ? Vec3(0, 0, 4) : Vec3(0.0)));
+            const HemicubeFrame frame = make_frame(normal, 6.283185307179586 * w(rng));
+            // Triangles in clusters (so that nodes group neighbours), in the local frame first.
+            std::vector<std::array<Vec3, 3>> tris;
+            for (int c = 0; c < 40; ++c) {
+                const Vec3 dir = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+                const double dist = c < 4 ? 0.02 + 0.1 * w(rng) : 0.5 + 20 * w(rng) * w(rng);
+                const Vec3 centre = dist * dir;
+                const double size = (c % 5 == 0 ? 0.5 : 0.05) * dist;
+                for (int t = 0; t < 30; ++t) {
+                    const Vec3 at = centre + size * Vec3(u(rng), u(rng), u(rng));
+                    const double s = 0.2 * size * (0.05 + w(rng));
+                    tris.push_back({at, at + s * Vec3(u(rng), u(rng), u(rng)), at + s * Vec3(u(rng), u(rng), u(rng))});
+                }
+            }
+            // World corners, then their local floats as the worker makes them (gl/hemicube_worker.cpp).
+            std::vector<BvhBox> boxes;
+            std::vector<std::array<Vec3, 3>> local;
+            for (const auto& t : tris) {
+                std::array<Vec3, 3> world, loc;
+                for (int k = 0; k < 3; ++k) world[k] = eye + frame.to_world(t[k]);
+                BvhBox b{world[0], world[0]};
+                for (int k = 0; k < 3; ++k) {
+                    b.lo = glm::min(b.lo, world[k]);
+                    b.hi = glm::max(b.hi, world[k]);
+                    const Vec3 d = world[k] - eye;
+                    loc[k] = Vec3(static_cast<float>(glm::dot(d, frame.tangent)), static_cast<float>(glm::dot(d, frame.bitangent)),
+                                  static_cast<float>(glm::dot(d, frame.normal)));
+                }
+                boxes.push_back(b);
+                local.push_back(loc);
+            }
+            const PieceBvh bvh(boxes);
+            // Depth images: per face walls (rectangles of one depth near / D) over a background
+            // wall, with holes (0: nothing drawn).
+            std::vector<float> depth(static_cast<std::size_t>(lay.atlas_width()) * lay.atlas_height(), 0.0f);
+            for (const FaceSpec& f : lay.faces()) {
+                const AtlasViewport& vp = f.viewport;
+                const float back = static_cast<float>(near / (0.3 + 3 * w(rng)));
+                for (int y = 0; y < vp.height; ++y)
+                    for (int x = 0; x < vp.width; ++x) depth[static_cast<std::size_t>(vp.y + y) * lay.atlas_width() + vp.x + x] = back;
+                for (int b = 0; b < 6; ++b) {
+                    std::uniform_int_distribution<int> xs(0, vp.width - 1), ys(0, vp.height - 1);
+                    const int x0 = xs(rng), y0 = ys(rng), x1 = std::min(vp.width - 1, x0 + xs(rng) / 2),
+                              y1 = std::min(vp.height - 1, y0 + ys(rng) / 2);
+                    const float v = b == 5 ? 0.0f : static_cast<float>(near / (0.2 + 5 * w(rng)));
+                    for (int y = y0; y <= y1; ++y)
+                        for (int x = x0; x <= x1; ++x) depth[static_cast<std::size_t>(vp.y + y) * lay.atlas_width() + vp.x + x] = v;
+                }
+            }
+            std::array<FaceDepthRows, 5> rows;
+            for (std::size_t f = 0; f < 5; ++f) rows[f].build(depth, lay.atlas_width(), lay.faces()[f].viewport);
+            HiddenFaces hidden;
+            nodes += hide_hidden_nodes(bvh, lay.faces(), rows, eye, frame, near, 0x1f, hidden);
+            for (std::uint32_t g = 0; g < tris.size(); ++g) {
+                for (std::size_t f = 0; f < 5; ++f) {
+                    FaceFootprint fp = face_footprint(lay.faces()[f], local[g], near, false);
+                    const bool shows = fp.x0 <= fp.x1 && fp.y0 <= fp.y1;
+                    const bool piece = hidden_behind(rows[f], fp);
+                    hidden_pieces += shows && piece;
+                    if (hidden.of(g) & (1u << f)) {
+                        ++marks;
+                        ASSERT_TRUE(piece) << "offset " << offset << " scene " << scene << " piece " << g << " face " << f;
+                    }
+                }
+            }
+        }
+    }
+    // Not vacuous: nodes were hidden, and they marked a good share of the pieces on a face that
+    // the piece test hides (about half of the clusters lie behind some wall's depth).
+    EXPECT_GT(nodes, 100u);
+    EXPECT_GT(marks, hidden_pieces / 4) << marks << " of " << hidden_pieces;
+}
+
 }  // namespace
 }  // namespace ffcube

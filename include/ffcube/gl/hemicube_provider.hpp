@@ -33,6 +33,10 @@ struct HemicubeOptions {
     // wholly behind the pieces the worker's previous hemicube showed (drawn first, depth only)
     // are not drawn. The item buffers are the same bits either way (tested); false: draw all.
     bool occlusion_culling = true;
+    // With it, whole nodes of the pieces' hierarchy hidden on a face are left out at once
+    // (hemicube/occlusion.hpp, hide_hidden_nodes): the same pieces as testing each, fewer tests.
+    // false: every piece tested on its own (tests compare the two).
+    bool occlusion_nodes = true;
     // Adaptive sender sampling (docs/accuracy.md, "Adaptive sender sampling"): a row planned at
     // 4 × 4 sub-hemicubes is measured at 2 × 2 (and the centre) first, and refined to 4 × 4 only
     // where the 2 × 2 rule's estimated error exceeds 5e-4 (gl/sample_agreement.hpp). Off by
@@ -84,6 +88,8 @@ struct HemicubeStats {
     std::array<std::uint64_t, 5> pieces_culled{};     // in front of the plane but outside the face
     std::array<std::uint64_t, 5> pieces_occluded{};   // in the face but behind the occluders
     std::uint64_t occlusion_hemicubes = 0;            // hemicubes that drew occluders first
+    std::uint64_t nodes_occluded = 0;                 // hierarchy nodes × faces found hidden whole
+    std::uint64_t pieces_occluded_by_node = 0;        // of pieces_occluded (all faces): left out by those
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)

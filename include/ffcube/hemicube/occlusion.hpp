@@ -16,7 +16,9 @@
 #include <span>
 #include <vector>
 
+#include "ffcube/hemicube/frame.hpp"
 #include "ffcube/hemicube/layout.hpp"
+#include "ffcube/hemicube/piece_bvh.hpp"
 
 namespace ffcube {
 
@@ -119,5 +121,49 @@ inline constexpr double kOcclusionMargin = 1e-2;
 // (when the rectangle is not covered) the rectangle cut by the edges' half-planes, which it adds
 // to fp.
 bool hidden_behind(const FaceDepthRows& depth, FaceFootprint& fp);
+
+// Per piece, the faces on which hide_hidden_nodes proved it hidden, for one hemicube (a stamp per
+// piece, so that starting the next hemicube clears nothing).
+class HiddenFaces {
+public:
+    void begin(std::size_t pieces) {
+        if (stamp_.size() != pieces || ++now_ == 0) {
+            stamp_.assign(pieces, 0);
+            faces_.assign(pieces, 0);
+            now_ = 1;
+        }
+    }
+    std::uint8_t of(std::uint32_t g) const { return stamp_[g] == now_ ? faces_[g] : std::uint8_t{0}; }
+    void add(std::uint32_t g, unsigned bits) {
+        if (stamp_[g] != now_) {
+            stamp_[g] = now_;
+            faces_[g] = 0;
+        }
+        faces_[g] = static_cast<std::uint8_t>(faces_[g] | bits);
+    }
+
+private:
+    std::vector<std::uint32_t> stamp_;
+    std::vector<std::uint8_t> faces_;
+    std::uint32_t now_ = 0;
+};
+
+// Occlusion culling by whole nodes of the pieces' hierarchy (issue 15: in a city most of what a
+// face culls lies behind the first facades in whole blocks, and testing it piece by piece was a
+// quarter of a city run's CPU). Walks bvh from the root with the faces in `open` (bit f: faces[f])
+// and, for each face, marks in `out` every piece under a node whose box is hidden on that face
+// behind depth[f] (the same test as hidden_behind, on the rectangle and depth bound of the box).
+// eye, frame: the hemicube's (the pieces' corners in its local frame are what face_footprint
+// gets, rounded to float). Sound for the piece test: a mark implies that hidden_behind of the
+// piece's own footprint (face_footprint of its corners, from those floats) is true, because the
+// box holds every corner, so the box's projection holds the piece's clipped polygon's (a/d is
+// linear-fractional: its extremes over a box in front of the eye are at corners), and the box's
+// least distance bounds the piece's; the float rounding of the corners (2^-24 of a coordinate)
+// and of the double arithmetic is covered by widening the box by E = 2e-7 × its largest
+// coordinate sum in every direction. So the pieces left out are exactly those the piece test
+// leaves out: the walk only spares the tests (test OcclusionNodes.*). Returns the nodes hidden.
+std::size_t hide_hidden_nodes(const PieceBvh& bvh, const std::array<FaceSpec, 5>& faces,
+                              const std::array<FaceDepthRows, 5>& depth, const Vec3& eye, const HemicubeFrame& frame,
+                              double near, unsigned open, HiddenFaces& out);
 
 }  // namespace ffcube

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "ffcube/scene/scene.hpp"
@@ -37,6 +38,28 @@ public:
     std::size_t mark_in_front(const Vec3& origin, const Vec3& normal, std::vector<std::uint32_t>& visit,
                               std::uint32_t stamp) const;
 
+    // Depth first from the root, for a query that settles whole subtrees at once (occlusion
+    // culling by nodes: hemicube/occlusion.hpp): at each node visited,
+    // open = decide(box, open, items) gets the node's box, the query's bits still open above it
+    // and the indices of the boxes under it (a contiguous range), and returns the bits left open
+    // below it. The walk goes below a node while bits stay open and it is not a leaf.
+    template <class Decide>
+    void walk(unsigned open, Decide&& decide) const {
+        if (nodes_.empty() || open == 0) return;
+        std::pair<std::uint32_t, unsigned> stack[64];  // depth ≤ log2(n / kLeafSize) + 1 (median splits)
+        int top = 0;
+        stack[top++] = {0u, open};
+        while (top > 0) {
+            const auto [at, bits] = stack[--top];
+            const Node& nd = nodes_[at];
+            const unsigned left =
+                decide(nd.box, bits, std::span<const std::uint32_t>(items_.data() + nd.begin, nd.end - nd.begin));
+            if (left == 0 || nd.count > 0) continue;
+            stack[top++] = {nd.first, left};
+            stack[top++] = {at + 1, left};
+        }
+    }
+
     std::size_t size() const { return items_.size(); }
     std::size_t node_count() const { return nodes_.size(); }
 
@@ -47,6 +70,7 @@ private:
         BvhBox box;
         std::uint32_t first = 0;  // leaf: first of items_; inner: index of the second child
         std::uint32_t count = 0;  // leaf: number of items (> 0); inner: 0 (first child follows)
+        std::uint32_t begin = 0, end = 0;  // the items under it: items_[begin, end)
     };
     std::uint32_t build(std::span<const BvhBox> boxes, std::vector<Vec3>& centres, std::uint32_t begin,
                         std::uint32_t end);
