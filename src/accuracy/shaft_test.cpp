@@ -42,6 +42,36 @@ bool separated(const Vec3& axis, std::span<const Vec3> hull, const Poly& q, doub
     return separated(axis, hull_extent(axis, hull), q, tol);
 }
 
+// Whether the segment a → b crosses the interior of the convex polygon q (unit normal nq, its
+// corners counter-clockwise about it) so deep that no unit axis u separates q from a convex set
+// holding a and b, even allowing an overlap of tol (separated() above). Proof: let the segment
+// cross q's plane at p = a + t (b − a), at an angle whose sine is δ = |nq · d| (d the unit
+// direction), with a disc of radius r about p inside q. On an axis u with in-plane part s, q's
+// extent holds u·p ± r s and the set's holds u·a and u·b, so both ends overlap by at least
+// max(r s, min(t, 1 − t) L |u·d|), L = |b − a|. Where s ≥ δ/2 that is ≥ r δ/2; else |u·nq| ≥
+// √(1 − δ²/4) and |u·d| ≥ 0.866 δ − δ/2 > 0.366 δ. Required: both above 100 tol (the rounding of
+// these few operations is some 1e-16 of the coordinates, tol at least 1e-9 of the pair's size).
+bool crosses_deep(const Poly& q, const Vec3& nq, const Vec3& a, const Vec3& b, double tol) {
+    const Vec3 ab = b - a;
+    const double len = glm::length(ab);
+    if (!(len > 0)) return false;
+    const double ga = glm::dot(nq, a - q.v[0]), gb = glm::dot(nq, b - q.v[0]);
+    if (!((ga > 0 && gb < 0) || (ga < 0 && gb > 0))) return false;
+    const double t = ga / (ga - gb);
+    const Vec3 p = a + t * ab;
+    const double delta = std::abs(ga - gb) / len;
+    const double m = std::min(t, 1 - t) * len;
+    double r = INFINITY;
+    for (std::size_t k = 0; k < q.n; ++k) {
+        const Vec3 e = q.v[(k + 1) % q.n] - q.v[k];
+        const Vec3 in = glm::cross(nq, e);
+        const double il = glm::length(in);
+        if (!(il > 0)) return false;
+        r = std::min(r, glm::dot(in, p - q.v[k]) / il);
+    }
+    return 0.5 * r * delta > 100 * tol && 0.366 * delta * m > 100 * tol;
+}
+
 }  // namespace
 
 // Candidate axes: the normals of q, i and j; the cross products of q's edges with every segment
@@ -51,9 +81,10 @@ namespace {
 
 // Visits every candidate q of the pair's shaft with whether an axis separates it from the hull,
 // until on_candidate returns false; returns whether it never did.
+// first: a patch to test before the grid's (skipped there), or UINT32_MAX.
 template <class OnCandidate>
 bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
-                 ShaftScratch& scratch, OnCandidate&& on_candidate) {
+                 ShaftScratch& scratch, std::uint32_t first, OnCandidate&& on_candidate) {
     const Scene& scene = patches.scene;
     const Box pair = patches.pair_box(i, j);
     const double scale = glm::length(pair.hi - pair.lo);
@@ -73,7 +104,9 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
     // brings in front. A triangle clipped by a plane has at most 4 vertices, a quad 5.
     std::array<Vec3, 10> hull_points{};
     std::size_t m = 0;
+    std::size_t split = 0;  // hull_points[0, split): i's part; [split, m): j's
     for (const auto& [a, b] : {std::pair{i, j}, std::pair{j, i}}) {
+        if (a == j) split = m;
         const Patch& pb = scene.patches[b];
         const std::size_t from = m;
         clip_front_each(patches.polys[a].span(), pb.centroid - tol * pb.normal, pb.normal,
@@ -90,6 +123,21 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
     Box inflated{hull[0], hull[0]};
     for (const Vec3& v : hull) inflated = Box{glm::min(inflated.lo, v), glm::max(inflated.hi, v)};
     inflated = Box{inflated.lo - Vec3(tol), inflated.hi + Vec3(tol)};
+    // The blocker tried first (`first`: shaft_unoccluded's last one), if it crosses the segment
+    // between the two parts' vertex means (points of the hull) deep inside: not separated by any
+    // axis, so the answer is known before the axes are made.
+    const bool tried = first < patches.size() && first != i && first != j && patches.boxes[first].overlaps(inflated);
+    if (tried) {
+        Vec3 ci(0.0), cj(0.0);
+        for (std::size_t k = 0; k < split; ++k) ci += hull[k];
+        for (std::size_t k = split; k < m; ++k) cj += hull[k];
+        ci /= static_cast<double>(split);
+        cj /= static_cast<double>(m - split);
+        if (crosses_deep(patches.polys[first], scene.patches[first].normal, ci, cj, tol) && !on_candidate(first, false)) {
+            ++scratch.deep_crossings;
+            return false;
+        }
+    }
     // Hull-only axes are the same for every q: precompute them.
     std::vector<Vec3>& axes = scratch.axes;
     axes.clear();
@@ -112,8 +160,7 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
 
     // Every candidate must be separated: the answer does not depend on the order, so the grid's
     // visit stops at the first that is not (refused pairs, most of a city's, stop early).
-    return grid.visit(inflated, [&](std::uint32_t qi) {
-        if (qi == i || qi == j) return true;
+    const auto test = [&](std::uint32_t qi) {
         const Poly& q = patches.polys[qi];
         bool sep = separated(scene.patches[qi].normal, hull, q, tol);
         for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], extent[a], q, tol);
@@ -127,6 +174,11 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
             }
         }
         return on_candidate(qi, sep);
+    };
+    if (tried && !test(first)) return false;
+    return grid.visit(inflated, [&](std::uint32_t qi) {
+        if (qi == i || qi == j || (tried && qi == first)) return true;
+        return test(qi);
     });
 }
 
@@ -134,13 +186,16 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
 
 bool shaft_unoccluded(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
                       ShaftScratch& scratch) {
-    return visit_shaft(patches, grid, i, j, scratch, [](std::uint32_t, bool sep) { return sep; });
+    return visit_shaft(patches, grid, i, j, scratch, scratch.last_blocker, [&](std::uint32_t q, bool sep) {
+        if (!sep) scratch.last_blocker = q;
+        return sep;
+    });
 }
 
 bool shaft_blockers(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t i, std::uint32_t j,
                     ShaftScratch& scratch, std::vector<std::uint32_t>& blockers, std::size_t max) {
     blockers.clear();
-    const bool few = visit_shaft(patches, grid, i, j, scratch, [&](std::uint32_t q, bool sep) {
+    const bool few = visit_shaft(patches, grid, i, j, scratch, UINT32_MAX, [&](std::uint32_t q, bool sep) {
         if (!sep) blockers.push_back(q);
         return blockers.size() <= max;
     });

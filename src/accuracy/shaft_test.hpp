@@ -16,6 +16,12 @@ struct ShaftScratch {
     std::vector<Vec3> axes;
     std::vector<std::pair<double, double>> axis_extent;  // the hull's projection on each of axes
     std::vector<Vec3> segments;
+    // The last blocker shaft_unoccluded found (a wall beside the sender blocks many of its
+    // pairs): the next call tests it first. Only the order of the tests: not the answer.
+    std::uint32_t last_blocker = UINT32_MAX;
+    // Calls answered by that blocker crossing the segment between the two parts' centres deep
+    // inside (no axis can then separate it: shaft_test.cpp, crosses_deep), before any axis.
+    std::uint64_t deep_crossings = 0;
 };
 
 // Separating-axis test between the convex hull of patches i ∪ j (the parts of each in front of

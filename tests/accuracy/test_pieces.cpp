@@ -188,6 +188,49 @@ TEST(ShaftTest, NeverAcceptsABlockedShaft) {
     EXPECT_GE(free_accepted * 10, free * 5) << free_accepted << " of " << free;
 }
 
+// The last blocker found is tried first by the next call (ShaftScratch::last_blocker), and
+// answers it before any axis is made when it crosses the segment between the two parts' centres
+// deep inside (crosses_deep). Neither may change an answer: on configurations like those above
+// (every other trial with the blockers crowded within 0.3 of the segment, every fourth with them
+// facing along it, so across it), the answer with each of the three blockers as the hint equals
+// the answer with none; and the deep crossing must have answered some calls (546 here).
+TEST(ShaftTest, TheBlockerTriedFirstNeverChangesTheAnswer) {
+    Rng rng(5);
+    std::size_t compared = 0, refused = 0;
+    std::uint64_t deep = 0;
+    for (int trial = 0; trial < 800; ++trial) {
+        const Vec3 ca(0.0), dir = random_unit(rng);
+        const double dist = rng(0.8, 3.0);
+        const Vec3 cb = ca + dir * dist;
+        std::vector<NamedPolygon> polys{{"a", random_facet(rng, ca, glm::normalize(dir + 0.6 * random_unit(rng)), 1.0)},
+                                        {"b", random_facet(rng, cb, glm::normalize(-dir + 0.6 * random_unit(rng)), 1.0)}};
+        for (int q = 0; q < 3; ++q) {
+            const Vec3 c = ca + dir * (dist * rng(0.1, 0.9)) + random_unit(rng) * rng(0.0, trial % 2 ? 0.3 : 1.5);
+            // Every fourth trial: a blocker across the segment, facing along it.
+            const Vec3 n = trial % 4 == 0 ? glm::normalize(dir + 0.3 * random_unit(rng)) : random_unit(rng);
+            polys.push_back({"q" + std::to_string(q), random_facet(rng, c, n, rng(0.1, 0.8))});
+        }
+        const Scene s = test::make_scene(polys, 1e3);
+        ASSERT_EQ(s.size(), 5u);
+        const accuracy::PatchSet ps(s);
+        if (!ps.facing(0, 1)) continue;
+        const accuracy::SpatialGrid grid(ps);
+        accuracy::ShaftScratch fresh;
+        const bool want = accuracy::shaft_unoccluded(ps, grid, 0, 1, fresh);
+        refused += !want;
+        for (std::uint32_t hint = 2; hint < 5; ++hint) {
+            accuracy::ShaftScratch scratch;
+            scratch.last_blocker = hint;
+            ASSERT_EQ(accuracy::shaft_unoccluded(ps, grid, 0, 1, scratch), want) << "trial " << trial << " hint " << hint;
+            deep += scratch.deep_crossings;
+            ++compared;
+        }
+    }
+    EXPECT_GT(compared, 1000u);
+    EXPECT_GT(refused, 100u);
+    EXPECT_GT(deep, 50u) << "the deep crossing never answered: this compares only the ordering";
+}
+
 // Rebalancing: a closed row sums to 1 afterwards, no row it changes exceeds 1, exact entries
 // keep their value whenever the others can absorb the change, and a change beyond 10% is
 // refused (the row is left as it was).
