@@ -216,6 +216,18 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
         for (std::size_t c = scene.grids[g].first_patch; c < end; ++c) piece_of_[c] = static_cast<std::uint32_t>(g);
     }
     seen_.assign(scene.grids.size(), 0u);
+    // Per piece its corners' mean and their largest distance from it, in world coordinates
+    // (occlude()'s angular sizes; a distance does not depend on the frame).
+    sphere_.assign(scene.grids.size(), Sphere{});
+    for (std::size_t g = 0; g < scene.grids.size(); ++g) {
+        const PatchGrid& pg = scene.grids[g];
+        Vec3 c(0.0);
+        for (std::uint32_t v = 0; v < pg.count; ++v) c += pg.corners[v];
+        c /= static_cast<double>(pg.count);
+        double r2 = 0;
+        for (std::uint32_t v = 0; v < pg.count; ++v) r2 = std::max(r2, glm::dot(pg.corners[v] - c, pg.corners[v] - c));
+        sphere_[g] = {c, std::sqrt(r2)};
+    }
     depth_.resize(static_cast<std::size_t>(layout.atlas_width()) * layout.atlas_height());
     stamp_.assign(scene.patches.size(), 0);
     // Range-limited rows only: the piece boxes (every vertex slot: corners and T-vertices).
@@ -830,17 +842,8 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
         Drawn& d = drawn_[k];
         d.occluder = !d.back && seen_[d.g] == last_stamp_ && last_stamp_ != 0;
         if (d.back || d.occluder) continue;
-        const std::uint32_t base = pieces_.first[d.g];
-        const std::uint32_t count = scene_.grids[d.g].count;
-        Vec3 c(0.0);
-        for (std::uint32_t v = 0; v < count; ++v) c += Vec3(local_[(base + v) * 3], local_[(base + v) * 3 + 1], local_[(base + v) * 3 + 2]);
-        c /= static_cast<double>(count);
-        double r2 = 0;
-        for (std::uint32_t v = 0; v < count; ++v) {
-            const Vec3 e = Vec3(local_[(base + v) * 3], local_[(base + v) * 3 + 1], local_[(base + v) * 3 + 2]) - c;
-            r2 = std::max(r2, glm::dot(e, e));
-        }
-        const double r = std::sqrt(r2), gap = glm::length(c) - r;
+        const Sphere& sp = sphere_[d.g];
+        const double r = sp.radius, gap = glm::length(sp.centre - eye) - r;
         scores_.emplace_back(gap > 0 ? r / gap : INFINITY, static_cast<std::uint32_t>(k));
     }
     if (scores_.size() > kOccluderCount) {

@@ -142,6 +142,11 @@ private:
     HiddenFaces hidden_;  // occlude(): per piece, the faces a hidden hierarchy node leaves it out of
     std::vector<Vec3> corners_;
     std::vector<std::pair<double, std::uint32_t>> scores_;  // (angular size, drawn_ index)
+    struct Sphere {
+        Vec3 centre{0.0};
+        double radius = 0;
+    };
+    std::vector<Sphere> sphere_;  // per piece: its corners' mean and their largest distance from it
     std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;
     std::vector<double> acc_;
     std::vector<std::uint64_t> run_bits_;  // accumulate(): where runs of one id start in a line

@@ -141,20 +141,28 @@ TEST(SpatialGrid, FindsExactlyTheNearPairs) {
 // blocker (test::crosses_interior, independent of the code under test). The shaft test must
 // never accept a configuration where a segment is blocked, and must accept most of those where
 // none is and the blockers lie outside the pair's hull in the first place.
+// Two facets a and b facing each other about a random direction, and three blockers q0..q2 at
+// random points of the segment between their centres, moved off it by up to `spread`; `across`:
+// the blockers face along the segment (so they lie across it), else any way.
+std::vector<NamedPolygon> shaft_configuration(Rng& rng, double spread, bool across) {
+    const Vec3 ca(0.0), dir = random_unit(rng);
+    const double dist = rng(0.8, 3.0);
+    const Vec3 cb = ca + dir * dist;
+    std::vector<NamedPolygon> polys{{"a", random_facet(rng, ca, glm::normalize(dir + 0.6 * random_unit(rng)), 1.0)},
+                                    {"b", random_facet(rng, cb, glm::normalize(-dir + 0.6 * random_unit(rng)), 1.0)}};
+    for (int q = 0; q < 3; ++q) {
+        const Vec3 c = ca + dir * (dist * rng(0.1, 0.9)) + random_unit(rng) * rng(0.0, spread);
+        const Vec3 n = across ? glm::normalize(dir + 0.3 * random_unit(rng)) : random_unit(rng);
+        polys.push_back({"q" + std::to_string(q), random_facet(rng, c, n, rng(0.1, 0.8))});
+    }
+    return polys;
+}
+
 TEST(ShaftTest, NeverAcceptsABlockedShaft) {
     Rng rng(99);
     std::size_t blocked = 0, free = 0, free_accepted = 0;
     for (int trial = 0; trial < 600; ++trial) {
-        const Vec3 ca(0.0), dir = random_unit(rng);
-        const double dist = rng(0.8, 3.0);
-        const Vec3 cb = ca + dir * dist;
-        std::vector<NamedPolygon> polys{{"a", random_facet(rng, ca, glm::normalize(dir + 0.6 * random_unit(rng)), 1.0)},
-                                        {"b", random_facet(rng, cb, glm::normalize(-dir + 0.6 * random_unit(rng)), 1.0)}};
-        for (int q = 0; q < 3; ++q) {
-            const Vec3 c = ca + dir * (dist * rng(0.1, 0.9)) + random_unit(rng) * rng(0.0, 1.5);
-            polys.push_back({"q" + std::to_string(q), random_facet(rng, c, random_unit(rng), rng(0.1, 0.8))});
-        }
-        const Scene s = test::make_scene(polys, 1e3);
+        const Scene s = test::make_scene(shaft_configuration(rng, 1.5, false), 1e3);
         ASSERT_EQ(s.size(), 5u);
         const accuracy::PatchSet ps(s);
         if (!ps.facing(0, 1)) continue;
@@ -199,18 +207,7 @@ TEST(ShaftTest, TheBlockerTriedFirstNeverChangesTheAnswer) {
     std::size_t compared = 0, refused = 0;
     std::uint64_t deep = 0;
     for (int trial = 0; trial < 800; ++trial) {
-        const Vec3 ca(0.0), dir = random_unit(rng);
-        const double dist = rng(0.8, 3.0);
-        const Vec3 cb = ca + dir * dist;
-        std::vector<NamedPolygon> polys{{"a", random_facet(rng, ca, glm::normalize(dir + 0.6 * random_unit(rng)), 1.0)},
-                                        {"b", random_facet(rng, cb, glm::normalize(-dir + 0.6 * random_unit(rng)), 1.0)}};
-        for (int q = 0; q < 3; ++q) {
-            const Vec3 c = ca + dir * (dist * rng(0.1, 0.9)) + random_unit(rng) * rng(0.0, trial % 2 ? 0.3 : 1.5);
-            // Every fourth trial: a blocker across the segment, facing along it.
-            const Vec3 n = trial % 4 == 0 ? glm::normalize(dir + 0.3 * random_unit(rng)) : random_unit(rng);
-            polys.push_back({"q" + std::to_string(q), random_facet(rng, c, n, rng(0.1, 0.8))});
-        }
-        const Scene s = test::make_scene(polys, 1e3);
+        const Scene s = test::make_scene(shaft_configuration(rng, trial % 2 ? 0.3 : 1.5, trial % 4 == 0), 1e3);
         ASSERT_EQ(s.size(), 5u);
         const accuracy::PatchSet ps(s);
         if (!ps.facing(0, 1)) continue;
