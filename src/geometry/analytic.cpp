@@ -246,12 +246,11 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     };
     // g is smooth except where q(t) meets segment P, and steep where q(t) passes near P or near
     // its ends: split at the closest approach to P and at the points nearest p0 and p1.
-    std::array<double, 5> cuts = {0.0, closest_on_q(p0, d, lp, q0, e, lq),
-                                  std::clamp(glm::dot(p0 - q0, e), 0.0, lq),
-                                  std::clamp(glm::dot(p1 - q0, e), 0.0, lq), lq};
-    FFCUBE_CHECK_MSG(std::all_of(cuts.begin(), cuts.end(), [](double x) { return std::isfinite(x); }),
+    const double t_near = closest_on_q(p0, d, lp, q0, e, lq);
+    const double t_p0 = std::clamp(glm::dot(p0 - q0, e), 0.0, lq);
+    const double t_p1 = std::clamp(glm::dot(p1 - q0, e), 0.0, lq);
+    FFCUBE_CHECK_MSG(std::isfinite(t_near) && std::isfinite(t_p0) && std::isfinite(t_p1),
                      "contour integral: a non-finite cut would drop part of the edge");
-    std::sort(cuts.begin(), cuts.end());
     // Absolute tolerance 1e-13 of the pair's scale lp·lq: the sum over all pairs of a polygon
     // pair then carries ≲ 1e-13 × perimeter1 × perimeter2 of quadrature error.
     const double tol = 1e-13 * lp * lq;
@@ -261,13 +260,59 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     // noise accepted over all of Q is then 1e-14 S lq: the floor that doubles allow.
     const double extent = lp + lq + glm::length(q0 - p0);
     const double noise = 1e-14 * extent;
+    // Near misses. Where q(t) passes at a small distance from P, g has a feature of width ρ in t
+    // that is not a singularity on the real line:
+    //  - near the closest approach t*, at distance h0 and an angle θ between the edges,
+    //    g = smooth + π D(t) with D = √(h0² + sin²θ (t − t*)²) = sinθ √((t − t*)² + ρ²),
+    //    ρ = h0 / sinθ: complex singularities at t* ± iρ;
+    //  - near an end p of P, g's terms are functions of |q(t) − p|² = (t − t_p)² + ρ², ρ the
+    //    distance from p to Q's line: singular at t_p ± iρ.
+    // A panel that reaches the feature but is much wider than ρ has no node within ρ of it (the
+    // outermost K15 node is 0.0043 of the panel from its end), so K15 and G7 both miss the
+    // feature's integral, π sinθ ρ² (ln(2W/ρ) + ½) / 2 ≤ 2 ρ² (ln(2W/ρ) + 1) over a panel of
+    // width W, and agree: |K − G| says converged when it is not. (A sliver 1.4e-5 wide whose long
+    // edge passes 2e-6 from another polygon's edge: one panel of 0.41 accepted at
+    // |K − G| = 4e-14 with an error of 1.5e-11; reciprocity off by 1.6e-6 relative.)
+    // So where that part could exceed 1/16 of the tolerance, cuts are added at c ± ρ 4^k
+    // (k = 0, 1, … while ρ 4^k < lq / 8). Every panel then either lies within ρ of the feature's
+    // centre, or is 3 ρ 4^k wide at ρ 4^k from it, or is the outermost one, at ≥ lq / 32 from
+    // it and ≤ lq wide: the singularities are at least 1/16 of each panel's half-width outside
+    // it, the rules' nodes see the feature, |K − G| is a true estimate, and the adaptive
+    // bisection does the rest. ρ is taken at the cut c itself, |q(c) − p| (and |q(c) − P| / sinθ
+    // for the closest approach): the distance from c to the singularity, also when c is clamped
+    // to an end of Q. Below the threshold (ρ ≲ 1e-8 of the edges) the feature is below the
+    // tolerance; ρ ≤ min_width (a shared vertex, a touching edge, up to rounding) is a
+    // singularity at the cut, which bisection resolves geometrically. From ρ > 4ε lq to lq / 8
+    // is at most 24 factors of 4 (kMaxGradedCutsPerSide = 28).
+    const double min_width = 4.0 * std::numeric_limits<double>::epsilon() * lq;
+    std::array<double, 5 + 6 * kMaxGradedCutsPerSide> cuts{};
+    std::size_t n_cuts = 0;
+    for (double c : {0.0, t_near, t_p0, t_p1, lq}) cuts[n_cuts++] = c;
+    const double sin_angle = glm::length(glm::cross(d, e));
+    const auto grade = [&](double c, double rho) {
+        if (!(rho > min_width) || !(rho < 0.125 * lq)) return;
+        if (2.0 * rho * rho * (std::log(2.0 * lq / rho) + 1.0) <= tol / 16.0) return;
+        double r = rho;
+        for (int k = 0; k < kMaxGradedCutsPerSide && r < 0.125 * lq; ++k, r *= 4.0) {
+            if (c - r > 0.0) cuts[n_cuts++] = c - r;
+            if (c + r < lq) cuts[n_cuts++] = c + r;
+        }
+    };
+    const auto q_at = [&](double t) { return q0 + t * e; };
+    const auto distance_to_p = [&](const Vec3& x) {
+        const double s = std::clamp(glm::dot(x - p0, d), 0.0, lp);
+        return glm::length(x - (p0 + s * d));
+    };
+    grade(t_near, distance_to_p(q_at(t_near)) / sin_angle);
+    grade(t_p0, glm::length(q_at(t_p0) - p0));
+    grade(t_p1, glm::length(q_at(t_p1) - p1));
+    std::sort(cuts.begin(), cuts.begin() + static_cast<std::ptrdiff_t>(n_cuts));
     // Budget: see kContourEvalsPerEdgePair (analytic.hpp). Splitting stops once kEdgePairSplitBudget
     // evaluations are spent; the panels then pending (≤ kMaxQuadDepth per cut, ≤ 4 cuts) cost 15
     // each, so the pair never exceeds kContourEvalsPerEdgePair.
     const std::uint64_t limit = work.evaluations + kEdgePairSplitBudget;
-    const double min_width = 4.0 * std::numeric_limits<double>::epsilon() * lq;
     double integral = 0.0;
-    for (std::size_t i = 0; i + 1 < cuts.size(); ++i)
+    for (std::size_t i = 0; i + 1 < n_cuts; ++i)
         if (cuts[i + 1] > cuts[i])
             integral += integrate(g, cuts[i], cuts[i + 1], tol, noise, min_width, kMaxQuadDepth, limit, work);
     return cos_angle * integral;

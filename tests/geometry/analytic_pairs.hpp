@@ -231,11 +231,27 @@ private:
         const Vec3 a(0, 0, 0), b(1, 0, 0);
         const Vec3 up = unit_vector();
         // Third vertices: a random point, a point 1e-k off the line ab (sliver), or close to a.
+        // Each draw is its own statement: the order of evaluation of a constructor's arguments is
+        // unspecified (g++ and clang++ differ), and a fuzzer's input must decode to the same pair
+        // in the clang-built fuzzer and the g++-built tests.
         auto third = [&](const Vec3& n_hint) {
             switch (pick(3)) {
-                case 0: return Vec3(uniform(-0.5, 1.5), log_uniform(-9.0, -3.0), 0.0) + 0.0 * n_hint;
-                case 1: return uniform(0.05, 1.0) * glm::normalize(Vec3(uniform(-1, 1), uniform(0.05, 1), 0.0));
-                default: return Vec3(uniform(-0.5, 1.5), uniform(0.05, 1.0), 0.0);
+                case 0: {
+                    const double x = uniform(-0.5, 1.5);
+                    const double y = log_uniform(-9.0, -3.0);
+                    return Vec3(x, y, 0.0) + 0.0 * n_hint;
+                }
+                case 1: {
+                    const double r = uniform(0.05, 1.0);
+                    const double x = uniform(-1, 1);
+                    const double y = uniform(0.05, 1);
+                    return r * glm::normalize(Vec3(x, y, 0.0));
+                }
+                default: {
+                    const double x = uniform(-0.5, 1.5);
+                    const double y = uniform(0.05, 1.0);
+                    return Vec3(x, y, 0.0);
+                }
             }
         };
         // Polygon 1 in z = 0, facing +z: triangle a, b, t1 (CCW as t1.y > 0).
@@ -258,7 +274,8 @@ private:
             }
             default: {                                                              // tiny next to big
                 const double s = log_uniform(-4.0, -1.0);
-                const Vec3 o(uniform(0.0, 1.0), 0.0, pick(2) == 0 ? 0.0 : 1e-12);
+                const double ox = uniform(0.0, 1.0);
+                const Vec3 o(ox, 0.0, pick(2) == 0 ? 0.0 : 1e-12);
                 p.p2 = {o + s * Vec3(1, 0, 0), o, o + s * u};
                 break;
             }

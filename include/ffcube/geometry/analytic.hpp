@@ -128,12 +128,17 @@ double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2);
 // its |K15 − G7| exceeds its tolerance, the integrand's rounding and 50ε of its magnitude. With
 // the singularities at cut ends, at most 2 panels per level are split (one at each end), so
 // ≤ 4 evaluated: ≤ 4 cuts × 50 levels × 4 panels × 15 = 12,000 evaluations, the split budget. Once it is spent nothing more is split:
-// each panel then evaluated or pending (≤ 50 on the stack + 3 cuts) keeps its K15 value — the
-// fallback, counted with |K15 − G7| as its error bound — so a pair never exceeds
+// each panel then evaluated or pending (≤ 50 on the stack + 3 cuts + the graded cuts) keeps its
+// K15 value — the fallback, counted with |K15 − G7| as its error bound — so a pair never exceeds
 // kContourEvalsPerEdgePair evaluations (an evaluation: ∫ ln r along edge 1 in closed form).
+// Graded cuts: where edge 2 passes near edge 1 or its ends without touching, at most
+// kMaxGradedCutsPerSide cuts on each side of each of the 3 cuts, at distances ρ 4^k
+// (analytic.cpp, edge_pair: from ρ > 4ε of edge 2 to an eighth of it, ≤ 24 factors of 4).
 inline constexpr int kMaxQuadDepth = 50;
+inline constexpr int kMaxGradedCutsPerSide = 28;
 inline constexpr std::uint64_t kEdgePairSplitBudget = 4 * 50 * 4 * 15;
-inline constexpr std::uint64_t kContourEvalsPerEdgePair = kEdgePairSplitBudget + 15 * (kMaxQuadDepth + 3);
+inline constexpr std::uint64_t kContourEvalsPerEdgePair =
+    kEdgePairSplitBudget + 15 * (kMaxQuadDepth + 3 + 6 * kMaxGradedCutsPerSide);
 // The far-field rule (fixed 20 × 20 Gauss points per edge of the smaller polygon, each one
 // Lambert sum over the other polygon): no adaptivity, no fallback.
 inline constexpr std::uint64_t kFarFieldEvalsPerEdge = 400;
