@@ -142,6 +142,13 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "vertex shader makes each hemicube's eye-relative positions; per-hemicube: the CPU uploads them "
                     "every hemicube. The same rows either way (docs/architecture.md, \"Vertex data\")",
                     "once");
+    app.add_option_function<std::string>(
+           "--occlusion-culling", [&o](const std::string& w) { o.occlusion_culling = w == "on"; },
+           "hemicube: on (default): a hemicube with 128 pieces or more in front draws likely occluders' depth "
+           "first and leaves out the pieces (and whole hierarchy nodes) hidden behind them; off: every piece in "
+           "the frustum is drawn. The same rows either way (docs/architecture.md, \"Culling\")")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->default_str("on");
     app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
                    "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
         ->default_val(24.0);

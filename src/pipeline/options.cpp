@@ -154,6 +154,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.sub_hemicube_range_k = o.sub_hemicube_range_k;
     h.fine_sub_resolution = o.fine_sub_hemicubes;
     h.vertex_upload = o.vertex_upload;
+    h.occlusion_culling = o.occlusion_culling;
     return h;
 }
 

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -121,6 +123,35 @@ struct BadCase {
     int code;
     std::string message;
 };
+
+// --occlusion-culling off draws every piece in the frustum; on (the default) leaves out what the
+// occluders hide. The rows must be the same bits (the .ffm bytes), and only `on` may count
+// pieces left out by occlusion. A 600-triangle city from tools/gen_city.py (one patch per facet,
+// so its hemicubes list the 128 pieces that occlusion culling needs).
+TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
+    TempDir dir;
+    const std::string city = dir / "city.stl";
+    ASSERT_EQ(std::system(("python3 " + std::string(FFCUBE_SOURCE_DIR) + "/tools/gen_city.py " + city +
+                           " --binary --triangles 600 --seed 2 > /dev/null")
+                              .c_str()),
+              0);
+    std::map<std::string, std::uint64_t> left_out;
+    for (const std::string mode : {"on", "off"}) {
+        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --resolution 64 -q --occlusion-culling " + mode +
+                                  " -o " + (dir / (mode + ".ffm")) + " --report " + (dir / (mode + ".json")));
+        ASSERT_EQ(r.code, 0) << r.output;
+        const auto report = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
+        std::uint64_t n = 0;
+        for (const auto& [face, count] : report["left_out"]["pieces_occluded_per_face"].items()) n += count.get<std::uint64_t>();
+        left_out[mode] = n;
+    }
+    EXPECT_EQ(test::read_text(dir / "on.ffm"), test::read_text(dir / "off.ffm"));
+    EXPECT_GT(left_out["on"], 0u);
+    EXPECT_EQ(left_out["off"], 0u);
+    const auto bad = run_ffcube("formfactors " + city + " --no-subdivide --occlusion-culling maybe -o " + (dir / "x.ffm"));
+    EXPECT_NE(bad.code, 0);
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
+}
 
 TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
     TempDir dir;

@@ -82,6 +82,9 @@ struct RowOptions {
     FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
     // HemicubeOptions::vertex_upload (--vertex-upload once|per-hemicube): the same rows either way.
     VertexUpload vertex_upload = VertexUpload::once;
+    // HemicubeOptions::occlusion_culling (--occlusion-culling on|off): the same rows either way;
+    // off leaves out the occluders' depth pass and the tests (docs/architecture.md, "Culling").
+    bool occlusion_culling = true;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
     // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
