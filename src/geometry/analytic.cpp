@@ -308,8 +308,9 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     grade(t_p1, glm::length(q_at(t_p1) - p1));
     std::sort(cuts.begin(), cuts.begin() + static_cast<std::ptrdiff_t>(n_cuts));
     // Budget: see kContourEvalsPerEdgePair (analytic.hpp). Splitting stops once kEdgePairSplitBudget
-    // evaluations are spent; the panels then pending (≤ kMaxQuadDepth per cut, ≤ 4 cuts) cost 15
-    // each, so the pair never exceeds kContourEvalsPerEdgePair.
+    // evaluations are spent; the panels then pending (≤ kMaxQuadDepth on the stack, and the cuts'
+    // panels not yet begun: ≤ 3 + 6 kMaxGradedCutsPerSide) cost 15 each, so the pair never exceeds
+    // kContourEvalsPerEdgePair.
     const std::uint64_t limit = work.evaluations + kEdgePairSplitBudget;
     double integral = 0.0;
     for (std::size_t i = 0; i + 1 < n_cuts; ++i)
