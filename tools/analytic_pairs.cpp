@@ -23,8 +23,6 @@ int main(int argc, char** argv) {
     int count = 40;
     std::uint64_t seed = 1;
     std::set<testing::PairKind> kinds = {testing::PairKind::hinged, testing::PairKind::stress};
-    const char* names[] = {"parallel_offset", "perpendicular_edge", "perpendicular_gap", "perpendicular_vertex",
-                           "separated",       "hinged",             "stress"};
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         if (a == "--count" && i + 1 < argc) {
@@ -37,11 +35,13 @@ int main(int argc, char** argv) {
             std::string word;
             while (std::getline(list, word, ',')) {
                 bool found = false;
-                for (int k = 0; k < static_cast<int>(testing::PairKind::count); ++k)
-                    if (word == names[k]) {
-                        kinds.insert(static_cast<testing::PairKind>(k));
+                for (int k = 0; k < static_cast<int>(testing::PairKind::count); ++k) {
+                    const auto kind = static_cast<testing::PairKind>(k);
+                    if (word == testing::kind_name(kind)) {
+                        kinds.insert(kind);
                         found = true;
                     }
+                }
                 if (!found) {
                     std::fprintf(stderr, "analytic_pairs: unknown kind '%s'\n", word.c_str());
                     return 2;
@@ -68,7 +68,7 @@ int main(int argc, char** argv) {
             continue;  // a polygon of zero area after rounding: nothing to compare
         }
         const double s = std::max(polygon_max_edge(p.p1), polygon_max_edge(p.p2));
-        std::printf("pair %d %s\n", k, names[static_cast<int>(p.kind)]);
+        std::printf("pair %d %s\n", k, testing::kind_name(p.kind));
         for (const auto* poly : {&p.p1, &p.p2}) {
             std::printf("poly:\n");
             for (const Vec3& v : *poly) std::printf("%.17g %.17g %.17g\n", v.x, v.y, v.z);

@@ -226,7 +226,8 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     const double cos_angle = glm::dot(d, e);
     // Perpendicular edges: dx1·dx2 = 0. 1e-15 × the O(lp·lq) integral is below rounding.
     if (std::abs(cos_angle) < 1e-15) return 0.0;
-    if (glm::length(glm::cross(d, e)) < 1e-12) {
+    const double sin_angle = glm::length(glm::cross(d, e));
+    if (sin_angle < 1e-12) {
         // Parallel (collinear or not): closed form. Positions of Q's ends along d measured from
         // p0; h = distance between the lines (taken at Q's midpoint; for edges parallel to
         // 1e-12 that moves the ends by at most 1e-12 of the edge).
@@ -288,7 +289,6 @@ double edge_pair(const Vec3& p0, const Vec3& p1, const Vec3& q0, const Vec3& q1,
     std::array<double, 5 + 6 * kMaxGradedCutsPerSide> cuts{};
     std::size_t n_cuts = 0;
     for (double c : {0.0, t_near, t_p0, t_p1, lq}) cuts[n_cuts++] = c;
-    const double sin_angle = glm::length(glm::cross(d, e));
     const auto grade = [&](double c, double rho) {
         if (!(rho > min_width) || !(rho < 0.125 * lq)) return;
         if (2.0 * rho * rho * (std::log(2.0 * lq / rho) + 1.0) <= tol / 16.0) return;

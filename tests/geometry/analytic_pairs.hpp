@@ -32,6 +32,12 @@ enum class PairKind {
     count
 };
 
+inline const char* kind_name(PairKind k) {
+    static const char* names[] = {"parallel_offset", "perpendicular_edge", "perpendicular_gap",
+                                  "perpendicular_vertex", "separated", "hinged", "stress"};
+    return names[static_cast<int>(k)];
+}
+
 struct PolygonPair {
     PairKind kind = PairKind::stress;
     std::vector<Vec3> p1, p2;

@@ -39,6 +39,7 @@ namespace {
 
 using testing::PairKind;
 using testing::PolygonPair;
+using testing::kind_name;
 using testing::stated_error_area;
 using LD = long double;
 constexpr LD kPiL = 3.141592653589793238462643383279502884L;
@@ -211,12 +212,6 @@ std::string describe(const PolygonPair& p) {
         out += "}";
     }
     return out;
-}
-
-const char* kind_name(PairKind k) {
-    static const char* names[] = {"parallel_offset", "perpendicular_edge", "perpendicular_gap",
-                                  "perpendicular_vertex", "separated", "hinged", "stress"};
-    return names[static_cast<int>(k)];
 }
 
 TEST(AnalyticFuzz, RandomPairsAreBoundedReciprocalAndMatchReferences) {
