@@ -472,20 +472,28 @@ bool Worker::sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st)
 
 // The column of a pixel's id (id − 1). An id past the last patch means a broken patch lookup
 // (shader or pieces): a bug, stopped here instead of writing past the row's arrays.
-std::uint32_t Worker::column_of(std::uint32_t p, std::size_t k, std::uint32_t id) const {
+inline __attribute__((always_inline)) std::uint32_t Worker::column_of(std::uint32_t p, std::size_t k,
+                                                                     std::uint32_t id) const {
     const std::uint32_t j = id - 1;
-    FFCUBE_CHECK_MSG(j < stamp_.size(), fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}",
-                                                    p, k, id, stamp_.size()));
+    if (j >= stamp_.size()) bad_id(p, k, id);
     return j;
 }
 
-// Starts column j of the row being made (epoch_) at 0 the first time a pixel shows it.
-void Worker::touch(std::uint32_t j) {
-    if (stamp_[j] != epoch_) {
-        stamp_[j] = epoch_;
-        acc_[j] = 0.0;
-        touched_.push_back(j);
-    }
+[[noreturn]] __attribute__((noinline)) void Worker::bad_id(std::uint32_t p, std::size_t k, std::uint32_t id) const {
+    throw_internal("id - 1 < patches", __FILE__, __LINE__,
+                   fmt::format("hemicube of patch {}: pixel {} shows id {}, past the last patch {}", p, k, id, stamp_.size()));
+}
+
+// Starts column j of the row being made (epoch_) at 0 the first time a pixel shows it. The test
+// is inlined into the accumulation's loop over runs; the first touch is a call.
+inline __attribute__((always_inline)) void Worker::touch(std::uint32_t j) {
+    if (stamp_[j] != epoch_) first_touch(j);
+}
+
+__attribute__((noinline)) void Worker::first_touch(std::uint32_t j) {
+    stamp_[j] = epoch_;
+    acc_[j] = 0.0;
+    touched_.push_back(j);
 }
 
 // Calls f(a, b, id, ΔF) for every run [a, b) of pixels of one id within a face's row of the

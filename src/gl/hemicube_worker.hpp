@@ -87,7 +87,9 @@ private:
     void accumulate_range_far(std::uint32_t p, HemicubeStats& st);
     bool piece_near(std::uint32_t g) const;  // wholly within range_near_ of range_centre_
     std::uint32_t column_of(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // id − 1, checked
-    void touch(std::uint32_t j);  // column j enters the row being made (epoch_) at 0
+    [[noreturn]] void bad_id(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // column_of's failure
+    void touch(std::uint32_t j);        // column j enters the row being made (epoch_) at 0
+    void first_touch(std::uint32_t j);  // touch's work when j is not in the row yet
     void end_seen();  // the pieces the last hemicube showed become the next one's occluders
     // One hemicube of patch p at `at` (half resolution or full), weight 1, as its own row in out.
     void hemicube_row(std::uint32_t p, const Vec3& at, Res res, SparseRow& out, HemicubeStats& st);

@@ -11,6 +11,8 @@
 //    pixels count wholly or not at all, error uniform in ±ΔF/2). The tolerance is 6σ (a false
 //    failure about once in 5e8 under the model).
 #include <gtest/gtest.h>
+#include <sys/socket.h>
+#include <unistd.h>
 
 #include <algorithm>
 
@@ -552,6 +554,47 @@ TEST(HemicubeWorkers, ProcessesAndThreadsGiveIdenticalRows) {
     }
     EXPECT_EQ(by_processes.col(), by_threads.col());
     EXPECT_EQ(by_processes.val(), by_threads.val());
+}
+
+// A worker process sends a row's header and arrays in one sendmsg: rows larger than the socket's
+// buffer (sent by the kernel in several rounds while the reader drains it) arrive whole and
+// unchanged. An inward box of
+// 64,000 patches at N = 256 (196,608 pixels): a row sees tens of thousands of patches, 12 bytes
+// an entry, beyond the default buffer of a Unix socket (212,992 bytes here; read on a fresh
+// socket pair, so the test says so where the default is larger).
+TEST(HemicubeWorkers, RowsLargerThanTheSocketBufferArriveWhole) {
+    const Scene scene = test::make_scene(test::inward_box(1, 2, 1), 0.0125);
+    ASSERT_GT(scene.size(), 60000u);
+    HemicubeOptions o;
+    o.resolution = 256;
+    o.threads = 2;
+    const std::vector<std::uint32_t> rows = {0, 7, static_cast<std::uint32_t>(scene.size() / 2),
+                                             static_cast<std::uint32_t>(scene.size() - 1)};
+    const auto compute = [&](const char* kind) {
+        HemicubeRowProvider provider(scene, o);
+        EXPECT_EQ(provider.workers(), kind);
+        std::vector<SparseRow> out;
+        provider.compute_rows(rows, [&](std::uint32_t, const SparseRow& r) { out.push_back(r); });
+        return out;
+    };
+    const std::vector<SparseRow> by_processes = compute("processes");
+    int sv[2];
+    ASSERT_EQ(::socketpair(AF_UNIX, SOCK_STREAM, 0, sv), 0);
+    int sndbuf = 0;
+    socklen_t len = sizeof sndbuf;
+    ASSERT_EQ(::getsockopt(sv[0], SOL_SOCKET, SO_SNDBUF, &sndbuf, &len), 0);
+    ::close(sv[0]);
+    ::close(sv[1]);
+    const auto ctx = create_headless_context(Backend::Auto);  // no forking from now on
+    const std::vector<SparseRow> by_threads = compute("threads");
+    ASSERT_EQ(by_processes.size(), rows.size());
+    ASSERT_EQ(by_threads.size(), rows.size());
+    for (std::size_t k = 0; k < rows.size(); ++k) {
+        EXPECT_GT(by_processes[k].nnz() * (sizeof(std::uint32_t) + sizeof(double)), static_cast<std::size_t>(sndbuf))
+            << "row " << rows[k];
+        EXPECT_EQ(by_processes[k].col, by_threads[k].col) << "row " << rows[k];
+        EXPECT_EQ(by_processes[k].val, by_threads[k].val) << "row " << rows[k];
+    }
 }
 
 // set_scene (adaptive levels keep their workers): a provider started on one scene and sent

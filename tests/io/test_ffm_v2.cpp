@@ -423,7 +423,9 @@ TEST_F(FfmV2, RowsWithColumnsEqualTheInMemoryTranspose) {
                 for (std::uint32_t c : F.row(k).col) below += c < k;
             EXPECT_EQ(held_total, below);
             EXPECT_LT(below, F.nnz());
-            if (budget == 1) EXPECT_GT(t.scratch_bytes, 8 * held_total);
+            if (budget == 1) {
+                EXPECT_GT(t.scratch_bytes, 8 * held_total);
+            }
         }
         if (budget == 1 && part == ColumnPart::all) {  // a band per column: 250 bands, spilled 64 at a time (4 passes), then 1
             EXPECT_EQ(plan.band_count(), n);
