@@ -22,7 +22,8 @@ struct OrderedRowPool::Impl {
     std::condition_variable cv_work, cv_done;
     bool stopping = false;
     std::span<const std::uint32_t> rows;
-    const Compute* compute = nullptr;
+    const Compute* compute = nullptr;  // run()'s, or run_pipelined()'s collect
+    const Submit* submit = nullptr;    // run_pipelined()'s; null in run()
     std::size_t next = 0, consumed = 0, window = 0, in_flight = 0;
     std::vector<SparseRow> slots;
     std::vector<char> ready;
@@ -59,11 +60,49 @@ struct OrderedRowPool::Impl {
         ++started;
         cv_done.notify_all();
         SparseRow row;
+        // Pipelined runs: the row this worker submitted and has not collected (k, i), if any.
+        constexpr std::size_t kNone = ~std::size_t{0};
+        std::size_t held = kNone;
+        std::uint32_t held_i = 0;
+        const auto can_take = [&] { return next < rows.size() && next < consumed + window && !error; };
         for (;;) {
-            cv_work.wait(lock, [&] {
-                return stopping || (index == 0 && job) || (next < rows.size() && next < consumed + window && !error);
-            });
+            cv_work.wait(lock, [&] { return stopping || (index == 0 && job) || held != kNone || can_take(); });
             if (stopping) break;
+            if (held != kNone || (submit && can_take())) {
+                // Submit the next row (when one may be taken), then collect the one held: the
+                // worker computes the next while this thread finishes the last.
+                std::size_t k = kNone;
+                std::uint32_t i = 0;
+                if (can_take()) {
+                    k = next++;
+                    i = rows[k];
+                    ++in_flight;
+                }
+                const Submit* const s = submit;
+                const Compute* const c = compute;
+                const std::size_t mine = (k != kNone) + (held != kNone);
+                lock.unlock();
+                try {
+                    if (k != kNone) (*s)(index, k, i);
+                    if (held != kNone) (*c)(index, held, held_i, row);
+                } catch (...) {
+                    fail(lock);
+                    in_flight -= mine;  // both dropped: the error stays, nothing more is delivered
+                    held = kNone;
+                    cv_done.notify_all();
+                    continue;
+                }
+                lock.lock();
+                if (held != kNone) {
+                    std::swap(slots[held % window], row);
+                    ready[held % window] = 1;
+                    --in_flight;
+                    cv_done.notify_all();
+                }
+                held = k;
+                held_i = i;
+                continue;
+            }
             if (index == 0 && job) {
                 const std::function<void()>* const j = job;
                 lock.unlock();
@@ -122,12 +161,23 @@ OrderedRowPool::~OrderedRowPool() = default;
 unsigned OrderedRowPool::size() const { return static_cast<unsigned>(impl_->threads.size()); }
 
 void OrderedRowPool::run(std::span<const std::uint32_t> rows, const Compute& compute, const RowSink& sink) {
+    run_rows(rows, nullptr, compute, sink);
+}
+
+void OrderedRowPool::run_pipelined(std::span<const std::uint32_t> rows, const Submit& submit, const Compute& collect,
+                                   const RowSink& sink) {
+    run_rows(rows, &submit, collect, sink);
+}
+
+void OrderedRowPool::run_rows(std::span<const std::uint32_t> rows, const Submit* submit, const Compute& compute,
+                              const RowSink& sink) {
     Impl& im = *impl_;
     if (rows.empty()) return;
     std::unique_lock lock(im.mutex);
     if (im.error) std::rethrow_exception(im.error);
     im.rows = rows;
     im.compute = &compute;
+    im.submit = submit;
     im.next = 0;
     im.consumed = 0;
     im.window = 4 * im.threads.size();
@@ -141,6 +191,7 @@ void OrderedRowPool::run(std::span<const std::uint32_t> rows, const Compute& com
         im.cv_done.wait(lock, [&] { return im.in_flight == 0; });
         im.rows = {};
         im.compute = nullptr;
+        im.submit = nullptr;
     };
     SparseRow current;
     try {

@@ -21,6 +21,13 @@ public:
     // quadrature points; 0: one hemicube at the centre); the work done is added to st.
     // Errors are thrown as the class they were raised as, wherever that was (core/error.hpp).
     virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) = 0;
+    // row() in two halves, for engines that compute elsewhere (pipelined() true): submit asks for
+    // row p and returns at once; collect waits for the oldest row submitted and not collected.
+    // The thread can then plan and send the next row, and finish the last one, while the engine
+    // computes (HemicubeRowProvider keeps one row waiting at each worker process).
+    virtual bool pipelined() const { return false; }
+    virtual void submit(std::uint32_t p, int sub_points);
+    virtual void collect(SparseRow& out, HemicubeStats& st);
     virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
     virtual void stop() = 0;  // on the worker thread, after the last request
     // Draw `scene` (cut into `pieces`) from the next request on; from the provider's thread,

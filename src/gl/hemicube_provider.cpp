@@ -25,6 +25,11 @@
 
 namespace ffcube {
 
+void Engine::submit(std::uint32_t, int) { FFCUBE_CHECK_MSG(false, "Engine::submit on an engine that is not pipelined"); }
+void Engine::collect(SparseRow&, HemicubeStats&) {
+    FFCUBE_CHECK_MSG(false, "Engine::collect on an engine that is not pipelined");
+}
+
 void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.hemicubes += b.hemicubes;
     a.prepare_seconds += b.prepare_seconds;
@@ -77,23 +82,54 @@ struct HemicubeRowProvider::Impl {
     // how to make each row, unless the stages (compute_rows_staged's) plan and finish them.
     void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowPlan> plans,
              const RowProvider::RowStages* stages, const RowSink& sink) {
-        const OrderedRowPool::Compute compute = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
-            using RowPlan = RowProvider::RowPlan;
-            HemicubeStats local;
+        using RowPlan = RowProvider::RowPlan;
+        const auto plan_of = [&](std::size_t k, std::uint32_t i) {
             RowPlan plan = plans.empty() ? RowPlan::centre : plans[k];
             if (stages && stages->plan) plan = stages->plan(k, i);
-            if (plan == RowPlan::skip) {
-                out.clear();
-                ++local.skipped_rows;
-            } else {
-                engines[w]->row(i, out, local, plan == RowPlan::sampled ? 2 : plan == RowPlan::sampled_fine ? 4 : 0);
-            }
+            return plan;
+        };
+        const auto points = [](RowPlan plan) { return plan == RowPlan::sampled ? 2 : plan == RowPlan::sampled_fine ? 4 : 0; };
+        const auto finish = [&](std::size_t k, std::uint32_t i, SparseRow& out, const HemicubeStats& local) {
             {
                 // Merged before the row is handed on: the sink sees stats that include its row.
                 std::lock_guard lock(stats_mutex);
                 add_stats(stats, local);
             }
             if (stages && stages->finish) stages->finish(k, i, out);
+        };
+        if (processes) {
+            // Worker processes: row k + 1 is planned and sent before row k's reply is read, so the
+            // child starts it as soon as it has sent row k, and this thread plans and finishes
+            // rows (the correction's analysis, exact values and sender quadrature) while the
+            // child draws. The plan of a row in flight waits here, one slot per listed row.
+            std::vector<RowPlan> planned(rows.size());
+            const OrderedRowPool::Submit submit = [&](unsigned w, std::size_t k, std::uint32_t i) {
+                planned[k] = plan_of(k, i);
+                if (planned[k] != RowPlan::skip) engines[w]->submit(i, points(planned[k]));
+            };
+            const OrderedRowPool::Compute collect = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
+                HemicubeStats local;
+                if (planned[k] == RowPlan::skip) {
+                    out.clear();
+                    ++local.skipped_rows;
+                } else {
+                    engines[w]->collect(out, local);
+                }
+                finish(k, i, out, local);
+            };
+            pool->run_pipelined(rows, submit, collect, sink);
+            return;
+        }
+        const OrderedRowPool::Compute compute = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
+            HemicubeStats local;
+            const RowPlan plan = plan_of(k, i);
+            if (plan == RowPlan::skip) {
+                out.clear();
+                ++local.skipped_rows;
+            } else {
+                engines[w]->row(i, out, local, points(plan));
+            }
+            finish(k, i, out, local);
         };
         pool->run(rows, compute, sink);
     }

@@ -247,8 +247,22 @@ std::pair<std::string, std::string> ProcessEngine::hello() {
 }
 
 void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
+    submit(p, sub_points);
+    collect(out, st);
+}
+
+// The child serves requests in the order sent, so replies come back in that order: collect reads
+// the oldest row's.
+void ProcessEngine::submit(std::uint32_t p, int sub_points) {
     const Request kind = sub_points >= 4 ? Request::SampledFineRow : sub_points >= 2 ? Request::SampledRow : Request::Row;
-    const Reply r = request(static_cast<std::uint32_t>(kind), p);
+    const RequestMsg req{kind, p};
+    send_all(fd_, &req, sizeof req);
+}
+
+void ProcessEngine::collect(SparseRow& out, HemicubeStats& st) {
+    Reply r{};
+    recv_or_throw(&r, sizeof r);
+    if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
     out.col.resize(r.count);
     out.val.resize(r.count);
     if (r.count) {

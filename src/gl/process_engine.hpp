@@ -38,6 +38,9 @@ public:
     void start() override {}
     void stop() override {}
     void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
+    bool pipelined() const override { return true; }
+    void submit(std::uint32_t p, int sub_points) override;
+    void collect(SparseRow& out, HemicubeStats& st) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
     // Sends the scene and waits for the child to rebuild its pieces and Worker (a child keeps
     // its GL context across scenes). `pieces` is not sent: the child prepares its own.

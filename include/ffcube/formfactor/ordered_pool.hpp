@@ -37,6 +37,15 @@ public:
     // no worker is still on a row of this call.
     void run(std::span<const std::uint32_t> rows, const Compute& compute, const RowSink& sink);
 
+    // run() with each row in two halves, for workers that compute elsewhere (a child process):
+    // submit(worker, k, i) starts row k and returns; collect(worker, k, i, out) waits for it and
+    // finishes it. A worker submits its next row before it collects the last, so at most two of
+    // its rows are in flight, collected in the order submitted; rows reach the sink in list order
+    // as with run(). On an exception the worker drops both (the call rethrows it, and it stays).
+    using Submit = std::function<void(unsigned worker, std::size_t k, std::uint32_t i)>;
+    void run_pipelined(std::span<const std::uint32_t> rows, const Submit& submit, const Compute& collect,
+                       const RowSink& sink);
+
     // Runs job on worker 0's thread (where its GL context is current) and waits for it; an
     // exception is rethrown, and stays as run's do.
     void run_on_first(const std::function<void()>& job);
@@ -44,6 +53,7 @@ public:
     unsigned size() const;
 
 private:
+    void run_rows(std::span<const std::uint32_t> rows, const Submit* submit, const Compute& compute, const RowSink& sink);
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
