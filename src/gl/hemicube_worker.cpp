@@ -4,6 +4,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <csignal>
 #include <bit>
 #include <cstdlib>
 #include <cstring>
@@ -250,7 +251,7 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     }
     if (const char* fail = std::getenv("FFCUBE_TEST_WORKER_FAIL"); fail && *fail) {
         const std::string f = fail;
-        test_fail_ = f == "input" ? 1 : f == "io" ? 2 : f == "internal" ? 3 : f == "gl" ? 4 : -1;
+        test_fail_ = f == "input" ? 1 : f == "io" ? 2 : f == "internal" ? 3 : f == "gl" ? 4 : f == "kill" ? 5 : -1;
     }
 }
 
@@ -265,9 +266,10 @@ namespace {
         case 2: throw IoError(where + ": I/O error");
         case 3: FFCUBE_CHECK_MSG(false, where); break;
         case 4: throw GlError(where + ": GL error");
+        case 5: ::raise(SIGKILL); break;  // a worker killed from outside (the OOM killer, a user)
         default: break;
     }
-    throw InputError("FFCUBE_TEST_WORKER_FAIL: use input, io, internal or gl");
+    throw InputError("FFCUBE_TEST_WORKER_FAIL: use input, io, internal, gl or kill");
 }
 
 }  // namespace

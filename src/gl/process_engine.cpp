@@ -45,12 +45,24 @@ using ReplyMsg = ProcessEngine::Reply;
 
 namespace {
 
+// The other end of the socket is closed (EPIPE, ECONNRESET): in the parent, the child has ended
+// or is ending, and ProcessEngine::child_gone says how.
+struct PeerGone : IoError {
+    using IoError::IoError;
+};
+
+[[noreturn]] void socket_failed(const char* what, int err) {
+    const std::string msg = fmt::format("hemicube worker socket: {} failed: {}", what, std::strerror(err));
+    if (err == EPIPE || err == ECONNRESET) throw PeerGone(msg);
+    throw IoError(msg);
+}
+
 void send_all(int fd, const void* data, std::size_t size) {
     const char* p = static_cast<const char*>(data);
     while (size > 0) {
         const ssize_t n = ::send(fd, p, size, MSG_NOSIGNAL);
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) throw IoError(fmt::format("hemicube worker socket: send failed: {}", std::strerror(errno)));
+        if (n <= 0) socket_failed("send", errno);
         p += n;
         size -= static_cast<std::size_t>(n);
     }
@@ -63,7 +75,7 @@ bool recv_all(int fd, void* data, std::size_t size) {
     while (got < size) {
         const ssize_t n = ::recv(fd, p + got, size - got, 0);
         if (n < 0 && errno == EINTR) continue;
-        if (n < 0) throw IoError(fmt::format("hemicube worker socket: receive failed: {}", std::strerror(errno)));
+        if (n < 0) socket_failed("receive", errno);
         if (n == 0) {
             if (got == 0) return false;
             throw IoError("hemicube worker socket: truncated message");
@@ -90,7 +102,7 @@ void send_parts(int fd, std::span<iovec> parts) {
         m.msg_iovlen = parts.size() - first;
         ssize_t n = ::sendmsg(fd, &m, MSG_NOSIGNAL);
         if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) throw IoError(fmt::format("hemicube worker socket: send failed: {}", std::strerror(errno)));
+        if (n <= 0) socket_failed("send", errno);
         // Skip what went; a part sent in part keeps its rest.
         for (; first < parts.size() && static_cast<std::size_t>(n) >= parts[first].iov_len; ++first)
             n -= static_cast<ssize_t>(parts[first].iov_len);
@@ -256,7 +268,13 @@ void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int 
 void ProcessEngine::submit(std::uint32_t p, int sub_points) {
     const Request kind = sub_points >= 4 ? Request::SampledFineRow : sub_points >= 2 ? Request::SampledRow : Request::Row;
     const RequestMsg req{kind, p};
-    send_all(fd_, &req, sizeof req);
+    try {
+        send_all(fd_, &req, sizeof req);
+    } catch (const PeerGone&) {
+        // The next row is sent before the last one's reply is read: a child that died on that
+        // row is seen here first, and is reported as recv_or_throw would (how it ended).
+        child_gone();
+    }
 }
 
 void ProcessEngine::collect(SparseRow& out, HemicubeStats& st) {
@@ -313,16 +331,24 @@ std::string ProcessEngine::read_text(std::uint64_t n) {
 }
 
 void ProcessEngine::recv_or_throw(void* data, std::size_t size) {
-    if (!recv_all(fd_, data, size)) {
-        int status = 0;
-        std::string how = "exited";
-        if (::waitpid(pid_, &status, 0) == pid_) {
-            how = WIFSIGNALED(status) ? fmt::format("was killed by signal {}", WTERMSIG(status))
-                                      : fmt::format("exited with status {}", WEXITSTATUS(status));
-            pid_ = -1;
-        }
-        throw IoError("a hemicube worker process " + how + " unexpectedly");
+    bool got = false;
+    try {
+        got = recv_all(fd_, data, size);
+    } catch (const PeerGone&) {  // reset: the child ended with a request of ours unread
     }
+    if (!got) child_gone();
+}
+
+// The child's end of the socket is closed: it has ended or is ending. Waits for it and says how.
+void ProcessEngine::child_gone() {
+    int status = 0;
+    std::string how = "exited";
+    if (pid_ > 0 && ::waitpid(pid_, &status, 0) == pid_) {
+        how = WIFSIGNALED(status) ? fmt::format("was killed by signal {}", WTERMSIG(status))
+                                  : fmt::format("exited with status {}", WEXITSTATUS(status));
+        pid_ = -1;
+    }
+    throw IoError("a hemicube worker process " + how + " unexpectedly");
 }
 
 }  // namespace ffcube

@@ -56,6 +56,7 @@ private:
     Reply request(std::uint32_t kind, std::uint32_t p);
     std::string read_text(std::uint64_t n);
     void recv_or_throw(void* data, std::size_t size);
+    [[noreturn]] void child_gone();  // the socket's other end is closed: how the child ended
 
     int fd_ = -1;
     pid_t pid_ = -1;

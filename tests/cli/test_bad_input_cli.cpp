@@ -153,5 +153,23 @@ TEST(WorkerErrorsCli, ExitCodeFollowsTheClassRaisedInTheWorker) {
     }
 }
 
+// A worker process killed from outside (FFCUBE_TEST_WORKER_FAIL=kill: it sends itself SIGKILL at
+// its first row, as the OOM killer would) ends the run as an I/O error that says how the worker
+// ended, whether the parent first notices it reading the reply or sending the next row (rows are
+// pipelined), and leaves no output.
+TEST(WorkerErrorsCli, AKilledWorkerIsAnIoErrorThatSaysSo) {
+    for (const char* threads : {"1", "2"}) {
+        test::TempDir dir;
+        const auto r = test::run_ffcube_env("FFCUBE_TEST_WORKER_FAIL=kill ",
+                                            "formfactors " + test::example("cube.obj") +
+                                                " --max-patch-edge 0.5 --resolution 16 --correct none --threads " + threads + " -q -o " +
+                                                (dir / "F.ffm"));
+        EXPECT_EQ(r.code, 3) << r.output;
+        EXPECT_NE(r.output.find("a hemicube worker process was killed by signal 9 unexpectedly"), std::string::npos)
+            << r.output;
+        EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm"));
+    }
+}
+
 }  // namespace
 }  // namespace ffcube
