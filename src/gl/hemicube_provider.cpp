@@ -97,7 +97,7 @@ struct HemicubeRowProvider::Impl {
             }
             if (stages && stages->finish) stages->finish(k, i, out);
         };
-        if (processes) {
+        if (engines.front()->pipelined()) {
             // Worker processes: row k + 1 is planned and sent before row k's reply is read, so the
             // child starts it as soon as it has sent row k, and this thread plans and finishes
             // rows (the correction's analysis, exact values and sender quadrature) while the

@@ -4,8 +4,8 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
-#include <csignal>
 #include <bit>
+#include <csignal>
 #include <cstdlib>
 #include <cstring>
 #include <numbers>

@@ -45,8 +45,9 @@ using ReplyMsg = ProcessEngine::Reply;
 
 namespace {
 
-// The other end of the socket is closed (EPIPE, ECONNRESET): in the parent, the child has ended
-// or is ending, and ProcessEngine::child_gone says how.
+// The other end of the socket is closed (EPIPE, ECONNRESET, or the end of the stream within a
+// message): in the parent, the child has ended or is ending, and ProcessEngine::child_gone says
+// how.
 struct PeerGone : IoError {
     using IoError::IoError;
 };
@@ -78,7 +79,7 @@ bool recv_all(int fd, void* data, std::size_t size) {
         if (n < 0) socket_failed("receive", errno);
         if (n == 0) {
             if (got == 0) return false;
-            throw IoError("hemicube worker socket: truncated message");
+            throw PeerGone("hemicube worker socket: truncated message");
         }
         got += static_cast<std::size_t>(n);
     }
@@ -334,7 +335,7 @@ void ProcessEngine::recv_or_throw(void* data, std::size_t size) {
     bool got = false;
     try {
         got = recv_all(fd_, data, size);
-    } catch (const PeerGone&) {  // reset: the child ended with a request of ours unread
+    } catch (const PeerGone&) {  // reset (the child ended with a request of ours unread), or cut short
     }
     if (!got) child_gone();
 }
