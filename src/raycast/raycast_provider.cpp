@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/formfactor/ordered_pool.hpp"
 #include "raycast/embree_mesh.hpp"
 
 namespace ffcube {
@@ -147,33 +148,38 @@ unsigned RaycastRowProvider::threads() const { return impl_->threads; }
 std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.load(); }
 
 void RaycastRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
+    compute_rows_staged(rows, RowStages{}, sink);
+}
+
+// Rows through an OrderedRowPool: each worker casts a row and runs the caller's finish on it (the
+// near-field correction's analysis and exact values, as much work as the rays on a city), and the
+// calling thread passes the rows to the sink in list order while the workers go on. No plans: the
+// ray caster samples the whole sender anyway (can_sample_sender is false, so none are asked for).
+void RaycastRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                                             const RowSink& sink) {
     for (std::uint32_t r : rows)
         if (r >= size()) throw InternalError(fmt::format("raycast: row {} out of range (n = {})", r, size()));
+    if (rows.empty()) return;
     Impl& im = *impl_;
     const std::size_t n = im.scene.size();
-    const unsigned T = im.threads;
-    // Rows are computed in blocks so that memory stays bounded; each block's rows go to the sink
-    // in list order once the block is done.
-    const std::size_t block = std::max<std::size_t>(256, 32 * static_cast<std::size_t>(T));
-    std::vector<SparseRow> out(std::min(block, rows.size()));
+    const unsigned T = static_cast<unsigned>(std::min<std::size_t>(im.threads, rows.size()));
+    // Per worker: the row's accumulator (n doubles, all zero between rows) and its touched list.
     std::vector<std::vector<double>> acc(T, std::vector<double>(n, 0.0));
     std::vector<std::vector<std::uint32_t>> touched(T);
-    for (std::size_t start = 0; start < rows.size(); start += block) {
-        const std::size_t count = std::min(block, rows.size() - start);
-        std::atomic<std::size_t> next{0};
-        auto work = [&](unsigned t) {
-            for (std::size_t k = next.fetch_add(1); k < count; k = next.fetch_add(1))
-                im.row(rows[start + k], out[k], acc[t], touched[t]);
-        };
-        const unsigned used = static_cast<unsigned>(std::min<std::size_t>(T, count));
-        if (used <= 1) {
-            work(0);
-        } else {
-            std::vector<std::jthread> pool;
-            for (unsigned t = 0; t < used; ++t) pool.emplace_back(work, t);
+    const auto make = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
+        im.row(i, out, acc[w], touched[w]);
+        if (stages.finish) stages.finish(k, i, out);
+    };
+    if (T == 1) {
+        SparseRow row;
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            make(0, k, rows[k], row);
+            sink(rows[k], row);
         }
-        for (std::size_t k = 0; k < count; ++k) sink(rows[start + k], out[k]);
+        return;
     }
+    OrderedRowPool pool(T, {}, {});
+    pool.run(rows, make, sink);
 }
 
 }  // namespace ffcube

@@ -11,6 +11,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <vector>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
@@ -133,6 +137,62 @@ TEST(RaycastRows, SameRowsWithOneOrTwoThreadsAndAnyRowOrder) {
     const RowView v = a.row(7);
     ASSERT_EQ(r.nnz(), v.col.size());
     for (std::size_t k = 0; k < r.nnz(); ++k) EXPECT_EQ(static_cast<float>(r.val[k]), v.val[k]);
+}
+
+// The caller's finish (the near-field correction's, in a run) runs on the ray caster's worker
+// threads: once per listed row, with that row's position k, on the row as cast, before the sink
+// sees it; the sink gets the rows in list order, the same with one thread or two.
+TEST(RaycastRows, StagedFinishRunsOnceARowOnTheWorkersInListOrder) {
+    const Scene scene = test::make_scene(test::inward_box(1, 1, 2), 0.25);
+    std::vector<std::uint32_t> rows(scene.size());
+    for (std::uint32_t k = 0; k < rows.size(); ++k) rows[k] = (7 * k + 3) % static_cast<std::uint32_t>(rows.size());
+    ASSERT_GT(rows.size(), 20u);
+    RaycastRowProvider reference(scene, options(300, 1));
+    std::vector<SparseRow> plain(rows.size());
+    std::size_t at = 0;
+    reference.compute_rows(rows, [&](std::uint32_t i, const SparseRow& r) {
+        ASSERT_EQ(i, rows[at]);
+        plain[at++] = r;
+    });
+    for (unsigned threads : {1u, 2u}) {
+        RaycastRowProvider provider(scene, options(300, threads));
+        std::mutex mutex;
+        std::vector<int> finished(rows.size(), 0);
+        std::set<std::thread::id> finishers;
+        RowProvider::RowStages stages;
+        // A finish that depends on k and i (as the contract allows): scales the row by 1/(k + 1)
+        // and appends a column n + k, so a row finished with the wrong k or twice shows.
+        stages.finish = [&](std::size_t k, std::uint32_t i, SparseRow& row) {
+            {
+                const std::lock_guard lock(mutex);
+                ASSERT_LT(k, rows.size());
+                EXPECT_EQ(i, rows[k]);
+                ++finished[k];
+                finishers.insert(std::this_thread::get_id());
+            }
+            for (double& v : row.val) v /= static_cast<double>(k + 1);
+            row.col.push_back(static_cast<std::uint32_t>(scene.size() + k));
+            row.val.push_back(1.0);
+        };
+        std::size_t k = 0;
+        provider.compute_rows_staged(rows, stages, [&](std::uint32_t i, const SparseRow& r) {
+            ASSERT_LT(k, rows.size());
+            EXPECT_EQ(i, rows[k]);
+            ASSERT_EQ(r.nnz(), plain[k].nnz() + 1) << "row " << i;
+            for (std::size_t e = 0; e + 1 < r.nnz(); ++e) {
+                EXPECT_EQ(r.col[e], plain[k].col[e]);
+                EXPECT_EQ(r.val[e], plain[k].val[e] / static_cast<double>(k + 1));
+            }
+            EXPECT_EQ(r.col.back(), scene.size() + k);
+            ++k;
+        });
+        EXPECT_EQ(k, rows.size());
+        for (std::size_t m = 0; m < rows.size(); ++m) EXPECT_EQ(finished[m], 1) << "position " << m;
+        // Two workers: the finishes ran off the calling thread (on the workers).
+        if (threads == 2) {
+            EXPECT_EQ(finishers.count(std::this_thread::get_id()), 0u);
+        }
+    }
 }
 
 // The scene is centred and scaled before Embree's float conversion, so an offset of 1e5 or a

@@ -41,8 +41,13 @@ public:
 
     std::uint32_t size() const override;
     std::string name() const override { return "raycast"; }
-    // Parallel over rows with std::thread; results in list order on the calling thread.
+    // Parallel over rows (an OrderedRowPool of `threads` workers); results in list order on the
+    // calling thread, which runs only the sink. compute_rows_staged runs the caller's finish on
+    // the workers too, right after each row is cast (plans are never asked for: the ray caster
+    // samples the whole sender, can_sample_sender is false).
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
+    void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
+                             const RowSink& sink) override;
 
     std::uint64_t rays() const;
     unsigned threads() const;
