@@ -269,19 +269,11 @@ void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int 
 void ProcessEngine::submit(std::uint32_t p, int sub_points) {
     const Request kind = sub_points >= 4 ? Request::SampledFineRow : sub_points >= 2 ? Request::SampledRow : Request::Row;
     const RequestMsg req{kind, p};
-    try {
-        send_all(fd_, &req, sizeof req);
-    } catch (const PeerGone&) {
-        // The next row is sent before the last one's reply is read: a child that died on that
-        // row is seen here first, and is reported as recv_or_throw would (how it ended).
-        child_gone();
-    }
+    send_or_throw(&req, sizeof req);
 }
 
 void ProcessEngine::collect(SparseRow& out, HemicubeStats& st) {
-    Reply r{};
-    recv_or_throw(&r, sizeof r);
-    if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
+    const Reply r = read_reply();
     out.col.resize(r.count);
     out.val.resize(r.count);
     if (r.count) {
@@ -300,16 +292,12 @@ void ProcessEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out
 void ProcessEngine::send_scene(std::span<const std::uint8_t> blob) {
     const RequestMsg req{Request::SetScene, 0};
     const std::uint64_t n = blob.size();
-    send_all(fd_, &req, sizeof req);
-    send_all(fd_, &n, sizeof n);
-    if (n) send_all(fd_, blob.data(), n);
+    send_or_throw(&req, sizeof req);
+    send_or_throw(&n, sizeof n);
+    if (n) send_or_throw(blob.data(), n);
 }
 
-void ProcessEngine::await_scene() {
-    Reply r{};
-    recv_or_throw(&r, sizeof r);
-    if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
-}
+void ProcessEngine::await_scene() { read_reply(); }
 
 void ProcessEngine::set_scene(const Scene& scene, const ScenePieces&) {
     send_scene(serialize_scene(scene));
@@ -318,11 +306,27 @@ void ProcessEngine::set_scene(const Scene& scene, const ScenePieces&) {
 
 ProcessEngine::Reply ProcessEngine::request(std::uint32_t kind, std::uint32_t p) {
     const RequestMsg req{static_cast<Request>(kind), p};
-    send_all(fd_, &req, sizeof req);
+    send_or_throw(&req, sizeof req);
+    return read_reply();
+}
+
+// The next reply's header; a reply that carries the child's error is thrown as its class.
+ProcessEngine::Reply ProcessEngine::read_reply() {
     Reply r{};
     recv_or_throw(&r, sizeof r);
     if (r.error) throw_error(static_cast<ErrorKind>(r.error), read_text(r.count));
     return r;
+}
+
+// A closed socket while sending is the child gone as much as while reading (rows are pipelined:
+// the next row is sent before the last one's reply is read, so a child that died on that row is
+// often seen here first), and is reported the same way: how it ended.
+void ProcessEngine::send_or_throw(const void* data, std::size_t size) {
+    try {
+        send_all(fd_, data, size);
+    } catch (const PeerGone&) {
+        child_gone();
+    }
 }
 
 std::string ProcessEngine::read_text(std::uint64_t n) {

@@ -55,6 +55,8 @@ public:
 private:
     Reply request(std::uint32_t kind, std::uint32_t p);
     std::string read_text(std::uint64_t n);
+    Reply read_reply();
+    void send_or_throw(const void* data, std::size_t size);
     void recv_or_throw(void* data, std::size_t size);
     [[noreturn]] void child_gone();  // the socket's other end is closed: how the child ended
 
