@@ -137,6 +137,15 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "touches the sender; docs/accuracy.md). half (default): N/2; three-eighths: 3N/8; quarter: N/4 "
                     "(cheaper, noisier rows: docs/benchmarks.md)",
                     "half");
+    add_word_option(app, "--fine-rows", o.fine_rows, parse_fine_rows, {"auto", "hemicubes", "rays"},
+                    "--correct near, hemicube: how rows planned at 4 x 4 sub-hemicubes (an occluder touches the "
+                    "sender) are measured. auto (default): ray-cast on scenes of 1000 pieces or more (no "
+                    "obstruction-only surfaces), where 16 sub-hemicubes cost more than the rays on llvmpipe; "
+                    "hemicubes; rays (docs/accuracy.md, \"Rows an occluder touches, by rays\")",
+                    "auto");
+    app.add_option("--fine-row-rays", o.fine_row_rays,
+                   "--fine-rows: rays per ray-cast row (default 0: max(N^2, min(4 N^2, 65536)): 65536 at N = 128 and 256)")
+        ->check(CLI::NonNegativeNumber);
     add_word_option(app, "--vertex-upload", o.vertex_upload, parse_vertex_upload, {"once", "per-hemicube"},
                     "hemicube: once (default): the scene's world positions go to the GL once, as doubles, and the "
                     "vertex shader makes each hemicube's eye-relative positions; per-hemicube: the CPU uploads them "

@@ -19,6 +19,8 @@
 #include "ffcube/hemicube/layout.hpp"
 #include "ffcube/hemicube/pieces.hpp"
 #include "ffcube/io/scene_blob.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/core/timer.hpp"
 #include "gl/engine.hpp"
 #include "gl/hemicube_worker.hpp"
 #include "gl/process_engine.hpp"
@@ -59,6 +61,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.back_face_weight += b.back_face_weight;
     a.miss_weight += b.miss_weight;
     a.self_hits += b.self_hits;
+    a.fine_rows_cast += b.fine_rows_cast;
+    a.cast_seconds += b.cast_seconds;
 }
 
 // Engines live as long as the provider; the pool's threads (one per engine) are stopped before
@@ -74,9 +78,61 @@ struct HemicubeRowProvider::Impl {
     std::unique_ptr<OrderedRowPool> pool;  // after engines: destroyed first
     mutable std::mutex stats_mutex;
     HemicubeStats stats;
+    // HemicubeOptions::fine_rows, resolved for the current scene; the ray caster is built when the
+    // first such row comes (its Embree scene: a fraction of a second on 23k triangles), and one
+    // scratch per pool thread.
+    bool fine_by_rays = false;
+    std::mutex caster_mutex;
+    std::unique_ptr<RaycastRowProvider> caster;
+    std::vector<RaycastRowProvider::RowScratch> cast_scratch;
 
-    Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {}
+    Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {
+        resolve_fine_rows();
+    }
     ~Impl() { pool.reset(); }
+
+    // HemicubeOptions::fine_row_rays, or its default: max(N², min(4 N², 65,536)).
+    std::uint64_t fine_rays() const {
+        const auto n = static_cast<std::uint64_t>(opt.resolution);
+        return opt.fine_row_rays ? opt.fine_row_rays : std::max(n * n, std::min<std::uint64_t>(4 * n * n, 65536));
+    }
+    void resolve_fine_rows() {
+        const bool obstructions = scene->obstruction_first < scene->patches.size();
+        const std::size_t n_pieces = pieces.first.empty() ? 0 : pieces.first.size() - 1;
+        switch (opt.fine_rows) {
+            case HemicubeOptions::FineRows::hemicubes: fine_by_rays = false; break;
+            case HemicubeOptions::FineRows::rays:
+                if (obstructions)
+                    throw InputError("--fine-rows rays: the scene has obstruction-only surfaces, which the ray caster "
+                                     "credits on either side (use --fine-rows hemicubes or auto)");
+                fine_by_rays = true;
+                break;
+            case HemicubeOptions::FineRows::automatic:
+                fine_by_rays = !obstructions && n_pieces >= HemicubeOptions::kFineRowsByRaysMinPieces;
+                break;
+        }
+        caster.reset();  // built on the next scene when it is needed
+    }
+    // Row i cast by rays on pool thread w, into out; its time and count into local.
+    void cast(unsigned w, std::uint32_t i, SparseRow& out, HemicubeStats& local) {
+        const RaycastRowProvider* c = nullptr;
+        {
+            const std::lock_guard lock(caster_mutex);
+            if (!caster) {
+                RaycastOptions ro;
+                ro.rays = fine_rays();
+                ro.threads = 1;
+                ro.seed = opt.seed;
+                caster = std::make_unique<RaycastRowProvider>(*scene, ro);
+                cast_scratch.resize(engines.size());
+            }
+            c = caster.get();
+        }
+        Stopwatch watch;
+        c->cast_row(i, out, cast_scratch[w]);
+        local.cast_seconds += watch.seconds();
+        ++local.fine_rows_cast;
+    }
 
     // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
     // how to make each row, unless the stages (compute_rows_staged's) plan and finish them.
@@ -102,16 +158,27 @@ struct HemicubeRowProvider::Impl {
             // child starts it as soon as it has sent row k, and this thread plans and finishes
             // rows (the correction's analysis, exact values and sender quadrature) while the
             // child draws. The plan of a row in flight waits here, one slot per listed row.
+            // A row to be ray-cast (fine_by_rays) is cast when it is planned, while the child
+            // draws the row before it, and kept until its turn to be collected.
             std::vector<RowPlan> planned(rows.size());
+            std::vector<SparseRow> cast_rows(fine_by_rays ? rows.size() : 0);
+            std::vector<HemicubeStats> cast_stats(fine_by_rays ? rows.size() : 0);
             const OrderedRowPool::Submit submit = [&](unsigned w, std::size_t k, std::uint32_t i) {
                 planned[k] = plan_of(k, i);
-                if (planned[k] != RowPlan::skip) engines[w]->submit(i, points(planned[k]));
+                if (planned[k] == RowPlan::sampled_fine && fine_by_rays)
+                    cast(w, i, cast_rows[k], cast_stats[k]);
+                else if (planned[k] != RowPlan::skip)
+                    engines[w]->submit(i, points(planned[k]));
             };
             const OrderedRowPool::Compute collect = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
                 HemicubeStats local;
                 if (planned[k] == RowPlan::skip) {
                     out.clear();
                     ++local.skipped_rows;
+                } else if (planned[k] == RowPlan::sampled_fine && fine_by_rays) {
+                    out = std::move(cast_rows[k]);
+                    cast_rows[k] = SparseRow{};  // its storage goes with the row
+                    local = cast_stats[k];
                 } else {
                     engines[w]->collect(out, local);
                 }
@@ -126,6 +193,8 @@ struct HemicubeRowProvider::Impl {
             if (plan == RowPlan::skip) {
                 out.clear();
                 ++local.skipped_rows;
+            } else if (plan == RowPlan::sampled_fine && fine_by_rays) {
+                cast(w, i, out, local);
             } else {
                 engines[w]->row(i, out, local, points(plan));
             }
@@ -226,6 +295,7 @@ void HemicubeRowProvider::set_scene(const Scene& scene) {
     } else {
         for (auto& e : im.engines) e->set_scene(scene, im.pieces);
     }
+    im.resolve_fine_rows();
     std::lock_guard lock(im.stats_mutex);
     im.stats = HemicubeStats{};
 }
@@ -243,5 +313,7 @@ bool HemicubeRowProvider::range_limited_sub_hemicubes() const {
 }
 
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
+bool HemicubeRowProvider::fine_rows_by_rays() const { return impl_->fine_by_rays; }
+std::uint64_t HemicubeRowProvider::fine_row_rays() const { return impl_->fine_rays(); }
 
 }  // namespace ffcube

@@ -53,6 +53,13 @@ SubHemicubeRange parse_sub_hemicube_range(std::string_view text) {
     throw InputError(fmt::format("--sub-hemicube-range {}: must be auto or off", text));
 }
 
+FineRows parse_fine_rows(std::string_view text) {
+    if (text == "auto") return FineRows::automatic;
+    if (text == "hemicubes") return FineRows::hemicubes;
+    if (text == "rays") return FineRows::rays;
+    throw InputError(fmt::format("--fine-rows {}: must be auto, hemicubes or rays", text));
+}
+
 FineSubResolution parse_fine_sub_hemicubes(std::string_view text) {
     if (text == "quarter") return FineSubResolution::quarter;
     if (text == "three-eighths") return FineSubResolution::three_eighths;
@@ -153,6 +160,8 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.sub_hemicube_range = o.sub_hemicube_range;
     h.sub_hemicube_range_k = o.sub_hemicube_range_k;
     h.fine_sub_resolution = o.fine_sub_hemicubes;
+    h.fine_rows = o.fine_rows;
+    h.fine_row_rays = o.fine_row_rays;
     h.vertex_upload = o.vertex_upload;
     h.occlusion_culling = o.occlusion_culling;
     return h;

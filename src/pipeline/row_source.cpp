@@ -83,6 +83,13 @@ std::vector<std::string> describe(const RowSource& rows) {
         if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
             lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
                                         m.source, m.pixel_ns, m.cpu_scale));
+        if (const HemicubeRowProvider* h = rows.hemicube(); h && h->fine_rows_by_rays())
+            lines.push_back(fmt::format("rows an occluder touches (planned at 4 x 4 sub-hemicubes) ray-cast, {} rays "
+                                        "each{}", h->fine_row_rays(),
+                                        rows.options().fine_rows == FineRows::automatic
+                                            ? " (--fine-rows auto: a scene of 1000 pieces or more; --fine-rows "
+                                              "hemicubes draws them)"
+                                            : ""));
         if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
             lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (rows whose range holds "
                                         "at most a quarter of the pieces; --sub-hemicube-range off draws everything)",
@@ -122,6 +129,12 @@ FfmMetadata row_metadata(const RowOptions& o) {
         if (o.method == RowMethod::Hemicube && o.fine_sub_hemicubes != FineSubResolution::half)
             meta.settings += o.fine_sub_hemicubes == FineSubResolution::quarter ? " fine_sub_hemicubes=quarter"
                                                                                 : " fine_sub_hemicubes=three-eighths";
+        // Rows planned at 4 × 4 by rays or by hemicubes: auto (the default) resolves by the scene,
+        // which the checkpoint's fingerprint holds; an explicit choice or ray count is written.
+        if (o.method == RowMethod::Hemicube && o.fine_rows != FineRows::automatic)
+            meta.settings += o.fine_rows == FineRows::rays ? " fine_rows=rays" : " fine_rows=hemicubes";
+        if (o.method == RowMethod::Hemicube && o.fine_row_rays != 0 && o.fine_rows != FineRows::hemicubes)
+            meta.settings += fmt::format(" fine_row_rays={}", o.fine_row_rays);
         // A cost model moves the automatic choices (far field, exact visibility): recorded when
         // it is not the built-in one.
         if (o.method == RowMethod::Hemicube && !o.cost_model.builtin())
@@ -243,6 +256,11 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     // Range-limited sub-hemicubes (--sub-hemicube-range auto, on scenes of many pieces).
     r.set("sub_hemicube_rows_range_limited", st.range_limited_rows);
     r.set("left_out.pieces_out_of_range", st.pieces_out_of_range);
+    // Rows planned at 4 × 4 ray-cast instead (--fine-rows), their rays and CPU-seconds.
+    r.set("fine_rows.by", provider.fine_rows_by_rays() ? "rays" : "hemicubes");
+    r.set("fine_rows.rays_per_row", provider.fine_row_rays());
+    r.set("fine_rows.cast", st.fine_rows_cast);
+    r.set("time.fine_row_rays", st.cast_seconds);
     r.set("upload.vertex_bytes", st.upload_vertex_bytes);
     r.set("upload.index_bytes", st.upload_index_bytes);
     r.set("rows_not_rendered", st.skipped_rows);

@@ -40,6 +40,33 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
     return r;
 }
 
+// The side m of a batch's m × m strata for `left` rays still to cast: ⌊√left⌋, at most
+// kMaxStrataSide (so a batch's permutation holds at most 65,536 entries, whatever --rays is).
+constexpr std::uint64_t kMaxStrataSide = 256;
+std::uint64_t strata_side(std::uint64_t left) {
+    std::uint64_t m = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(left)));
+    while (m * m > left) --m;
+    while ((m + 1) * (m + 1) <= left) ++m;
+    return std::clamp<std::uint64_t>(m, 1, kMaxStrataSide);
+}
+
+// Cosine-weighted direction about nrm from (r1, r2) uniform on the unit square, through the
+// concentric map of the square onto the disk (Shirley and Chiu 1997), which keeps strata compact
+// (the polar map would make wedges thin near the pole), lifted to the hemisphere (Malley).
+Vec3 cosine_direction(double r1, double r2, const Vec3& tu, const Vec3& tv, const Vec3& nrm) {
+    const double a = 2.0 * r1 - 1.0, b = 2.0 * r2 - 1.0;
+    double r = 0.0, phi = 0.0;
+    if (a * a > b * b) {
+        r = a;
+        phi = (std::numbers::pi / 4.0) * (b / a);
+    } else if (b != 0.0) {
+        r = b;
+        phi = (std::numbers::pi / 2.0) - (std::numbers::pi / 4.0) * (a / b);
+    }
+    const double x = r * std::cos(phi), y = r * std::sin(phi);
+    return x * tu + y * tv + std::sqrt(std::max(0.0, 1.0 - x * x - y * y)) * nrm;
+}
+
 }  // namespace
 
 struct RaycastRowProvider::Impl {
@@ -48,7 +75,7 @@ struct RaycastRowProvider::Impl {
     unsigned threads = 1;
     EmbreeMesh mesh;                          // the scene in Embree coordinates
     std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
-    std::atomic<std::uint64_t> traced{0};
+    mutable std::atomic<std::uint64_t> traced{0};
 
     Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
         if (opt.rays == 0) throw InputError("raycast: the number of rays per row must be at least 1");
@@ -74,16 +101,23 @@ struct RaycastRowProvider::Impl {
                std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
     }
 
-    // Row i into out; acc (size n, all zero) and touched (empty) are the caller's scratch and are
-    // left as they were found.
-    void row(std::uint32_t i, SparseRow& out, std::vector<double>& acc, std::vector<std::uint32_t>& touched) {
+    // Row i into out; acc (size n, all zero), touched (empty) and perm are the caller's scratch;
+    // acc and touched are left as they were found.
+    //
+    // Sampling (header comment): the row's rays come in batches of S = m² rays, m = min(⌊√left⌋,
+    // kMaxStrataSide), until none are left. In a batch, ray k starts in stratum k of an m × m grid
+    // over the patch and leaves in direction stratum perm[k] of an m × m grid over the unit square
+    // that the cosine-weighted map takes to the hemisphere, perm a uniformly random permutation
+    // ("padded" stratification: each of the two 2-D projections is stratified, the pairing is
+    // random). Every ray's (position, direction) is then uniform on its own, so the row is
+    // unbiased for any number of rays; the stratified directions are what lower the error on a
+    // receiver seen from most of the sender (a far one), the stratified positions on a near one.
+    void row(std::uint32_t i, SparseRow& out, std::vector<double>& acc, std::vector<std::uint32_t>& touched,
+             std::vector<std::uint32_t>& perm) const {
         out.clear();
         const Patch& p = scene.patches[i];
         const auto c = scene.patch_vertices(i);
         Rng rng = row_rng(opt.seed, i);
-        const std::uint64_t N = opt.rays;
-        const std::uint64_t m = std::max<std::uint64_t>(1, static_cast<std::uint64_t>(std::sqrt(static_cast<double>(N))));
-        const std::uint64_t strata = m * m;
         Vec3 tu, tv;
         orthonormal_basis(p.normal, tu, tv);
         const double offset = std::max(kOriginOffset * p.size * mesh.scale, kMinOffset);
@@ -92,10 +126,7 @@ struct RaycastRowProvider::Impl {
         std::uint64_t traced_here = 0;
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
-        for (std::uint64_t k = 0; k < N; ++k) {
-            const std::uint64_t s = k % strata;
-            const double u = (static_cast<double>(s % m) + rng.uniform()) / static_cast<double>(m);
-            const double v = (static_cast<double>(s / m) + rng.uniform()) / static_cast<double>(m);
+        const auto cast = [&](double u, double v, double r1, double r2) {
             Vec3 x;
             double w = 1.0;
             if (p.count == 3) {
@@ -110,9 +141,7 @@ struct RaycastRowProvider::Impl {
                 }
             }
             wsum += w;
-            const double r1 = rng.uniform(), r2 = rng.uniform();
-            const double rad = std::sqrt(r1), phi = 2.0 * std::numbers::pi * r2;
-            const Vec3 d = rad * std::cos(phi) * tu + rad * std::sin(phi) * tv + std::sqrt(std::max(0.0, 1.0 - r1)) * nrm;
+            const Vec3 d = cosine_direction(r1, r2, tu, tv, nrm);
             const Vec3 o = (x - mesh.center) * mesh.scale + offset * nrm;
 
             // A hit on the ray's own patch (or its plane) can only be float rounding: trace on past
@@ -125,6 +154,23 @@ struct RaycastRowProvider::Impl {
                 if (acc[j] == 0.0) touched.push_back(j);
                 acc[j] += w;
             }
+        };
+        for (std::uint64_t left = opt.rays; left > 0;) {
+            const std::uint64_t m = strata_side(left);
+            const std::uint32_t S = static_cast<std::uint32_t>(m * m);
+            perm.resize(S);
+            for (std::uint32_t k = 0; k < S; ++k) perm[k] = k;
+            for (std::uint32_t k = S; k > 1; --k)  // Fisher–Yates
+                std::swap(perm[k - 1], perm[static_cast<std::uint32_t>(rng.next() % k)]);
+            const double inv = 1.0 / static_cast<double>(m);
+            for (std::uint32_t k = 0; k < S; ++k) {
+                const double u = (static_cast<double>(k % m) + rng.uniform()) * inv;
+                const double v = (static_cast<double>(k / m) + rng.uniform()) * inv;
+                const double r1 = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
+                const double r2 = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
+                cast(u, v, r1, r2);
+            }
+            left -= S;
         }
         traced.fetch_add(traced_here, std::memory_order_relaxed);
         std::sort(touched.begin(), touched.end());
@@ -147,6 +193,12 @@ std::uint64_t RaycastRowProvider::rays() const { return impl_->opt.rays; }
 unsigned RaycastRowProvider::threads() const { return impl_->threads; }
 std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.load(); }
 
+void RaycastRowProvider::cast_row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
+    FFCUBE_CHECK_MSG(i < size(), "raycast: row out of range");
+    if (scratch.acc.size() != impl_->scene.size()) scratch.acc.assign(impl_->scene.size(), 0.0);
+    impl_->row(i, out, scratch.acc, scratch.touched, scratch.perm);
+}
+
 void RaycastRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     compute_rows_staged(rows, RowStages{}, sink);
 }
@@ -163,11 +215,11 @@ void RaycastRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows
     Impl& im = *impl_;
     const std::size_t n = im.scene.size();
     const unsigned T = static_cast<unsigned>(std::min<std::size_t>(im.threads, rows.size()));
-    // Per worker: the row's accumulator (n doubles, all zero between rows) and its touched list.
-    std::vector<std::vector<double>> acc(T, std::vector<double>(n, 0.0));
-    std::vector<std::vector<std::uint32_t>> touched(T);
+    // Per worker: the row's accumulator (n doubles, all zero between rows) and its lists.
+    std::vector<RowScratch> scratch(T);
+    for (RowScratch& s : scratch) s.acc.assign(n, 0.0);
     const auto make = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
-        im.row(i, out, acc[w], touched[w]);
+        im.row(i, out, scratch[w].acc, scratch[w].touched, scratch[w].perm);
         if (stages.finish) stages.finish(k, i, out);
     };
     if (T == 1) {

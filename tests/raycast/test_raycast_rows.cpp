@@ -12,7 +12,9 @@
 
 #include <cmath>
 #include <mutex>
+#include <map>
 #include <set>
+#include <string>
 #include <thread>
 #include <vector>
 
@@ -208,6 +210,93 @@ TEST(RaycastRows, OffsetsAndScalesGiveTheSameFactors) {
         const auto G = object_ff(scene, options(rays));
         EXPECT_NEAR(G[0][1], exact, tolerance(scene, 0, exact, rays)) << "scale " << scale << " offset " << offset;
     }
+}
+
+// K copies of a sender and a receiver within a unit cube, on a square grid 3 units apart: K
+// independent rows of the same pair, sender "s<k>", receiver "r<k>". Nothing of another copy
+// lies between a sender and its own receiver, so F to it is the pair's alone (rays that reach
+// other copies add entries to other columns). The grid keeps the scene's extent small: ray
+// origins sit kMinOffset × extent off the sender.
+std::vector<NamedPolygon> copies(const std::vector<Vec3>& sender, const std::vector<Vec3>& receiver, int K) {
+    std::vector<NamedPolygon> polys;
+    for (int k = 0; k < K; ++k) {
+        const int side = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(K))));
+        const Vec3 d(3.0 * (k % side), 3.0 * (k / side), 0);
+        std::vector<Vec3> s = sender, r = receiver;
+        for (Vec3& v : s) v += d;
+        for (Vec3& v : r) v += d;
+        polys.push_back({"s" + std::to_string(k), s});
+        polys.push_back({"r" + std::to_string(k), r});
+    }
+    return polys;
+}
+
+// F from copy k's sender to its receiver (copies(): one patch each), for every k.
+std::vector<double> copy_factors(const Scene& scene, const CsrMatrix& F, int K) {
+    std::map<std::string, std::uint32_t> patch;
+    for (std::uint32_t i = 0; i < scene.size(); ++i) patch[scene.objects[scene.patches[i].object]] = i;
+    std::vector<double> out(K, 0.0);
+    for (int k = 0; k < K; ++k) {
+        const RowView r = F.row(patch.at("s" + std::to_string(k)));
+        const std::uint32_t j = patch.at("r" + std::to_string(k));
+        for (std::size_t e = 0; e < r.col.size(); ++e)
+            if (r.col[e] == j) out[k] = r.val[e];
+    }
+    return out;
+}
+
+// Any number of rays is unbiased, not only squares: with 5 rays (a 2 × 2 batch and one ray on
+// its own) the floor's factor to a wall along one of its edges, averaged over 4,000 independent
+// rows, matches the closed form. Reusing stratum 0 for the fifth ray (the sampler before) would
+// weight the quarter of the floor beside the wall 2/5 instead of 1/4: +0.019 here (measured),
+// 6.6 σ of the mean. Tolerance 4σ of the mean, σ ≤ √(F(1−F)/5) a row (binomial bound).
+TEST(RaycastRows, AnyNumberOfRaysIsUnbiased) {
+    const std::vector<Vec3> floor = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};  // normal +z
+    const std::vector<Vec3> wall = {{0, 0, 0}, {0, 1, 0}, {0, 1, 1}, {0, 0, 1}};   // x = 0, normal +x
+    const int K = 4000;
+    const Scene scene = test::make_scene(copies(floor, wall, K), 10.0);
+    ASSERT_EQ(scene.size(), static_cast<std::size_t>(2 * K));
+    const std::uint64_t rays = 5;
+    RaycastRowProvider provider(scene, options(rays));
+    const CsrMatrix F = compute_all_rows(provider);
+    double sum = 0;
+    for (const double f : copy_factors(scene, F, K)) sum += f;
+    const double exact = ff_perpendicular_rectangles_common_edge(1, 1, 1);
+    const double sigma_mean = std::sqrt(exact * (1 - exact) / static_cast<double>(rays) / K);
+    EXPECT_NEAR(sum / K, exact, 4 * sigma_mean);
+}
+
+// Directions are stratified too. A receiver that every point of the sender sees alike (20 × 20
+// at distance 10 above a unit sender: moving the ray's origin across the sender moves its hit
+// by 1/20 of the receiver) makes the hit indicator a function of the direction alone, to first
+// order: a 2-D indicator with a smooth edge, whose jittered estimate over m² = N cells errs
+// only in the O(m) cells its edge crosses, Var ≈ c·m/N² = c·N^−1.5, so the error against the
+// binomial σ = √(F(1−F)/N) of independent directions is ≈ √(c/(F(1−F)))·N^−1/4: 0.125 × that
+// factor at N = 4,096. Asserted: RMS over 400 rows below σ/2 (the RMS of 400 rows is itself
+// within ±7% at 2σ). Measured: 0.22 σ; the sampler with independent directions, 0.98 σ.
+TEST(RaycastRows, DirectionsAreStratified) {
+    const std::vector<Vec3> a = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};              // normal +z
+    const std::vector<Vec3> b = {{-9.5, -9.5, 10}, {-9.5, 10.5, 10}, {10.5, 10.5, 10}, {10.5, -9.5, 10}};  // normal −z
+    const int K = 400;
+    std::vector<NamedPolygon> polys;
+    for (int k = 0; k < K; ++k) {  // side by side, 30 units apart (farther than the receiver reaches)
+        const Vec3 d(30.0 * (k % 20), 30.0 * (k / 20), 0);
+        std::vector<Vec3> s = a, r = b;
+        for (Vec3& v : s) v += d;
+        for (Vec3& v : r) v += d;
+        polys.push_back({"s" + std::to_string(k), s});
+        polys.push_back({"r" + std::to_string(k), r});
+    }
+    const Scene scene = test::make_scene(polys, 100.0);
+    const std::uint64_t rays = 4096;
+    RaycastRowProvider provider(scene, options(rays));
+    const CsrMatrix F = compute_all_rows(provider);
+    const double exact = ff_polygon_polygon(a, b);
+    double sq = 0;
+    for (const double f : copy_factors(scene, F, K)) sq += (f - exact) * (f - exact);
+    const double rms = std::sqrt(sq / K);
+    const double binomial = std::sqrt(exact * (1 - exact) / static_cast<double>(rays));
+    EXPECT_LT(rms, 0.5 * binomial);
 }
 
 TEST(RaycastRows, ZeroRaysIsAnInputError) {

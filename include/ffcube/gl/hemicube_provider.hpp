@@ -69,6 +69,21 @@ struct HemicubeOptions {
     // culling; the item buffers are the same bits (tested).
     enum class VertexUpload { once, per_hemicube };
     VertexUpload vertex_upload = VertexUpload::once;
+    // Rows planned at 4 × 4 sub-hemicubes (RowPlan::sampled_fine: an occluder touches the
+    // sender) ray-cast instead (docs/accuracy.md, "Rows an occluder touches, by rays"): the
+    // worker's thread casts fine_row_rays rays from the whole sender through Embree
+    // (RaycastRowProvider::cast_row, seeded by `seed`), which samples the sender as the
+    // sub-hemicubes do, but at a cost that follows the rays and not the scene's pieces × 16
+    // hemicubes. 0: max(N², min(4 N², 65,536)): 16,384 at N = 64, 65,536 at N = 128 and 256
+    // (where it measured as accurate as the 16 sub-hemicubes or more: docs/benchmarks.md), N²
+    // beyond. automatic: on scenes of at least kFineRowsByRaysMinPieces pieces (a mesh of that
+    // many facets), where the rays cost no more than the 16 sub-hemicubes on llvmpipe. Never on a scene
+    // with obstruction-only surfaces (the ray caster credits either side of them; hemicubes the
+    // facing one): automatic keeps hemicubes there, rays is an InputError.
+    enum class FineRows { hemicubes, rays, automatic };
+    FineRows fine_rows = FineRows::hemicubes;
+    std::uint64_t fine_row_rays = 0;
+    static constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -110,6 +125,10 @@ struct HemicubeStats {
     // eye and frame, or every vertex slot's floats) and the index lists.
     std::uint64_t upload_vertex_bytes = 0;
     std::uint64_t upload_index_bytes = 0;
+    // Rows planned at 4 × 4 that were ray-cast instead (HemicubeOptions::fine_rows), and the
+    // CPU-seconds their rays took (on the workers' threads in this process).
+    std::uint64_t fine_rows_cast = 0;
+    double cast_seconds = 0;
 };
 
 class HemicubeRowProvider final : public RowProvider {
@@ -159,6 +178,10 @@ public:
     // Whether rows of sub-hemicubes are range-limited on this scene (HemicubeOptions::
     // sub_hemicube_range automatic, enough pieces, a half resolution of exactly N/2).
     bool range_limited_sub_hemicubes() const;
+    // Whether rows planned at 4 × 4 are ray-cast on this scene (HemicubeOptions::fine_rows,
+    // automatic resolved), and with how many rays each.
+    bool fine_rows_by_rays() const;
+    std::uint64_t fine_row_rays() const;
 
     // Where the eye sits above the patch and where the near plane lies, as fractions of the
     // patch's longest edge (relative, never absolute units).

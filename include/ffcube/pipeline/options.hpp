@@ -43,6 +43,7 @@ using FarFieldMode = NearFieldOptions::FarField;
 using SubHemicubeRange = HemicubeOptions::SubHemicubeRange;
 using FineSubResolution = HemicubeOptions::FineSubResolution;
 using VertexUpload = HemicubeOptions::VertexUpload;
+using FineRows = HemicubeOptions::FineRows;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
@@ -80,6 +81,10 @@ struct RowOptions {
     double sub_hemicube_range_k = 24.0;
     // HemicubeOptions::fine_sub_resolution (--fine-sub-hemicubes half|three-eighths|quarter): 4 × 4 rows at N/2, 3N/8 or N/4.
     FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
+    // HemicubeOptions::fine_rows, fine_row_rays (--fine-rows auto|hemicubes|rays, --fine-row-rays R;
+    // 0: 4 N²): rows planned at 4 × 4 ray-cast instead, automatically on scenes of many pieces.
+    FineRows fine_rows = FineRows::automatic;
+    std::uint64_t fine_row_rays = 0;
     // HemicubeOptions::vertex_upload (--vertex-upload once|per-hemicube): the same rows either way.
     VertexUpload vertex_upload = VertexUpload::once;
     // HemicubeOptions::occlusion_culling (--occlusion-culling on|off): the same rows either way;
@@ -104,6 +109,7 @@ Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
 FineSubResolution parse_fine_sub_hemicubes(std::string_view text);  // half | three-eighths | quarter
+FineRows parse_fine_rows(std::string_view text);                    // auto | hemicubes | rays
 VertexUpload parse_vertex_upload(std::string_view text);  // once | per-hemicube
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 // --exact-visibility: auto | off | K (a number; its range is checked by validate(RowOptions)).

@@ -1,10 +1,13 @@
 // Rows of F by Monte Carlo ray casting through Embree 3: no GL at all, so it works where no
 // context can be had, and it checks the hemicube on occluded scenes where no formula exists.
 //
-// Row i is estimated from `rays` rays leaving patch i. Ray k starts at a point jittered inside
-// stratum k mod m² of an m × m grid over the patch (m = ⌊√rays⌋: samples per patch × rays per
-// sample = rays per row, with the strata reused in turn when rays is not a square) and goes in a
-// cosine-weighted direction about the patch's front normal. Hitting the front of patch j adds
+// Row i is estimated from `rays` rays leaving patch i, cast in batches of m² rays (m = ⌊√left⌋,
+// at most 256, until none are left). In a batch, ray k starts at a point jittered inside stratum
+// k of an m × m grid over the patch and leaves in a cosine-weighted direction about the patch's
+// front normal, jittered inside stratum π(k) of an m × m grid over the square that the concentric
+// map takes to the disk (π a random permutation per batch: "padded" stratification, both 2-D
+// projections stratified). Each ray's origin and direction are uniform on their own, so rows are
+// unbiased for any number of rays. Hitting the front of patch j adds
 // the ray's weight to F_ij; hitting a back face absorbs the ray (it blocks, and counts for
 // nothing); a ray leaving the scene adds nothing. Weights: 1 on triangles and parallelograms,
 // the bilinear map's Jacobian on other quads (area-uniform sampling), normalised so the weights
@@ -12,7 +15,10 @@
 // rounding).
 //
 // Statistics: each F_ij is a binomial fraction, standard error √(F(1−F)/rays) or less
-// (stratification only lowers it).
+// (stratification only lowers it). Stratified directions lower it most for a receiver that most
+// of the sender sees: then the hit indicator varies mainly with the direction, a 2-D indicator
+// with a smooth edge, whose jittered estimate has variance O(rays^−1.5) rather than O(rays^−1)
+// (docs/accuracy.md, "Ray caster").
 // Determinism: row i's random numbers come from (seed, i) alone, so rows do not depend on the
 // number of threads or on which rows are asked for together.
 #pragma once
@@ -20,6 +26,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/scene/scene.hpp"
@@ -48,6 +55,15 @@ public:
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                              const RowSink& sink) override;
+
+    // One row on the calling thread, for a caller with its own threads (the hemicube provider
+    // casts the rows it would draw as 4 × 4 sub-hemicubes: HemicubeOptions::fine_rows). The same
+    // row compute_rows makes. Thread-safe: any number at once, each with its own scratch.
+    struct RowScratch {
+        std::vector<double> acc;  // one per patch, all zero between rows
+        std::vector<std::uint32_t> touched, perm;
+    };
+    void cast_row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const;
 
     std::uint64_t rays() const;
     unsigned threads() const;

@@ -1,0 +1,165 @@
+// Rows planned at 4 × 4 sub-hemicubes ray-cast instead (HemicubeOptions::fine_rows, --fine-rows;
+// docs/accuracy.md, "Rows an occluder touches, by rays"): such a row is the ray caster's row, the
+// same bits, on either kind of worker; other rows are the hemicube's, untouched; the automatic
+// choice follows the scene's pieces and keeps hemicubes where obstruction-only surfaces are; and
+// through the correction the rows are as close to an independent reference as sub-hemicubes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/core/error.hpp"
+#include "ffcube/formfactor/checks.hpp"
+#include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/scene/mesher.hpp"
+#include "ffcube/scene/polygons.hpp"
+
+namespace ffcube {
+namespace {
+
+using Plan = RowProvider::RowPlan;
+using FineRows = HemicubeOptions::FineRows;
+
+Scene make(const std::vector<NamedPolygon>& polys, double edge) {
+    MeshOptions mo;
+    mo.max_patch_edge = edge;
+    return build_scene(model_from_polygons(polys, "<fine rows test>"), mo);
+}
+
+// A floor and a wall along one of its edges, 4 × 4 patches each (two pieces).
+Scene corner() {
+    return make({{"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+                 {"wall", {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}}},
+                0.25);
+}
+
+std::vector<SparseRow> planned_rows(HemicubeRowProvider& p, const std::vector<std::uint32_t>& rows,
+                                    const std::vector<Plan>& plans) {
+    std::vector<SparseRow> out;
+    p.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) { out.push_back(r); });
+    return out;
+}
+
+// A fine row is exactly the ray caster's row (its rays and seed); a centre row is exactly the
+// hemicube's; with workers on threads (a GL context each, in this process) and forked worker
+// processes (rows pipelined: the ray-cast row is cast while the child draws the row before) alike.
+TEST(FineRowsByRays, AFineRowIsTheRayCastersRowAndOtherRowsTheHemicubes) {
+    const Scene s = corner();
+    const std::vector<std::uint32_t> rows = {3, 20, 5, 3};
+    const std::vector<Plan> plans = {Plan::sampled_fine, Plan::centre, Plan::sampled, Plan::sampled_fine};
+    RaycastOptions ro;
+    ro.rays = 1000;
+    ro.threads = 1;
+    ro.seed = 77;
+    RaycastRowProvider caster(s, ro);
+    SparseRow cast;
+    caster.compute_row(3, cast);
+    ASSERT_GT(cast.nnz(), 0u);
+    for (const auto& [threads, processes] : {std::pair{1u, false}, std::pair{2u, false}, std::pair{2u, true}}) {
+        HemicubeOptions o;
+        o.resolution = 64;
+        o.threads = threads;
+        o.worker_processes = processes;
+        o.seed = 77;
+        HemicubeRowProvider drawn(s, o);
+        const std::vector<SparseRow> ref = planned_rows(drawn, rows, plans);
+        o.fine_rows = FineRows::rays;
+        o.fine_row_rays = 1000;
+        HemicubeRowProvider hybrid(s, o);
+        if (!processes) {
+            EXPECT_EQ(hybrid.workers(), "threads");
+        }
+        EXPECT_TRUE(hybrid.fine_rows_by_rays());
+        EXPECT_EQ(hybrid.fine_row_rays(), 1000u);
+        const std::vector<SparseRow> got = planned_rows(hybrid, rows, plans);
+        ASSERT_EQ(got.size(), rows.size());
+        for (const std::size_t k : {0u, 3u}) {
+            EXPECT_EQ(got[k].col, cast.col) << threads << " thread(s), row " << k;
+            EXPECT_EQ(got[k].val, cast.val) << threads << " thread(s), row " << k;
+        }
+        for (const std::size_t k : {1u, 2u}) {
+            EXPECT_EQ(got[k].col, ref[k].col) << threads << " thread(s), row " << k;
+            EXPECT_EQ(got[k].val, ref[k].val) << threads << " thread(s), row " << k;
+        }
+        const HemicubeStats st = hybrid.stats();
+        EXPECT_EQ(st.fine_rows_cast, 2u);
+        EXPECT_EQ(st.hemicubes, drawn.stats().hemicubes - 2 * 16);  // the two rows' 16 sub-hemicubes each
+    }
+}
+
+// automatic: rays on a scene of kFineRowsByRaysMinPieces pieces or more, hemicubes below; never
+// where the scene has obstruction-only surfaces (the ray caster credits either side of those),
+// where an explicit `rays` is refused. The default ray count follows the resolution.
+TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions) {
+    const auto tiles = [](std::size_t n) {  // n separate unit tiles on the ground: n pieces
+        std::vector<NamedPolygon> polys;
+        for (std::size_t k = 0; k < n; ++k) {
+            const double x = static_cast<double>(k % 40) * 1.5, y = static_cast<double>(k / 40) * 1.5;
+            polys.push_back({"t" + std::to_string(k), {{x, y, 0}, {x + 1, y, 0}, {x + 1, y + 1, 0}, {x, y + 1, 0}}});
+        }
+        return make(polys, 2.0);
+    };
+    HemicubeOptions o;
+    o.resolution = 64;
+    o.threads = 1;
+    o.fine_rows = FineRows::automatic;
+    const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
+    {
+        const Scene few = tiles(min - 1);
+        EXPECT_FALSE(HemicubeRowProvider(few, o).fine_rows_by_rays());
+    }
+    Scene many = tiles(min);
+    {
+        HemicubeRowProvider p(many, o);
+        EXPECT_TRUE(p.fine_rows_by_rays());
+        EXPECT_EQ(p.fine_row_rays(), 16384u);  // max(N², min(4 N², 65,536)) at N = 64
+    }
+    o.resolution = 256;
+    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 65536u);
+    o.resolution = 512;
+    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 262144u);
+    o.resolution = 64;
+    many.obstruction_first = static_cast<std::uint32_t>(many.size() - 1);  // the last tile: an obstruction
+    EXPECT_FALSE(HemicubeRowProvider(many, o).fine_rows_by_rays());
+    o.fine_rows = FineRows::rays;
+    EXPECT_THROW(HemicubeRowProvider(many, o), InputError);
+}
+
+// Through the correction, on a sender an occluder touches: a floor and a wall, 4 × 4 patches
+// each, and a two-sided fin standing on the floor near their shared edge (the floor patches it
+// stands on are planned at 4 × 4). Reference: the ray caster with 4e5 rays per patch and
+// another seed (object value's σ ≈ √(F/rays)/4 ≈ 2e-4). The floor→wall value with the 4 × 4
+// rows ray-cast (65,536 rays: σ of the object value from those rows below 1e-4) must be within
+// 5σ of the reference's noise, as the sub-hemicubes' is (tests/bench/test_sub_hemicubes.cpp).
+TEST(FineRowsByRays, ThroughTheCorrectionAsCloseToTheReferenceAsSubHemicubes) {
+    const std::vector<NamedPolygon> polys = {
+        {"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+        {"wall", {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}},
+        {"fin_a", {{0.45, 0.05, 0}, {0.45, 0.4, 0}, {0.45, 0.4, 0.3}, {0.45, 0.05, 0.3}}},
+        {"fin_b", {{0.45, 0.05, 0}, {0.45, 0.05, 0.3}, {0.45, 0.4, 0.3}, {0.45, 0.4, 0}}},
+    };
+    const Scene s = make(polys, 0.25);
+    HemicubeOptions o;
+    o.resolution = 128;
+    o.threads = 2;
+    o.fine_rows = FineRows::rays;
+    HemicubeRowProvider hemi(s, o);
+    CorrectedRowProvider corrected(s, hemi, near_field_options_for_hemicube(o.resolution));
+    const double value = object_form_factors(compute_all_rows(corrected), s)[0][1];
+    EXPECT_GT(corrected.stats().rows_sampled_fine, 0u);
+    EXPECT_EQ(hemi.stats().fine_rows_cast, corrected.stats().rows_sampled_fine);
+    RaycastOptions ro;
+    ro.rays = 400000;
+    ro.threads = 2;
+    ro.seed = 9;
+    RaycastRowProvider rays(s, ro);
+    const double reference = object_form_factors(compute_all_rows(rays), s)[0][1];
+    EXPECT_LT(std::abs(value - reference), 5 * 2e-4);
+}
+
+}  // namespace
+}  // namespace ffcube
