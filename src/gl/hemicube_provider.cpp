@@ -15,12 +15,12 @@
 #include <tuple>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/ordered_pool.hpp"
 #include "ffcube/hemicube/layout.hpp"
 #include "ffcube/hemicube/pieces.hpp"
 #include "ffcube/io/scene_blob.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
-#include "ffcube/core/timer.hpp"
 #include "gl/engine.hpp"
 #include "gl/hemicube_worker.hpp"
 #include "gl/process_engine.hpp"
@@ -113,8 +113,8 @@ struct HemicubeRowProvider::Impl {
         }
         caster.reset();  // built on the next scene when it is needed
     }
-    // Row i cast by rays on pool thread w, into out; its time and count into local.
-    void cast(unsigned w, std::uint32_t i, SparseRow& out, HemicubeStats& local) {
+    // Row i cast by rays on pool thread w, into out; returns the seconds it took.
+    double cast(unsigned w, std::uint32_t i, SparseRow& out) {
         const RaycastRowProvider* c = nullptr;
         {
             const std::lock_guard lock(caster_mutex);
@@ -130,8 +130,7 @@ struct HemicubeRowProvider::Impl {
         }
         Stopwatch watch;
         c->cast_row(i, out, cast_scratch[w]);
-        local.cast_seconds += watch.seconds();
-        ++local.fine_rows_cast;
+        return watch.seconds();
     }
 
     // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
@@ -162,11 +161,11 @@ struct HemicubeRowProvider::Impl {
             // draws the row before it, and kept until its turn to be collected.
             std::vector<RowPlan> planned(rows.size());
             std::vector<SparseRow> cast_rows(fine_by_rays ? rows.size() : 0);
-            std::vector<HemicubeStats> cast_stats(fine_by_rays ? rows.size() : 0);
+            std::vector<double> cast_seconds(fine_by_rays ? rows.size() : 0);
             const OrderedRowPool::Submit submit = [&](unsigned w, std::size_t k, std::uint32_t i) {
                 planned[k] = plan_of(k, i);
                 if (planned[k] == RowPlan::sampled_fine && fine_by_rays)
-                    cast(w, i, cast_rows[k], cast_stats[k]);
+                    cast_seconds[k] = cast(w, i, cast_rows[k]);
                 else if (planned[k] != RowPlan::skip)
                     engines[w]->submit(i, points(planned[k]));
             };
@@ -178,7 +177,8 @@ struct HemicubeRowProvider::Impl {
                 } else if (planned[k] == RowPlan::sampled_fine && fine_by_rays) {
                     out = std::move(cast_rows[k]);
                     cast_rows[k] = SparseRow{};  // its storage goes with the row
-                    local = cast_stats[k];
+                    local.cast_seconds = cast_seconds[k];
+                    local.fine_rows_cast = 1;
                 } else {
                     engines[w]->collect(out, local);
                 }
@@ -194,7 +194,8 @@ struct HemicubeRowProvider::Impl {
                 out.clear();
                 ++local.skipped_rows;
             } else if (plan == RowPlan::sampled_fine && fine_by_rays) {
-                cast(w, i, out, local);
+                local.cast_seconds = cast(w, i, out);
+                local.fine_rows_cast = 1;
             } else {
                 engines[w]->row(i, out, local, points(plan));
             }

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <nlohmann/json.hpp>
 
 #include "cli/cli_util.hpp"
@@ -150,6 +151,68 @@ TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
     EXPECT_EQ(left_out["off"], 0u);
     const auto bad = run_ffcube("formfactors " + city + " --no-subdivide --occlusion-culling maybe -o " + (dir / "x.ffm"));
     EXPECT_NE(bad.code, 0);
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
+}
+
+// --fine-rows: on a 1,200-facet city (a mesh of 1,000 pieces or more) the default ray-casts the
+// rows planned at 4 × 4 and says so in its log and report; --fine-rows hemicubes draws them.
+// The plans are the scene's, so both runs have the same rows at 4 × 4, and every other row is
+// the same bits in both (.mtx text per row); a bad word is refused without output.
+TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
+    TempDir dir;
+    const std::string city = dir / "city.stl";
+    ASSERT_EQ(std::system(("python3 " + std::string(FFCUBE_SOURCE_DIR) + "/tools/gen_city.py " + city +
+                           " --binary --triangles 1200 --seed 2 > /dev/null")
+                              .c_str()),
+              0);
+    std::map<std::string, nlohmann::json> report;
+    std::map<std::string, std::map<std::string, std::string>> rows;  // run -> row -> its .mtx lines
+    for (const std::string mode : {"auto", "hemicubes"}) {
+        const std::string args = mode == "auto" ? "" : " --fine-rows " + mode;
+        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --resolution 32" + args + " -o " +
+                                  (dir / (mode + ".mtx")) + " --report " + (dir / (mode + ".json")));
+        ASSERT_EQ(r.code, 0) << r.output;
+        EXPECT_EQ(r.output.find("ray-cast, 4096 rays each") != std::string::npos, mode == "auto") << r.output;
+        report[mode] = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
+        std::istringstream mtx(test::read_text(dir / (mode + ".mtx")));
+        std::string line;
+        bool size_line = true;
+        while (std::getline(mtx, line)) {
+            if (line.empty() || line[0] == '%') continue;
+            if (size_line) {
+                size_line = false;
+                continue;
+            }
+            rows[mode][line.substr(0, line.find(' '))] += line + "\n";
+        }
+    }
+    const auto& a = report["auto"];
+    const auto& h = report["hemicubes"];
+    EXPECT_EQ(a["fine_rows"]["by"], "rays");
+    EXPECT_EQ(h["fine_rows"]["by"], "hemicubes");
+    const std::uint64_t fine = a["corrections"]["rows_sub_hemicubes_4x4"].get<std::uint64_t>();
+    EXPECT_GT(fine, 0u);
+    EXPECT_EQ(a["fine_rows"]["cast"].get<std::uint64_t>(), fine);
+    EXPECT_EQ(h["fine_rows"]["cast"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(h["corrections"]["rows_sub_hemicubes_4x4"].get<std::uint64_t>(), fine);
+    EXPECT_LT(a["hemicubes"].get<std::uint64_t>(), h["hemicubes"].get<std::uint64_t>());
+    const auto measure = a["corrections"]["row_measure"];
+    ASSERT_EQ(measure, h["corrections"]["row_measure"]);
+    std::size_t same = 0, differ = 0;
+    for (std::size_t i = 0; i < measure.size(); ++i) {
+        const std::string key = std::to_string(i + 1);  // Matrix Market rows count from 1
+        if (measure[i].get<int>() == 4) {
+            differ += rows["auto"][key] != rows["hemicubes"][key];
+        } else {
+            EXPECT_EQ(rows["auto"][key], rows["hemicubes"][key]) << "row " << i << " (measure " << measure[i] << ")";
+            ++same;
+        }
+    }
+    EXPECT_GT(same, 0u);
+    EXPECT_GT(differ, 0u);
+    const auto bad = run_ffcube("formfactors " + city + " --no-subdivide --fine-rows maybe -o " + (dir / "x.ffm"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("--fine-rows"), std::string::npos) << bad.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
 }
 
