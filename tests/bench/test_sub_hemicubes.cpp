@@ -13,6 +13,7 @@
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/polygons.hpp"
+#include "support/scenes.hpp"
 
 namespace ffcube {
 namespace {
@@ -74,14 +75,7 @@ TEST(SubHemicubes, SampledRowMeasuresTheSenderQuadrature) {
 // σ ≈ √(F/rays)/4 ≈ 2e-4). With sub-hemicubes the floor→wall value must be nearer to it than
 // with the refused pairs left at the centre's value, and within the reference's noise.
 TEST(SubHemicubes, PartlyOccludedNearPairsAreSampledAndCloser) {
-    const std::vector<NamedPolygon> polys = {
-        {"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
-        {"wall", {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}},
-        // A fin in the plane x = 0.45 from y = 0.05 to 0.4, z up to 0.3, two-sided.
-        {"fin_a", {{0.45, 0.05, 0}, {0.45, 0.4, 0}, {0.45, 0.4, 0.3}, {0.45, 0.05, 0.3}}},
-        {"fin_b", {{0.45, 0.05, 0}, {0.45, 0.05, 0.3}, {0.45, 0.4, 0.3}, {0.45, 0.4, 0}}},
-    };
-    const Scene s = make(polys, 0.25);
+    const Scene s = make(test::floor_wall_fin(), 0.25);  // the fin: x = 0.45, y 0.05..0.4, z up to 0.3
     HemicubeOptions o;
     o.resolution = 256;
     o.threads = 2;

@@ -8,6 +8,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -116,6 +117,14 @@ inline std::map<std::string, double> last_column_by_first(const std::string& tex
     std::getline(in, line);  // header
     while (std::getline(in, line)) m[line.substr(0, line.find(','))] = std::stod(line.substr(line.rfind(',') + 1));
     return m;
+}
+
+// Writes a binary STL city from tools/gen_city.py (one facet per triangle); returns the exit status.
+inline int gen_city(const std::string& path, int triangles, int seed) {
+    return std::system(("python3 " + std::string(FFCUBE_SOURCE_DIR) + "/tools/gen_city.py \"" + path +
+                        "\" --binary --triangles " + std::to_string(triangles) + " --seed " + std::to_string(seed) +
+                        " > /dev/null")
+                           .c_str());
 }
 
 inline std::string example(const std::string& name) { return std::string(FFCUBE_SOURCE_DIR) + "/examples/" + name; }

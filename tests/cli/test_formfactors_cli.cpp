@@ -132,10 +132,7 @@ struct BadCase {
 TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
     TempDir dir;
     const std::string city = dir / "city.stl";
-    ASSERT_EQ(std::system(("python3 " + std::string(FFCUBE_SOURCE_DIR) + "/tools/gen_city.py " + city +
-                           " --binary --triangles 600 --seed 2 > /dev/null")
-                              .c_str()),
-              0);
+    ASSERT_EQ(test::gen_city(city, 600, 2), 0);
     std::map<std::string, std::uint64_t> left_out;
     for (const std::string mode : {"on", "off"}) {
         const auto r = run_ffcube("formfactors " + city + " --no-subdivide --resolution 64 -q --occlusion-culling " + mode +
@@ -161,10 +158,7 @@ TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
 TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
     TempDir dir;
     const std::string city = dir / "city.stl";
-    ASSERT_EQ(std::system(("python3 " + std::string(FFCUBE_SOURCE_DIR) + "/tools/gen_city.py " + city +
-                           " --binary --triangles 1200 --seed 2 > /dev/null")
-                              .c_str()),
-              0);
+    ASSERT_EQ(test::gen_city(city, 1200, 2), 0);
     std::map<std::string, nlohmann::json> report;
     std::map<std::string, std::map<std::string, std::string>> rows;  // run -> row -> its .mtx lines
     for (const std::string mode : {"auto", "hemicubes"}) {

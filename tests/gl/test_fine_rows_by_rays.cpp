@@ -17,6 +17,7 @@
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/polygons.hpp"
+#include "support/scenes.hpp"
 
 namespace ffcube {
 namespace {
@@ -136,13 +137,7 @@ TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions)
 // rows ray-cast (65,536 rays: σ of the object value from those rows below 1e-4) must be within
 // 5σ of the reference's noise, as the sub-hemicubes' is (tests/bench/test_sub_hemicubes.cpp).
 TEST(FineRowsByRays, ThroughTheCorrectionAsCloseToTheReferenceAsSubHemicubes) {
-    const std::vector<NamedPolygon> polys = {
-        {"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
-        {"wall", {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}},
-        {"fin_a", {{0.45, 0.05, 0}, {0.45, 0.4, 0}, {0.45, 0.4, 0.3}, {0.45, 0.05, 0.3}}},
-        {"fin_b", {{0.45, 0.05, 0}, {0.45, 0.05, 0.3}, {0.45, 0.4, 0.3}, {0.45, 0.4, 0}}},
-    };
-    const Scene s = make(polys, 0.25);
+    const Scene s = make(test::floor_wall_fin(), 0.25);
     HemicubeOptions o;
     o.resolution = 128;
     o.threads = 2;

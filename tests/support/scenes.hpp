@@ -27,6 +27,19 @@ inline NamedPolygon square_z(const std::string& name, double z, bool facing_up, 
     return p;
 }
 
+// Two unit squares at 90° sharing an edge (floor, normal +z; wall in y = 0, normal +y) and a
+// two-sided fin standing on the floor near that edge: the plane x = 0.45 from y = 0.05 to 0.4,
+// up to z = 0.3 (objects floor, wall, fin_a, fin_b). The floor patches the fin stands on have an
+// occluder touching them; pairs across the fin may be occluded.
+inline std::vector<NamedPolygon> floor_wall_fin() {
+    return {
+        {"floor", {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}},
+        {"wall", {{0, 0, 0}, {0, 0, 1}, {1, 0, 1}, {1, 0, 0}}},
+        {"fin_a", {{0.45, 0.05, 0}, {0.45, 0.4, 0}, {0.45, 0.4, 0.3}, {0.45, 0.05, 0.3}}},
+        {"fin_b", {{0.45, 0.05, 0}, {0.45, 0.05, 0.3}, {0.45, 0.4, 0.3}, {0.45, 0.4, 0}}},
+    };
+}
+
 // The six inward-facing walls of the axis-aligned box [0,sx]×[0,sy]×[0,sz], objects named
 // x0, x1, y0, y1, z0, z1 (the wall at x = 0 is "x0").
 inline std::vector<NamedPolygon> inward_box(double sx, double sy, double sz) {
