@@ -82,7 +82,8 @@ struct RowOptions {
     // HemicubeOptions::fine_sub_resolution (--fine-sub-hemicubes half|three-eighths|quarter): 4 × 4 rows at N/2, 3N/8 or N/4.
     FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
     // HemicubeOptions::fine_rows, fine_row_rays (--fine-rows auto|hemicubes|rays, --fine-row-rays R;
-    // 0: 4 N²): rows planned at 4 × 4 ray-cast instead, automatically on scenes of many pieces.
+    // 0: max(N², min(4 N², 65,536))): rows planned at 4 × 4 ray-cast instead, automatically on
+    // scenes of many pieces.
     FineRows fine_rows = FineRows::automatic;
     std::uint64_t fine_row_rays = 0;
     // HemicubeOptions::vertex_upload (--vertex-upload once|per-hemicube): the same rows either way.
