@@ -158,6 +158,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     // runs both on its worker threads (RowProvider::RowStages), where they overlap the other
     // workers' measuring, and the rows do not depend on the thread count.
     const bool sample = options_.sub_hemicubes && inner_.can_sample_sender();
+    const std::uint64_t cast_fine_rays = inner_.cast_fine_row_rays();
     RowStages stages;
     if (sample) {
         stages.plan = [&](std::size_t k, std::uint32_t i) {
@@ -182,7 +183,9 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         std::unique_ptr<NearFieldScratch> scratch = pools_->take();
         double estimate = 0;
         const bool sampled = sample && a.done && a.sampled;
-        corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled);
+        // Rows planned at 4 × 4 (occluder 2) that the inner provider ray-cast (fine_rows).
+        const double cast_rays = sampled && a.occluder == 2 ? static_cast<double>(cast_fine_rays) : 0.0;
+        corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled, cast_rays);
         pools_->give_back(std::move(scratch));
         // One writer per row (i is listed once); both are sized before the stages start.
         row_error_[i] = static_cast<float>(estimate);

@@ -457,7 +457,8 @@ void count_small_receivers(const SparseRow& row, double pixel_delta_ff, NearFiel
 // otherwise the merge of the inner row with the analytic entries (rescaling the rest), the
 // closed-row rebalancing, and the estimate.
 void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, NearFieldScratch& scratch,
-                                 double* error_estimate, const NearAnalysis* analysis, bool sampled_row) const {
+                                 double* error_estimate, const NearAnalysis* analysis, bool sampled_row,
+                                 double cast_rays) const {
     const Impl& im = *impl_;
     NearFieldScratch::Buffers& b = scratch.buffers();
     ++stats.rows;
@@ -477,9 +478,12 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     const bool quadrature = im.options.sender_quadrature && !sampled_row;
     const double inner_sum = row.sum();
     const bool quadrature_needed = quadrature && sender_quadrature_needed(im.patches, im.options, i, row.col);
-    const RowErrorModel error{im.patches.scene, im.patches.scene.patches[i], im.options.pixel_delta_ff,
-                              im.options.rays, sampled_row, quadrature};
-    count_small_receivers(row, im.options.pixel_delta_ff, stats);
+    // A ray-cast row (cast_rays): the rays' noise, no pixels, no quadrature residual.
+    const bool cast = sampled_row && cast_rays > 0;
+    const double pixel_delta_ff = cast ? 0.0 : im.options.pixel_delta_ff;
+    const RowErrorModel error{im.patches.scene, im.patches.scene.patches[i], pixel_delta_ff,
+                              cast ? cast_rays : im.options.rays, sampled_row && !cast, quadrature};
+    count_small_receivers(row, pixel_delta_ff, stats);
     const auto& exact = analysis->exact;  // (j, exact F_ij), j increasing
     double estimate = analysis->far_error;
     if (exact.empty() && !quadrature_needed) {

@@ -305,6 +305,34 @@ TEST(NearField, RejectsBadOptions) {
 namespace ffcube {
 namespace {
 
+// A row the inner provider ray-cast from the whole sender (HemicubeOptions::fine_rows: the rows
+// planned at 4 × 4) is estimated by the rays' noise, Σ √(f/R), with no pixel noise, no 2 × 2
+// residual and no small receivers counted; the same row as sub-hemicubes keeps the pixel terms.
+// Two squares 100 apart: no near pair, so the row is handed on untouched with its estimate.
+TEST(NearField, ARayCastRowIsEstimatedByTheRaysNoise) {
+    const std::vector<NamedPolygon> polys{test::square_z("low", 0, true), test::square_z("high", 100, false)};
+    const Scene s = test::make_scene(polys, 0.5);
+    NearFieldOptions o;
+    o.sender_quadrature = true;
+    o.pixel_delta_ff = 1e-4;
+    NearFieldCorrector c(s, o);
+    NearFieldScratch scratch;
+    const SparseRow inner{{4, 5}, {2e-6, 3e-6}};
+    const double rays = 65536;
+    const double expected = std::sqrt(2e-6 / rays) + std::sqrt(3e-6 / rays);
+    SparseRow row = inner;
+    NearFieldStats cast_stats, drawn_stats;
+    double cast = 0, drawn = 0;
+    c.correct(0, row, cast_stats, scratch, &cast, nullptr, true, rays);
+    EXPECT_EQ(row.val, inner.val);
+    EXPECT_DOUBLE_EQ(cast, expected);
+    EXPECT_EQ(cast_stats.small_receiver_entries, 0u);
+    row = inner;
+    c.correct(0, row, drawn_stats, scratch, &drawn, nullptr, true);
+    EXPECT_GT(drawn, 2 * expected);  // the pixel noise of receivers worth a few hundredths of a pixel
+    EXPECT_EQ(drawn_stats.small_receiver_entries, 2u);
+}
+
 TEST(NearField, VertexAnUlpBehindTheOtherPlaneDoesNotHang) {
     // A wall patch and a ceiling patch of a box meshed 12 × 12, as the mesher rounds them: the
     // ceiling's vertices are an ulp or two below z = 1, so the wall's top edge is 1e-16 behind

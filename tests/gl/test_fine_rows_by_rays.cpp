@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
@@ -154,6 +155,40 @@ TEST(FineRowsByRays, ThroughTheCorrectionAsCloseToTheReferenceAsSubHemicubes) {
     RaycastRowProvider rays(s, ro);
     const double reference = object_form_factors(compute_all_rows(rays), s)[0][1];
     EXPECT_LT(std::abs(value - reference), 5 * 2e-4);
+}
+
+// The error estimate of a ray-cast row is the rays' noise, not the hemicube's pixels: at N = 64
+// and N = 256 (the far field off, so that the analyses are the same) the cast rows are the same
+// bits and so are their estimates, while the rows measured by hemicubes are estimated apart.
+TEST(FineRowsByRays, ACastRowsErrorEstimateDoesNotFollowThePixels) {
+    const Scene s = make(test::floor_wall_fin(), 0.25);
+    std::vector<float> estimate[2];
+    std::vector<std::int8_t> measure;
+    for (const int k : {0, 1}) {
+        HemicubeOptions o;
+        o.resolution = k == 0 ? 64 : 256;
+        o.threads = 2;
+        o.fine_rows = FineRows::rays;
+        o.fine_row_rays = 16384;
+        HemicubeRowProvider hemi(s, o);
+        NearFieldOptions nf = near_field_options_for_hemicube(o.resolution);
+        nf.far_field = NearFieldOptions::FarField::off;
+        CorrectedRowProvider corrected(s, hemi, nf);
+        compute_all_rows(corrected);
+        estimate[k] = corrected.row_error_estimates();
+        measure = corrected.row_measures();
+    }
+    std::size_t cast = 0, drawn = 0;
+    for (std::size_t i = 0; i < measure.size(); ++i) {
+        if (measure[i] == CorrectedRowProvider::sampled_touching) {
+            EXPECT_EQ(estimate[0][i], estimate[1][i]) << "row " << i;
+            ++cast;
+        } else if (measure[i] != CorrectedRowProvider::analytic) {
+            drawn += estimate[0][i] != estimate[1][i];
+        }
+    }
+    EXPECT_GT(cast, 0u);
+    EXPECT_GT(drawn, 0u);
 }
 
 }  // namespace

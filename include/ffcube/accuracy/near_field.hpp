@@ -263,14 +263,16 @@ public:
     // (all but seconds). With error_estimate: the row's estimated error Σ_j |F_ij − exact_ij|
     // (docs/accuracy.md, "Per-row error estimate"). analysis: row i's, if already made.
     // sampled_row: the inner row is the average of sub-hemicubes at i's 2 × 2 quadrature points
-    // (no sender quadrature ratio on top). The inner row of a skipped complete analysis
+    // (no sender quadrature ratio on top). cast_rays > 0 (with sampled_row): it was ray-cast from
+    // the whole sender with that many rays instead (RowProvider::cast_fine_row_rays), so its
+    // error estimate is the rays' noise, with no pixel noise and no quadrature residual. The inner row of a skipped complete analysis
     // (NearAnalysis::skipped) is empty: the row is the analysis.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr,
                  const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
     // The same with the caller's scratch space: no heap allocation in the steady state.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, NearFieldScratch& scratch,
                  double* error_estimate = nullptr, const NearAnalysis* analysis = nullptr,
-                 bool sampled_row = false) const;
+                 bool sampled_row = false, double cast_rays = 0) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
     // The far field's visibility proof, O(1) per pair for scenes of few planes: no plane that

@@ -39,6 +39,10 @@ public:
     // nothing and skips nothing.
     enum class RowPlan : std::uint8_t { centre, sampled, skip, sampled_fine };
     virtual bool can_sample_sender() const { return false; }
+    // Rays per row when the provider ray-casts the rows planned sampled_fine from the whole
+    // sender instead of measuring them by sub-hemicubes (HemicubeOptions::fine_rows); 0: it does
+    // not. The caller's error estimate of such a row is the rays' noise.
+    virtual std::uint64_t cast_fine_row_rays() const { return 0; }
     virtual void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                       const RowSink& sink);
 
@@ -81,6 +85,7 @@ public:
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     bool can_sample_sender() const override { return inner_.can_sample_sender(); }
+    std::uint64_t cast_fine_row_rays() const override { return inner_.cast_fine_row_rays(); }
     void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                               const RowSink& sink) override;
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override;

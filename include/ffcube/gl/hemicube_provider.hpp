@@ -145,6 +145,7 @@ public:
     // points (3 on a triangle), weights by area, each with its own visibility, rendered at half
     // the resolution (when that is even and ≥ 8): about the cost and pixel noise of one hemicube.
     bool can_sample_sender() const override { return true; }
+    std::uint64_t cast_fine_row_rays() const override { return fine_rows_by_rays() ? fine_row_rays() : 0; }
     void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                               const RowSink& sink) override;
     // The stages run on the worker's thread in the calling process, around its row: plan, the
