@@ -101,8 +101,8 @@ struct RaycastRowProvider::Impl {
                std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
     }
 
-    // Row i into out; acc (size n, all zero), touched (empty) and perm are the caller's scratch;
-    // acc and touched are left as they were found.
+    // Row i into out; the scratch's acc (size n, all zero) and touched (empty) are left as they
+    // were found.
     //
     // Sampling (header comment): the row's rays come in batches of S = m² rays, m = min(⌊√left⌋,
     // kMaxStrataSide), until none are left. In a batch, ray k starts in stratum k of an m × m grid
@@ -112,8 +112,10 @@ struct RaycastRowProvider::Impl {
     // random). Every ray's (position, direction) is then uniform on its own, so the row is
     // unbiased for any number of rays; the stratified directions are what lower the error on a
     // receiver seen from most of the sender (a far one), the stratified positions on a near one.
-    void row(std::uint32_t i, SparseRow& out, std::vector<double>& acc, std::vector<std::uint32_t>& touched,
-             std::vector<std::uint32_t>& perm) const {
+    void row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
+        std::vector<double>& acc = scratch.acc;
+        std::vector<std::uint32_t>& touched = scratch.touched;
+        std::vector<std::uint32_t>& perm = scratch.perm;
         out.clear();
         const Patch& p = scene.patches[i];
         const auto c = scene.patch_vertices(i);
@@ -196,7 +198,7 @@ std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.loa
 void RaycastRowProvider::cast_row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
     FFCUBE_CHECK_MSG(i < size(), "raycast: row out of range");
     if (scratch.acc.size() != impl_->scene.size()) scratch.acc.assign(impl_->scene.size(), 0.0);
-    impl_->row(i, out, scratch.acc, scratch.touched, scratch.perm);
+    impl_->row(i, out, scratch);
 }
 
 void RaycastRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
@@ -219,7 +221,7 @@ void RaycastRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows
     std::vector<RowScratch> scratch(T);
     for (RowScratch& s : scratch) s.acc.assign(n, 0.0);
     const auto make = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
-        im.row(i, out, scratch[w].acc, scratch[w].touched, scratch[w].perm);
+        im.row(i, out, scratch[w]);
         if (stages.finish) stages.finish(k, i, out);
     };
     if (T == 1) {

@@ -265,8 +265,9 @@ public:
     // sampled_row: the inner row is the average of sub-hemicubes at i's 2 × 2 quadrature points
     // (no sender quadrature ratio on top). cast_rays > 0 (with sampled_row): it was ray-cast from
     // the whole sender with that many rays instead (RowProvider::cast_fine_row_rays), so its
-    // error estimate is the rays' noise, with no pixel noise and no quadrature residual. The inner row of a skipped complete analysis
-    // (NearAnalysis::skipped) is empty: the row is the analysis.
+    // error estimate is the rays' noise, with no pixel noise and no quadrature residual. The
+    // inner row of a skipped complete analysis (NearAnalysis::skipped) is empty: the row is the
+    // analysis.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, double* error_estimate = nullptr,
                  const NearAnalysis* analysis = nullptr, bool sampled_row = false) const;
     // The same with the caller's scratch space: no heap allocation in the steady state.

@@ -18,7 +18,7 @@
 // (stratification only lowers it). Stratified directions lower it most for a receiver that most
 // of the sender sees: then the hit indicator varies mainly with the direction, a 2-D indicator
 // with a smooth edge, whose jittered estimate has variance O(rays^−1.5) rather than O(rays^−1)
-// (docs/accuracy.md, "Ray caster").
+// (docs/accuracy.md, "The ray caster's sampling").
 // Determinism: row i's random numbers come from (seed, i) alone, so rows do not depend on the
 // number of threads or on which rows are asked for together.
 #pragma once
