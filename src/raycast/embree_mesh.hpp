@@ -40,12 +40,16 @@ void build_embree_mesh(const Scene& scene, EmbreeMesh& out, const char* who);
 
 inline constexpr std::uint32_t kNoPatch = std::numeric_limits<std::uint32_t>::max();
 
-// The first patch j that the ray o + t·d (Embree coordinates, t ≥ 0) meets with pass(j) false.
-// A hit with pass(j) true (the ray's own patch: float rounding) is traced on past, a few times at
-// most; then, or when the ray leaves the scene, kNoPatch. traced counts the rtcIntersect1 calls.
+// How many times a ray is traced at most, past hits on its own patch (float rounding).
+inline constexpr int kRetraces = 4;
+
+// The first patch j that the ray o + t·d (Embree coordinates, t ≥ tnear) meets with pass(j)
+// false. A hit with pass(j) true (the ray's own patch: float rounding) is traced on past,
+// `attempts` traces in all; then, or when the ray leaves the scene, kNoPatch. traced counts the
+// rtcIntersect1 calls.
 template <class Pass>
 std::uint32_t first_patch(const EmbreeMesh& m, RTCIntersectContext& ctx, const Vec3& o, const Vec3& d, Pass&& pass,
-                          std::uint64_t& traced) {
+                          std::uint64_t& traced, float tnear = 0.0f, int attempts = 4) {
     RTCRayHit rh;
     rh.ray.org_x = static_cast<float>(o.x);
     rh.ray.org_y = static_cast<float>(o.y);
@@ -53,12 +57,12 @@ std::uint32_t first_patch(const EmbreeMesh& m, RTCIntersectContext& ctx, const V
     rh.ray.dir_x = static_cast<float>(d.x);
     rh.ray.dir_y = static_cast<float>(d.y);
     rh.ray.dir_z = static_cast<float>(d.z);
-    rh.ray.tnear = 0.0f;
+    rh.ray.tnear = tnear;
     rh.ray.time = 0.0f;
     rh.ray.mask = 0xFFFFFFFFu;
     rh.ray.id = 0;
     rh.ray.flags = 0;
-    for (int attempt = 0; attempt < 4; ++attempt) {
+    for (int attempt = 0; attempt < attempts; ++attempt) {
         rh.ray.tfar = std::numeric_limits<float>::infinity();
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rh.hit.primID = RTC_INVALID_GEOMETRY_ID;

@@ -15,9 +15,12 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/ordered_pool.hpp"
 #include "raycast/embree_mesh.hpp"
+#include "raycast/sampling.hpp"
 
 namespace ffcube {
 namespace {
+
+using namespace raycast_sampling;
 
 // splitmix64: a full-period 64-bit generator that passes BigCrush; seeded per row, so a row's
 // numbers depend on (seed, row) only.
@@ -40,32 +43,14 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
     return r;
 }
 
-// The side m of a batch's m × m strata for `left` rays still to cast: ⌊√left⌋, at most
-// kMaxStrataSide (so a batch's permutation holds at most 65,536 entries, whatever --rays is).
-constexpr std::uint64_t kMaxStrataSide = 256;
-std::uint64_t strata_side(std::uint64_t left) {
-    std::uint64_t m = static_cast<std::uint64_t>(std::sqrt(static_cast<double>(left)));
-    while (m * m > left) --m;
-    while ((m + 1) * (m + 1) <= left) ++m;
-    return std::clamp<std::uint64_t>(m, 1, kMaxStrataSide);
-}
-
-// Cosine-weighted direction about nrm from (r1, r2) uniform on the unit square, through the
-// concentric map of the square onto the disk (Shirley and Chiu 1997), which keeps strata compact
-// (the polar map would make wedges thin near the pole), lifted to the hemisphere (Malley).
-Vec3 cosine_direction(double r1, double r2, const Vec3& tu, const Vec3& tv, const Vec3& nrm) {
-    const double a = 2.0 * r1 - 1.0, b = 2.0 * r2 - 1.0;
-    double r = 0.0, phi = 0.0;
-    if (a * a > b * b) {
-        r = a;
-        phi = (std::numbers::pi / 4.0) * (b / a);
-    } else if (b != 0.0) {
-        r = b;
-        phi = (std::numbers::pi / 2.0) - (std::numbers::pi / 4.0) * (a / b);
-    }
-    const double x = r * std::cos(phi), y = r * std::sin(phi);
-    return x * tu + y * tv + std::sqrt(std::max(0.0, 1.0 - x * x - y * y)) * nrm;
-}
+// Up to 16 rays in flight: Embree's packet and, per lane, what the hit's accounting needs.
+struct Packet {
+    RTCRayHit16 rh;  // RTC_ALIGN(64) members
+    alignas(64) int valid[16];
+    Vec3 org[16], dir[16];
+    double w[16];
+    int lanes = 0;
+};
 
 }  // namespace
 
@@ -105,17 +90,20 @@ struct RaycastRowProvider::Impl {
     // were found.
     //
     // Sampling (header comment): the row's rays come in batches of S = m² rays, m = min(⌊√left⌋,
-    // kMaxStrataSide), until none are left. In a batch, ray k starts in stratum k of an m × m grid
-    // over the patch and leaves in direction stratum perm[k] of an m × m grid over the unit square
-    // that the cosine-weighted map takes to the hemisphere, perm a uniformly random permutation
+    // kMaxStrataSide), until none are left. In a batch, the k-th ray cast leaves in direction
+    // stratum order[k] of an m × m grid over the unit square that the cosine-weighted map takes to
+    // the hemisphere (tile_order: neighbouring directions one after another) and starts in
+    // stratum perm[k] of an m × m grid over the patch, perm a uniformly random permutation
     // ("padded" stratification: each of the two 2-D projections is stratified, the pairing is
     // random). Every ray's (position, direction) is then uniform on its own, so the row is
     // unbiased for any number of rays; the stratified directions are what lower the error on a
     // receiver seen from most of the sender (a far one), the stratified positions on a near one.
+    // Rays are traced 16 at a time (rtcIntersect16) and their hits counted in the order cast.
     void row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
         std::vector<double>& acc = scratch.acc;
         std::vector<std::uint32_t>& touched = scratch.touched;
         std::vector<std::uint32_t>& perm = scratch.perm;
+        std::vector<std::uint32_t>& order = scratch.order;
         out.clear();
         const Patch& p = scene.patches[i];
         const auto c = scene.patch_vertices(i);
@@ -128,7 +116,15 @@ struct RaycastRowProvider::Impl {
         std::uint64_t traced_here = 0;
         RTCIntersectContext ctx;
         rtcInitIntersectContext(&ctx);
-        const auto cast = [&](double u, double v, double r1, double r2) {
+        ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+        Packet pk;
+        for (int l = 0; l < 16; ++l) {
+            pk.rh.ray.time[l] = 0.0f;
+            pk.rh.ray.mask[l] = 0xFFFFFFFFu;
+            pk.rh.ray.id[l] = 0;
+            pk.rh.ray.flags[l] = 0;
+        }
+        const auto add = [&](double u, double v, double r1, double r2) {
             Vec3 x;
             double w = 1.0;
             if (p.count == 3) {
@@ -143,19 +139,45 @@ struct RaycastRowProvider::Impl {
                 }
             }
             wsum += w;
-            const Vec3 d = cosine_direction(r1, r2, tu, tv, nrm);
-            const Vec3 o = (x - mesh.center) * mesh.scale + offset * nrm;
-
-            // A hit on the ray's own patch (or its plane) can only be float rounding: trace on past
-            // it, a few times at most (then the ray is dropped, as if absorbed).
-            const std::uint32_t j =
-                first_patch(mesh, ctx, o, d, [&](std::uint32_t q) { return pass_through(i, q); }, traced_here);
-            // A front face receives; so does either side of an obstruction-only patch, whose
-            // factor is measured only to be left out (Scene::drawn), so that it is not sky.
-            if (j != kNoPatch && (glm::dot(d, scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first)) {
-                if (acc[j] == 0.0) touched.push_back(j);
-                acc[j] += w;
+            const int l = pk.lanes++;
+            pk.dir[l] = cosine_direction(r1, r2, tu, tv, nrm);
+            pk.org[l] = (x - mesh.center) * mesh.scale + offset * nrm;
+            pk.w[l] = w;
+            pk.rh.ray.org_x[l] = static_cast<float>(pk.org[l].x);
+            pk.rh.ray.org_y[l] = static_cast<float>(pk.org[l].y);
+            pk.rh.ray.org_z[l] = static_cast<float>(pk.org[l].z);
+            pk.rh.ray.dir_x[l] = static_cast<float>(pk.dir[l].x);
+            pk.rh.ray.dir_y[l] = static_cast<float>(pk.dir[l].y);
+            pk.rh.ray.dir_z[l] = static_cast<float>(pk.dir[l].z);
+        };
+        const auto trace = [&]() {
+            if (pk.lanes == 0) return;
+            for (int l = 0; l < 16; ++l) {
+                pk.valid[l] = l < pk.lanes ? -1 : 0;
+                pk.rh.ray.tnear[l] = 0.0f;
+                pk.rh.ray.tfar[l] = std::numeric_limits<float>::infinity();
+                pk.rh.hit.geomID[l] = RTC_INVALID_GEOMETRY_ID;
+                pk.rh.hit.primID[l] = RTC_INVALID_GEOMETRY_ID;
             }
+            rtcIntersect16(pk.valid, mesh.embree.scene, &ctx, &pk.rh);
+            traced_here += static_cast<std::uint64_t>(pk.lanes);
+            for (int l = 0; l < pk.lanes; ++l) {
+                if (pk.rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;  // left the scene
+                std::uint32_t j = mesh.tri_patch[pk.rh.hit.primID[l]];
+                // A hit on the ray's own patch (or its plane) can only be float rounding: trace
+                // on past it, a few times at most (then the ray is dropped, as if absorbed).
+                if (pass_through(i, j))
+                    j = first_patch(mesh, ctx, pk.org[l], pk.dir[l], [&](std::uint32_t q) { return pass_through(i, q); },
+                                    traced_here, std::nextafter(pk.rh.ray.tfar[l], std::numeric_limits<float>::infinity()),
+                                    kRetraces - 1);
+                // A front face receives; so does either side of an obstruction-only patch, whose
+                // factor is measured only to be left out (Scene::drawn), so that it is not sky.
+                if (j != kNoPatch && (glm::dot(pk.dir[l], scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first)) {
+                    if (acc[j] == 0.0) touched.push_back(j);
+                    acc[j] += pk.w[l];
+                }
+            }
+            pk.lanes = 0;
         };
         for (std::uint64_t left = opt.rays; left > 0;) {
             const std::uint64_t m = strata_side(left);
@@ -164,14 +186,17 @@ struct RaycastRowProvider::Impl {
             for (std::uint32_t k = 0; k < S; ++k) perm[k] = k;
             for (std::uint32_t k = S; k > 1; --k)  // Fisher–Yates
                 std::swap(perm[k - 1], perm[static_cast<std::uint32_t>(rng.next() % k)]);
+            if (order.size() != S) tile_order(static_cast<std::uint32_t>(m), order);
             const double inv = 1.0 / static_cast<double>(m);
             for (std::uint32_t k = 0; k < S; ++k) {
-                const double u = (static_cast<double>(k % m) + rng.uniform()) * inv;
-                const double v = (static_cast<double>(k / m) + rng.uniform()) * inv;
-                const double r1 = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
-                const double r2 = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
-                cast(u, v, r1, r2);
+                const double u = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
+                const double v = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
+                const double r1 = (static_cast<double>(order[k] % m) + rng.uniform()) * inv;
+                const double r2 = (static_cast<double>(order[k] / m) + rng.uniform()) * inv;
+                add(u, v, r1, r2);
+                if (pk.lanes == 16) trace();
             }
+            trace();
             left -= S;
         }
         traced.fetch_add(traced_here, std::memory_order_relaxed);
