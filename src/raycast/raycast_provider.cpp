@@ -32,6 +32,13 @@ struct Rng {
         z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
         return z ^ (z >> 31);
     }
+    // Uniform in [0, k) for 0 < k < 2^32, by a multiply and a shift (Lemire 2019) instead of a
+    // 64-bit division, a tenth of a ray's cost in the shuffle; its bias, at most k / 2^64, is
+    // that of the modulo it replaced.
+    std::uint32_t below(std::uint32_t k) {
+        __extension__ using u128 = unsigned __int128;
+        return static_cast<std::uint32_t>((static_cast<u128>(next()) * k) >> 64);
+    }
     // Uniform in [0, 1) with 53 random bits.
     double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 };
@@ -43,14 +50,110 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
     return r;
 }
 
-// Up to 16 rays in flight: Embree's packet and, per lane, what the hit's accounting needs.
+// Up to 16 rays in flight: Embree's packet and, per lane, the ray's sample (u, v on the sender,
+// r1, r2 on the direction square), origin, direction and weight in double.
 struct Packet {
     RTCRayHit16 rh;  // RTC_ALIGN(64) members
     alignas(64) int valid[16];
-    Vec3 org[16], dir[16];
-    double w[16];
+    alignas(64) double u[16] = {}, v[16] = {}, r1[16] = {}, r2[16] = {};
+    alignas(64) double ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], w[16];
     int lanes = 0;
 };
+
+// What a row's rays need of their sender, in Embree's coordinates where marked.
+struct Sender {
+    Vec3 c[4];              // corners (scene coordinates; c[3] unused for a triangle)
+    int count = 3;
+    bool parallelogram = true;
+    Vec3 tu, tv, n;         // tangent frame, n the normal
+    Vec3 center;            // Embree's centre and scale
+    double scale = 1.0, offset = 0.0;  // origins sit offset in front (Embree units)
+};
+
+// Lanes [0, lanes) of pk from their (u, v, r1, r2): the point on the sender (area-uniform: on a
+// triangle through √u, on a quad bilinear with weight |∂x/∂u × ∂x/∂v| unless a parallelogram)
+// lifted offset along the normal, and the cosine-weighted direction (cosine_direction, written
+// here without branches). Loops over plain arrays, so the compiler vectorizes them (with this
+// file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 clone where the CPU has
+// one. The same bits either way: IEEE +, ×, ÷ and √ round alike in any width, and neither clone
+// contracts to FMA (no fma target).
+__attribute__((target_clones("avx2", "default"), optimize("tree-vectorize", "vect-cost-model=dynamic"))) void
+make_rays(Packet& pk, const Sender& s) {
+    // All 16 lanes (a fixed trip count vectorizes; lanes past pk.lanes are left out by the
+    // packet's valid mask), from locals that no store can alias.
+    constexpr int L = 16;
+    const double tux = s.tu.x, tuy = s.tu.y, tuz = s.tu.z, tvx = s.tv.x, tvy = s.tv.y, tvz = s.tv.z;
+    const double nx = s.n.x, ny = s.n.y, nz = s.n.z;
+    double* __restrict dx = pk.dx;
+    double* __restrict dy = pk.dy;
+    double* __restrict dz = pk.dz;
+    const double* __restrict r1 = pk.r1;
+    const double* __restrict r2 = pk.r2;
+    for (int l = 0; l < L; ++l) {
+        const double a = 2.0 * r1[l] - 1.0, b = 2.0 * r2[l] - 1.0;
+        const bool wide = a * a > b * b;
+        const double r = wide ? a : b, num = wide ? b : a;
+        const double t = num / (r != 0.0 ? r : 1.0);  // r = 0 only at a = b = 0, where num = 0
+        double sn = 0.0, cs = 0.0;
+        sincos_quarter_turn(t, sn, cs);
+        const double x = r * (wide ? cs : sn), y = r * (wide ? sn : cs);
+        const double zz = 1.0 - x * x - y * y;
+        const double z = std::sqrt(zz > 0.0 ? zz : 0.0);
+        dx[l] = x * tux + y * tvx + z * nx;
+        dy[l] = x * tuy + y * tvy + z * ny;
+        dz[l] = x * tuz + y * tvz + z * nz;
+    }
+    const double* __restrict u = pk.u;
+    const double* __restrict v = pk.v;
+    double* __restrict w = pk.w;
+    alignas(64) double px[L], py[L], pz[L];
+    const double c0x = s.c[0].x, c0y = s.c[0].y, c0z = s.c[0].z, c1x = s.c[1].x, c1y = s.c[1].y, c1z = s.c[1].z;
+    const double c2x = s.c[2].x, c2y = s.c[2].y, c2z = s.c[2].z, c3x = s.c[3].x, c3y = s.c[3].y, c3z = s.c[3].z;
+    if (s.count == 3) {
+        for (int l = 0; l < L; ++l) {
+            const double su = std::sqrt(u[l]);
+            const double a0 = 1.0 - su, a1 = su * (1.0 - v[l]), a2 = su * v[l];
+            px[l] = a0 * c0x + a1 * c1x + a2 * c2x;
+            py[l] = a0 * c0y + a1 * c1y + a2 * c2y;
+            pz[l] = a0 * c0z + a1 * c1z + a2 * c2z;
+            w[l] = 1.0;
+        }
+    } else {
+        for (int l = 0; l < L; ++l) {
+            const double a0 = (1 - u[l]) * (1 - v[l]), a1 = u[l] * (1 - v[l]), a2 = u[l] * v[l], a3 = (1 - u[l]) * v[l];
+            px[l] = a0 * c0x + a1 * c1x + a2 * c2x + a3 * c3x;
+            py[l] = a0 * c0y + a1 * c1y + a2 * c2y + a3 * c3y;
+            pz[l] = a0 * c0z + a1 * c1z + a2 * c2z + a3 * c3z;
+            w[l] = 1.0;
+        }
+        if (!s.parallelogram)
+            for (int l = 0; l < pk.lanes; ++l) {
+                const Vec3 du = (1 - v[l]) * (s.c[1] - s.c[0]) + v[l] * (s.c[2] - s.c[3]);
+                const Vec3 dv = (1 - u[l]) * (s.c[3] - s.c[0]) + u[l] * (s.c[2] - s.c[1]);
+                w[l] = glm::length(glm::cross(du, dv));
+            }
+    }
+    const double cx = s.center.x, cy = s.center.y, cz = s.center.z, sc = s.scale;
+    const double offx = s.offset * nx, offy = s.offset * ny, offz = s.offset * nz;
+    double* __restrict ox = pk.ox;
+    double* __restrict oy = pk.oy;
+    double* __restrict oz = pk.oz;
+    for (int l = 0; l < L; ++l) {
+        ox[l] = (px[l] - cx) * sc + offx;
+        oy[l] = (py[l] - cy) * sc + offy;
+        oz[l] = (pz[l] - cz) * sc + offz;
+    }
+    float* __restrict fox = pk.rh.ray.org_x;
+    float* __restrict foy = pk.rh.ray.org_y;
+    float* __restrict foz = pk.rh.ray.org_z;
+    float* __restrict fdx = pk.rh.ray.dir_x;
+    float* __restrict fdy = pk.rh.ray.dir_y;
+    float* __restrict fdz = pk.rh.ray.dir_z;
+    for (int l = 0; l < L; ++l) {
+        fox[l] = static_cast<float>(ox[l]), foy[l] = static_cast<float>(oy[l]), foz[l] = static_cast<float>(oz[l]);
+        fdx[l] = static_cast<float>(dx[l]), fdy[l] = static_cast<float>(dy[l]), fdz[l] = static_cast<float>(dz[l]);
+    }
+}
 
 }  // namespace
 
@@ -60,6 +163,7 @@ struct RaycastRowProvider::Impl {
     unsigned threads = 1;
     EmbreeMesh mesh;                          // the scene in Embree coordinates
     std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
+    std::vector<Vec3> normal;                 // per patch, packed: every hit reads one
     mutable std::atomic<std::uint64_t> traced{0};
 
     Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
@@ -68,6 +172,8 @@ struct RaycastRowProvider::Impl {
         if (scene.size() == 0) return;
         build_embree_mesh(scene, mesh, "raycast");
         parallelogram.resize(scene.size());
+        normal.resize(scene.size());
+        for (std::uint32_t i = 0; i < scene.size(); ++i) normal[i] = scene.patches[i].normal;
         for (std::uint32_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             if (p.count != 4) continue;
@@ -106,12 +212,17 @@ struct RaycastRowProvider::Impl {
         std::vector<std::uint32_t>& order = scratch.order;
         out.clear();
         const Patch& p = scene.patches[i];
+        Sender snd;
         const auto c = scene.patch_vertices(i);
+        for (std::size_t k = 0; k < c.size() && k < 4; ++k) snd.c[k] = c[k];
+        snd.count = p.count;
+        snd.parallelogram = p.count != 4 || parallelogram[i];
+        orthonormal_basis(p.normal, snd.tu, snd.tv);
+        snd.n = p.normal;
+        snd.center = mesh.center;
+        snd.scale = mesh.scale;
+        snd.offset = std::max(kOriginOffset * p.size * mesh.scale, kMinOffset);
         Rng rng = row_rng(opt.seed, i);
-        Vec3 tu, tv;
-        orthonormal_basis(p.normal, tu, tv);
-        const double offset = std::max(kOriginOffset * p.size * mesh.scale, kMinOffset);
-        const Vec3 nrm = p.normal;
         double wsum = 0.0;
         std::uint64_t traced_here = 0;
         RTCIntersectContext ctx;
@@ -124,34 +235,9 @@ struct RaycastRowProvider::Impl {
             pk.rh.ray.id[l] = 0;
             pk.rh.ray.flags[l] = 0;
         }
-        const auto add = [&](double u, double v, double r1, double r2) {
-            Vec3 x;
-            double w = 1.0;
-            if (p.count == 3) {
-                const double su = std::sqrt(u);  // area-uniform map of the unit square onto a triangle
-                x = (1.0 - su) * c[0] + su * (1.0 - v) * c[1] + su * v * c[2];
-            } else {
-                x = (1 - u) * (1 - v) * c[0] + u * (1 - v) * c[1] + u * v * c[2] + (1 - u) * v * c[3];
-                if (!parallelogram[i]) {
-                    const Vec3 du = (1 - v) * (c[1] - c[0]) + v * (c[2] - c[3]);
-                    const Vec3 dv = (1 - u) * (c[3] - c[0]) + u * (c[2] - c[1]);
-                    w = glm::length(glm::cross(du, dv));
-                }
-            }
-            wsum += w;
-            const int l = pk.lanes++;
-            pk.dir[l] = cosine_direction(r1, r2, tu, tv, nrm);
-            pk.org[l] = (x - mesh.center) * mesh.scale + offset * nrm;
-            pk.w[l] = w;
-            pk.rh.ray.org_x[l] = static_cast<float>(pk.org[l].x);
-            pk.rh.ray.org_y[l] = static_cast<float>(pk.org[l].y);
-            pk.rh.ray.org_z[l] = static_cast<float>(pk.org[l].z);
-            pk.rh.ray.dir_x[l] = static_cast<float>(pk.dir[l].x);
-            pk.rh.ray.dir_y[l] = static_cast<float>(pk.dir[l].y);
-            pk.rh.ray.dir_z[l] = static_cast<float>(pk.dir[l].z);
-        };
         const auto trace = [&]() {
             if (pk.lanes == 0) return;
+            make_rays(pk, snd);
             for (int l = 0; l < 16; ++l) {
                 pk.valid[l] = l < pk.lanes ? -1 : 0;
                 pk.rh.ray.tnear[l] = 0.0f;
@@ -162,17 +248,20 @@ struct RaycastRowProvider::Impl {
             rtcIntersect16(pk.valid, mesh.embree.scene, &ctx, &pk.rh);
             traced_here += static_cast<std::uint64_t>(pk.lanes);
             for (int l = 0; l < pk.lanes; ++l) {
+                wsum += pk.w[l];
                 if (pk.rh.hit.geomID[l] == RTC_INVALID_GEOMETRY_ID) continue;  // left the scene
                 std::uint32_t j = mesh.tri_patch[pk.rh.hit.primID[l]];
+                const Vec3 d(pk.dx[l], pk.dy[l], pk.dz[l]);
                 // A hit on the ray's own patch (or its plane) can only be float rounding: trace
                 // on past it, a few times at most (then the ray is dropped, as if absorbed).
                 if (pass_through(i, j))
-                    j = first_patch(mesh, ctx, pk.org[l], pk.dir[l], [&](std::uint32_t q) { return pass_through(i, q); },
-                                    traced_here, std::nextafter(pk.rh.ray.tfar[l], std::numeric_limits<float>::infinity()),
+                    j = first_patch(mesh, ctx, Vec3(pk.ox[l], pk.oy[l], pk.oz[l]), d,
+                                    [&](std::uint32_t q) { return pass_through(i, q); }, traced_here,
+                                    std::nextafter(pk.rh.ray.tfar[l], std::numeric_limits<float>::infinity()),
                                     kRetraces - 1);
                 // A front face receives; so does either side of an obstruction-only patch, whose
                 // factor is measured only to be left out (Scene::drawn), so that it is not sky.
-                if (j != kNoPatch && (glm::dot(pk.dir[l], scene.patches[j].normal) < 0.0 || j >= scene.obstruction_first)) {
+                if (j != kNoPatch && (glm::dot(d, normal[j]) < 0.0 || j >= scene.obstruction_first)) {
                     if (acc[j] == 0.0) touched.push_back(j);
                     acc[j] += pk.w[l];
                 }
@@ -185,15 +274,15 @@ struct RaycastRowProvider::Impl {
             perm.resize(S);
             for (std::uint32_t k = 0; k < S; ++k) perm[k] = k;
             for (std::uint32_t k = S; k > 1; --k)  // Fisher–Yates
-                std::swap(perm[k - 1], perm[static_cast<std::uint32_t>(rng.next() % k)]);
+                std::swap(perm[k - 1], perm[rng.below(k)]);
             if (order.size() != S) tile_order(static_cast<std::uint32_t>(m), order);
             const double inv = 1.0 / static_cast<double>(m);
             for (std::uint32_t k = 0; k < S; ++k) {
-                const double u = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
-                const double v = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
-                const double r1 = (static_cast<double>(order[k] % m) + rng.uniform()) * inv;
-                const double r2 = (static_cast<double>(order[k] / m) + rng.uniform()) * inv;
-                add(u, v, r1, r2);
+                const int l = pk.lanes++;
+                pk.u[l] = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
+                pk.v[l] = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
+                pk.r1[l] = (static_cast<double>(order[k] % m) + rng.uniform()) * inv;
+                pk.r2[l] = (static_cast<double>(order[k] / m) + rng.uniform()) * inv;
                 if (pk.lanes == 16) trace();
             }
             trace();
