@@ -74,11 +74,11 @@ struct Sender {
 // triangle through √u, on a quad bilinear with weight |∂x/∂u × ∂x/∂v| unless a parallelogram)
 // lifted offset along the normal, and the cosine-weighted direction (cosine_direction, written
 // here without branches). Loops over plain arrays, so the compiler vectorizes them (with this
-// file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 clone where the CPU has
-// one. The same bits either way: IEEE +, ×, ÷ and √ round alike in any width, and neither clone
-// contracts to FMA (no fma target).
-__attribute__((target_clones("avx2", "default"), optimize("tree-vectorize", "vect-cost-model=dynamic"))) void
-make_rays(Packet& pk, const Sender& s) {
+// file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 copy where the CPU has
+// it (make_rays picks one at start-up: a plain check, not an ifunc, which sanitizers dislike).
+// The same bits either way (checked: the same .ffm with either copy): IEEE +, ×, ÷ and √ round
+// alike in any width, and neither copy contracts to FMA (no fma target).
+__attribute__((always_inline)) inline void make_rays_body(Packet& pk, const Sender& s) {
     // All 16 lanes (a fixed trip count vectorizes; lanes past pk.lanes are left out by the
     // packet's valid mask), from locals that no store can alias.
     constexpr int L = 16;
@@ -153,6 +153,15 @@ make_rays(Packet& pk, const Sender& s) {
         fox[l] = static_cast<float>(ox[l]), foy[l] = static_cast<float>(oy[l]), foz[l] = static_cast<float>(oz[l]);
         fdx[l] = static_cast<float>(dx[l]), fdy[l] = static_cast<float>(dy[l]), fdz[l] = static_cast<float>(dz[l]);
     }
+}
+
+#define FFCUBE_VECTORIZE optimize("tree-vectorize", "vect-cost-model=dynamic")
+__attribute__((target("avx2"), FFCUBE_VECTORIZE)) void make_rays_avx2(Packet& pk, const Sender& s) { make_rays_body(pk, s); }
+__attribute__((FFCUBE_VECTORIZE)) void make_rays_plain(Packet& pk, const Sender& s) { make_rays_body(pk, s); }
+#undef FFCUBE_VECTORIZE
+void make_rays(Packet& pk, const Sender& s) {
+    static const auto chosen = __builtin_cpu_supports("avx2") ? &make_rays_avx2 : &make_rays_plain;
+    chosen(pk, s);
 }
 
 }  // namespace
