@@ -241,7 +241,9 @@ int run(const Options& o) {
     Report report;
     report.set("command", "formfactors");
     Scene scene = mpi_load_and_mesh(o.scene.scene, report);  // under mpirun: rank 0's, broadcast
-    RowOptions row_options = mpi_row_options(o.rows);
+    // --method auto, resolved here so that the fingerprint, the MPI ranks' blocks and the rows
+    // all see the method the scene gets.
+    RowOptions row_options = resolve_row_method(mpi_row_options(o.rows), scene.drawn_scene());
     apply_view3d_controls(scene, row_options, report);  // a .vs3's encl=1: --enforce closure
     refuse_enforcement_with_obstructions(row_options.enforce, scene);  // before any row
     const FfmMetadata meta = row_metadata(row_options);

@@ -139,10 +139,11 @@ int run(const Options& o) {
                                      "share of each row they intercept; run without --matrix, or `ffcube formfactors --sky`",
                                      scene.source));
     // Under mpirun each rank solves its block of rows (docs/scaling.md).
-    const std::unique_ptr<RowBlocks> blocks = mpi_row_blocks(scene, o.rows);
+    // --method auto, resolved before the ranks' blocks are balanced by the rows' estimated cost.
+    const RowOptions row_options = resolve_row_method(mpi_row_options(o.rows), scene.drawn_scene());
+    const std::unique_ptr<RowBlocks> blocks = mpi_row_blocks(scene, row_options);
     so.blocks = blocks.get();
     validate(so);
-    const RowOptions row_options = mpi_row_options(o.rows);
 
     // Rows: from the file, or hemicubes. The hemicube provider starts before this process makes a
     // GL context of its own (the picture's), so that its workers can be forked processes.

@@ -81,10 +81,18 @@ void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {
 }
 
 void add_row_options(CLI::App& app, RowOptions& o) {
-    add_word_option(app, "--method", o.method, parse_row_method, {"hemicube", "raycast"},
-                    "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)", "hemicube");
-    app.add_option("--rays", o.rays, "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays))")
-        ->default_val(4096);
+    o.method_auto = true;  // --method's default
+    app.add_option_function<std::string>(
+           "--method", [&o](const std::string& word) { set_row_method(word, o); },
+           "auto (rays on a mesh of 1000 pieces or more without obstruction-only surfaces, else hemicubes), "
+           "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)")
+        ->check(CLI::IsMember({"auto", "hemicube", "raycast"}))
+        ->default_str("auto");
+    app.add_option_function<std::uint64_t>(
+           "--rays", [&o](std::uint64_t r) { o.rays = r, o.rays_given = true; },
+           "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays); default 4096 with --method raycast, "
+           "max(N^2, min(4 N^2, 65536)) where --method auto casts rays)")
+        ->default_str("4096");
     app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
         ->default_val(256);
     add_word_option(app, "--backend", o.backend, parse_backend, {"auto", "egl", "osmesa"},

@@ -93,8 +93,7 @@ struct HemicubeRowProvider::Impl {
 
     // HemicubeOptions::fine_row_rays, or its default: max(N², min(4 N², 65,536)).
     std::uint64_t fine_rays() const {
-        const auto n = static_cast<std::uint64_t>(opt.resolution);
-        return opt.fine_row_rays ? opt.fine_row_rays : std::max(n * n, std::min<std::uint64_t>(4 * n * n, 65536));
+        return opt.fine_row_rays ? opt.fine_row_rays : HemicubeOptions::default_fine_row_rays(opt.resolution);
     }
     void resolve_fine_rows() {
         const bool obstructions = scene->obstruction_first < scene->patches.size();

@@ -101,6 +101,37 @@ EnforceRequest parse_enforce_request(std::string_view text) {
     throw InputError(fmt::format("--enforce {}: must be reciprocity, closure or both", text));
 }
 
+void set_row_method(std::string_view text, RowOptions& o) {
+    if (text == "auto") {
+        o.method_auto = true;
+        return;
+    }
+    try {
+        o.method = parse_row_method(text);
+    } catch (const InputError&) {
+        throw InputError(fmt::format("--method {}: must be auto, hemicube or raycast", text));
+    }
+    o.method_auto = false;
+}
+
+RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn) {
+    RowOptions r = o;
+    if (!o.method_auto) return r;
+    r.method_auto = false;
+    const bool obstructions = drawn.obstruction_first < drawn.patches.size();
+    const bool many = drawn.grids.size() >= HemicubeOptions::kFineRowsByRaysMinPieces;
+    r.auto_raycast = many && !obstructions && o.fine_rows != FineRows::hemicubes;
+    r.method_choice = fmt::format("auto: {} pieces{}", drawn.grids.size(),
+                                  !many              ? fmt::format(", fewer than {}", HemicubeOptions::kFineRowsByRaysMinPieces)
+                                  : obstructions     ? ", obstruction-only surfaces"
+                                  : !r.auto_raycast  ? ", --fine-rows hemicubes"
+                                                     : fmt::format(", {} or more", HemicubeOptions::kFineRowsByRaysMinPieces));
+    r.method = r.auto_raycast ? RowMethod::Raycast : RowMethod::Hemicube;
+    if (r.auto_raycast && !o.rays_given)
+        r.rays = o.fine_row_rays ? o.fine_row_rays : HemicubeOptions::default_fine_row_rays(o.resolution);
+    return r;
+}
+
 std::string_view to_string(RowMethod m) { return m == RowMethod::Raycast ? "raycast" : "hemicube"; }
 std::string_view to_string(Correction c) { return c == Correction::Near ? "near" : "none"; }
 std::string_view to_string(FarFieldMode f) {
@@ -133,8 +164,9 @@ void validate(const SceneOptions& o) {
 }
 
 void validate(const RowOptions& o) {
-    if (o.method == RowMethod::Hemicube) check_row_resolution(o.resolution);
-    if (o.method == RowMethod::Raycast && o.rays == 0) throw InputError("--rays 0: at least 1 ray per patch");
+    if (o.method == RowMethod::Hemicube || o.method_auto) check_row_resolution(o.resolution);
+    if ((o.method == RowMethod::Raycast || o.rays_given) && o.rays == 0)
+        throw InputError("--rays 0: at least 1 ray per patch");
     if (!(o.near_k > 0) || !std::isfinite(o.near_k))
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
     if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))

@@ -29,12 +29,12 @@ RowSource make_row_source(const Scene& radiating, const RowOptions& options) {
     validate(options);
     const Scene& scene = radiating.drawn_scene();
     RowSource rows;
-    rows.options_ = options;
+    rows.options_ = resolve_row_method(options, scene);
     Stopwatch watch;
-    if (options.method == RowMethod::Raycast)
-        rows.raycast_ = std::make_unique<RaycastRowProvider>(scene, raycast_options(options));
+    if (rows.options_.method == RowMethod::Raycast)
+        rows.raycast_ = std::make_unique<RaycastRowProvider>(scene, raycast_options(rows.options_));
     else
-        rows.hemicube_ = std::make_unique<HemicubeRowProvider>(scene, hemicube_options(options));
+        rows.hemicube_ = std::make_unique<HemicubeRowProvider>(scene, hemicube_options(rows.options_));
     rows.wrap(radiating);
     rows.setup_seconds_ = watch.seconds();
     return rows;
@@ -72,7 +72,12 @@ void rebind_row_source(RowSource& rows, const Scene& radiating) {
 std::vector<std::string> describe(const RowSource& rows) {
     std::vector<std::string> lines;
     if (const RaycastRowProvider* r = rows.raycast())
-        lines.push_back(fmt::format("raycast (Embree), {} thread(s), {} rays per patch", r->threads(), r->rays()));
+        lines.push_back(fmt::format("raycast (Embree), {} thread(s), {} rays per patch{}", r->threads(), r->rays(),
+                                    rows.options().auto_raycast
+                                        ? fmt::format(" (--method auto: a mesh of {} pieces or more; --method hemicube "
+                                                      "draws hemicubes)",
+                                                      HemicubeOptions::kFineRowsByRaysMinPieces)
+                                        : ""));
     if (const HemicubeRowProvider* h = rows.hemicube())
         lines.push_back(fmt::format("hemicube on {} ({}), {} {}, resolution {}", h->backend(), h->renderer(), h->threads(),
                                     h->workers(), h->resolution()));
@@ -276,6 +281,7 @@ void report_rates(Report& r, const RowSource& rows, std::size_t patches, double 
 
 void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
+    if (!rows.options().method_choice.empty()) r.set("method_choice", rows.options().method_choice);
     r.set("time.setup", rows.setup_seconds());
     if (const CorrectedRowProvider* c = rows.corrected()) {
         if (rows.hemicube()) {

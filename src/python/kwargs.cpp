@@ -145,7 +145,8 @@ std::string Kwargs::scene_option_given() const {
 }
 
 void Kwargs::read_row_options(RowOptions& o, bool enforce) {
-    if (py::object v = take("method"); !v.is_none()) o.method = parse_row_method(word("method", v));
+    o.method_auto = true;  // method="auto", the command line's default, unless named
+    if (py::object v = take("method"); !v.is_none()) set_row_method(word("method", v), o);
     if (py::object v = take("resolution"); !v.is_none())
         o.resolution = static_cast<int>(integer("resolution", v, INT_MIN, INT_MAX));  // check_row_resolution says the rule
     if (py::object v = take("backend"); !v.is_none()) o.backend = parse_backend(word("backend", v));
@@ -162,7 +163,10 @@ void Kwargs::read_row_options(RowOptions& o, bool enforce) {
     }
     if (py::object v = take("seed"); !v.is_none())
         o.seed = integer("seed", v, 0, std::numeric_limits<std::uint64_t>::max());
-    if (py::object v = take("rays"); !v.is_none()) o.rays = integer("rays", v, 0, std::numeric_limits<std::uint64_t>::max());
+    if (py::object v = take("rays"); !v.is_none()) {
+        o.rays = integer("rays", v, 0, std::numeric_limits<std::uint64_t>::max());
+        o.rays_given = true;
+    }
     if (py::object v = take("correct"); !v.is_none()) o.correct = parse_correction(word("correct", v));
     if (py::object v = take("near_k"); !v.is_none()) o.near_k = number("near_k", v);
     if (py::object v = take("exact_visibility"); !v.is_none()) {  // its range: validate(RowOptions)

@@ -151,8 +151,9 @@ TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
     EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
 }
 
-// --fine-rows: on a 1,200-facet city (a mesh of 1,000 pieces or more) the default ray-casts the
-// rows planned at 4 × 4 and says so in its log and report; --fine-rows hemicubes draws them.
+// --fine-rows: on a 1,200-facet city (a mesh of 1,000 pieces or more) hemicube runs ray-cast the
+// rows planned at 4 × 4 by default and say so in their log and report; --fine-rows hemicubes
+// draws them.
 // The plans are the scene's, so both runs have the same rows at 4 × 4, and every other row is
 // the same bits in both (.mtx text per row); a bad word is refused without output.
 TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
@@ -163,8 +164,8 @@ TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
     std::map<std::string, std::map<std::string, std::string>> rows;  // run -> row -> its .mtx lines
     for (const std::string mode : {"auto", "hemicubes"}) {
         const std::string args = mode == "auto" ? "" : " --fine-rows " + mode;
-        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --resolution 32" + args + " -o " +
-                                  (dir / (mode + ".mtx")) + " --report " + (dir / (mode + ".json")));
+        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --method hemicube --resolution 32" + args +
+                                  " -o " + (dir / (mode + ".mtx")) + " --report " + (dir / (mode + ".json")));
         ASSERT_EQ(r.code, 0) << r.output;
         EXPECT_EQ(r.output.find("ray-cast, 4096 rays each") != std::string::npos, mode == "auto") << r.output;
         report[mode] = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
@@ -207,6 +208,43 @@ TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
     const auto bad = run_ffcube("formfactors " + city + " --no-subdivide --fine-rows maybe -o " + (dir / "x.ffm"));
     EXPECT_EQ(bad.code, 2) << bad.output;
     EXPECT_NE(bad.output.find("--fine-rows"), std::string::npos) << bad.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
+}
+
+// --method auto (the default): a mesh of 1,000 pieces or more (the 1,200-facet city) gets the
+// ray caster at the fine-row count for its resolution (4,096 at N = 32), the same bytes as that
+// run named; --fine-rows hemicubes, or a scene of fewer pieces (the built-in box), the hemicube.
+// The log and the report say which and why; a bad word is refused without output.
+TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
+    TempDir dir;
+    const std::string city = dir / "city.stl";
+    ASSERT_EQ(test::gen_city(city, 1200, 2), 0);
+    const std::string base = "formfactors " + city + " --no-subdivide --resolution 32 --threads 2";
+    const auto a = run_ffcube(base + " -o " + (dir / "auto.ffm") + " --report " + (dir / "auto.json"));
+    ASSERT_EQ(a.code, 0) << a.output;
+    EXPECT_NE(a.output.find("4096 rays per patch (--method auto"), std::string::npos) << a.output;
+    const auto named = run_ffcube(base + " --method raycast --rays 4096 -o " + (dir / "named.ffm"));
+    ASSERT_EQ(named.code, 0) << named.output;
+    EXPECT_EQ(test::read_text(dir / "auto.ffm"), test::read_text(dir / "named.ffm"));
+    const auto ra = nlohmann::json::parse(test::read_text(dir / "auto.json"));
+    EXPECT_EQ(ra["method"], "raycast");
+    EXPECT_EQ(ra["method_choice"], "auto: 1200 pieces, 1000 or more");
+
+    const auto h = run_ffcube(base + " --fine-rows hemicubes -o " + (dir / "h.ffm") + " --report " + (dir / "h.json"));
+    ASSERT_EQ(h.code, 0) << h.output;
+    const auto rh = nlohmann::json::parse(test::read_text(dir / "h.json"));
+    EXPECT_EQ(rh["method"], "hemicube");
+    EXPECT_EQ(rh["method_choice"], "auto: 1200 pieces, --fine-rows hemicubes");
+
+    const auto box = run_ffcube("formfactors --resolution 32 -q -o " + (dir / "box.ffm") + " --report " + (dir / "box.json"));
+    ASSERT_EQ(box.code, 0) << box.output;
+    const auto rb = nlohmann::json::parse(test::read_text(dir / "box.json"));
+    EXPECT_EQ(rb["method"], "hemicube");
+    EXPECT_NE(rb["method_choice"].get<std::string>().find("fewer than 1000"), std::string::npos) << rb["method_choice"];
+
+    const auto bad = run_ffcube(base + " --method maybe -o " + (dir / "x.ffm"));
+    EXPECT_EQ(bad.code, 2) << bad.output;
+    EXPECT_NE(bad.output.find("--method"), std::string::npos) << bad.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
 }
 

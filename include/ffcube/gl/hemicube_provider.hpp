@@ -84,6 +84,11 @@ struct HemicubeOptions {
     FineRows fine_rows = FineRows::hemicubes;
     std::uint64_t fine_row_rays = 0;
     static constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
+    // fine_row_rays' default at resolution N: max(N², min(4 N², 65,536)).
+    static std::uint64_t default_fine_row_rays(int resolution) {
+        const auto n = static_cast<std::uint64_t>(resolution > 0 ? resolution : 0);
+        return std::max(n * n, std::min<std::uint64_t>(4 * n * n, 65536));
+    }
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers

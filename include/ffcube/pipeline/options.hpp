@@ -52,6 +52,13 @@ constexpr std::size_t kMaxExactVisibilityOccluders = 64;
 
 struct RowOptions {
     RowMethod method = RowMethod::Hemicube;
+    // --method auto: resolve_row_method picks the method from the scene; a named method
+    // (set_row_method) clears it. The command line and Python start with it on (their default
+    // is auto); a RowOptions made in code keeps `method` as set. auto_raycast: resolve_row_method
+    // chose the ray caster.
+    bool method_auto = false;
+    bool auto_raycast = false;
+    std::string method_choice;  // resolve_row_method's reason, for the report ("" when named)
     // Hemicube (gl/hemicube_provider.hpp): top-face pixels (hemicube/layout.hpp's rule), context.
     int resolution = 256;
     Backend backend = Backend::Auto;
@@ -62,8 +69,10 @@ struct RowOptions {
     // Hemicube workers may be forked processes (HemicubeOptions::worker_processes); the MPI
     // commands set false. Rows do not depend on it.
     bool worker_processes = true;
-    // Ray caster: rays per patch (≥ 1).
+    // Ray caster: rays per patch (≥ 1). rays_given: set by --rays (else --method auto's ray caster
+    // casts the fine-row count, HemicubeOptions::default_fine_row_rays).
     std::uint64_t rays = 4096;
+    bool rays_given = false;
     // The near-field correction (accuracy/near_field.hpp) and its far field.
     Correction correct = Correction::Near;
     double near_k = 3.0;
@@ -106,6 +115,8 @@ struct RowOptions {
 // Parsers of the command line's words; each throws InputError naming the option and the words
 // it accepts.
 RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
+// --method: auto | hemicube | raycast, into method and method_auto.
+void set_row_method(std::string_view text, RowOptions& o);
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
 SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
@@ -120,6 +131,16 @@ ContactCuts parse_contact_cuts(std::string_view text);    // auto | on | off
 bool cuts_contacts(const SceneOptions& o);
 const char* to_string(ContactCuts c);
 std::string_view to_string(RowMethod m);
+
+// --method auto, resolved for the scene whose rows are made (its drawn scene): the ray caster
+// where the scene has at least HemicubeOptions::kFineRowsByRaysMinPieces pieces (a mesh of that
+// many facets), no obstruction-only surfaces (the ray caster credits either side of them) and
+// --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays costs a third of one
+// hemicube that draws the whole city and is more accurate (docs/benchmarks.md, "Rows by rays on
+// scenes of many pieces"). Its rays: --rays if given, else --fine-row-rays, else
+// HemicubeOptions::default_fine_row_rays(--resolution). Everywhere else the hemicube. Options
+// without method_auto come back as they are.
+RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn);
 std::string_view to_string(Correction c);
 std::string_view to_string(FarFieldMode f);
 std::string_view to_string(EnforceRequest e);
