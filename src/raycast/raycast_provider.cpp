@@ -72,8 +72,8 @@ struct Sender {
 
 // Lanes [0, lanes) of pk from their (u, v, r1, r2): the point on the sender (area-uniform: on a
 // triangle through √u, on a quad bilinear with weight |∂x/∂u × ∂x/∂v| unless a parallelogram)
-// lifted offset along the normal, and the cosine-weighted direction (cosine_direction, written
-// here without branches). Loops over plain arrays, so the compiler vectorizes them (with this
+// lifted offset along the normal, and the cosine-weighted direction (concentric_disk lifted to
+// the hemisphere about the sender's frame). Loops over plain arrays, so the compiler vectorizes them (with this
 // file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 copy where the CPU has
 // it (make_rays picks one at start-up: a plain check, not an ifunc, which sanitizers dislike).
 // The same bits either way (checked: the same .ffm with either copy): IEEE +, ×, ÷ and √ round
@@ -90,13 +90,8 @@ __attribute__((always_inline)) inline void make_rays_body(Packet& pk, const Send
     const double* __restrict r1 = pk.r1;
     const double* __restrict r2 = pk.r2;
     for (int l = 0; l < L; ++l) {
-        const double a = 2.0 * r1[l] - 1.0, b = 2.0 * r2[l] - 1.0;
-        const bool wide = a * a > b * b;
-        const double r = wide ? a : b, num = wide ? b : a;
-        const double t = num / (r != 0.0 ? r : 1.0);  // r = 0 only at a = b = 0, where num = 0
-        double sn = 0.0, cs = 0.0;
-        sincos_quarter_turn(t, sn, cs);
-        const double x = r * (wide ? cs : sn), y = r * (wide ? sn : cs);
+        double x = 0.0, y = 0.0;
+        concentric_disk(r1[l], r2[l], x, y);
         const double zz = 1.0 - x * x - y * y;
         const double z = std::sqrt(zz > 0.0 ? zz : 0.0);
         dx[l] = x * tux + y * tvx + z * nx;
@@ -281,17 +276,18 @@ struct RaycastRowProvider::Impl {
             const std::uint64_t m = strata_side(left);
             const std::uint32_t S = static_cast<std::uint32_t>(m * m);
             perm.resize(S);
-            for (std::uint32_t k = 0; k < S; ++k) perm[k] = k;
+            for (std::uint32_t y = 0, k = 0; y < m; ++y)
+                for (std::uint32_t x = 0; x < m; ++x) perm[k++] = pack_stratum(x, y);
             for (std::uint32_t k = S; k > 1; --k)  // Fisher–Yates
                 std::swap(perm[k - 1], perm[rng.below(k)]);
             if (order.size() != S) tile_order(static_cast<std::uint32_t>(m), order);
             const double inv = 1.0 / static_cast<double>(m);
             for (std::uint32_t k = 0; k < S; ++k) {
                 const int l = pk.lanes++;
-                pk.u[l] = (static_cast<double>(perm[k] % m) + rng.uniform()) * inv;
-                pk.v[l] = (static_cast<double>(perm[k] / m) + rng.uniform()) * inv;
-                pk.r1[l] = (static_cast<double>(order[k] % m) + rng.uniform()) * inv;
-                pk.r2[l] = (static_cast<double>(order[k] / m) + rng.uniform()) * inv;
+                pk.u[l] = (static_cast<double>(stratum_x(perm[k])) + rng.uniform()) * inv;
+                pk.v[l] = (static_cast<double>(stratum_y(perm[k])) + rng.uniform()) * inv;
+                pk.r1[l] = (static_cast<double>(stratum_x(order[k])) + rng.uniform()) * inv;
+                pk.r2[l] = (static_cast<double>(stratum_y(order[k])) + rng.uniform()) * inv;
                 if (pk.lanes == 16) trace();
             }
             trace();

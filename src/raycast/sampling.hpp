@@ -34,26 +34,29 @@ inline void sincos_quarter_turn(double t, double& s, double& c) {
         x2 * (1.0 / 479001600.0 + x2 * (-1.0 / 87178291200.0 + x2 * (1.0 / 20922789888000.0))))))));
 }
 
-// Cosine-weighted direction about nrm from (r1, r2) uniform on the unit square, through the
-// concentric map of the square onto the disk (Shirley and Chiu 1997), which keeps strata compact
-// (the polar map would make wedges thin near the pole), lifted to the hemisphere (Malley).
-// φ = π/4 · b/a, or π/2 − π/4 · a/b (cos and sin swap): a quarter turn at most either way.
-inline Vec3 cosine_direction(double r1, double r2, const Vec3& tu, const Vec3& tv, const Vec3& nrm) {
+// The concentric map (Shirley and Chiu 1997) of (r1, r2) on the unit square onto (x, y) on the
+// unit disk, which keeps strata compact (the polar map would make wedges thin near the pole):
+// φ = π/4 · b/a, or π/2 − π/4 · a/b (cos and sin swap), a quarter turn at most either way.
+// Without branches (selects), so that make_rays' loop over a packet vectorizes. Lifted to the
+// hemisphere, (x, y, √(1 − x² − y²)), it is the cosine-weighted direction (Malley).
+inline void concentric_disk(double r1, double r2, double& x, double& y) {
     const double a = 2.0 * r1 - 1.0, b = 2.0 * r2 - 1.0;
-    double x = 0.0, y = 0.0;
-    if (a * a > b * b) {
-        double s = 0.0, c = 0.0;
-        sincos_quarter_turn(b / a, s, c);
-        x = a * c, y = a * s;
-    } else if (b != 0.0) {
-        double s = 0.0, c = 0.0;
-        sincos_quarter_turn(a / b, s, c);
-        x = b * s, y = b * c;
-    }
-    return x * tu + y * tv + std::sqrt(std::max(0.0, 1.0 - x * x - y * y)) * nrm;
+    const bool wide = a * a > b * b;
+    const double r = wide ? a : b, num = wide ? b : a;
+    const double t = num / (r != 0.0 ? r : 1.0);  // r = 0 only at a = b = 0, where num = 0
+    double sn = 0.0, cs = 0.0;
+    sincos_quarter_turn(t, sn, cs);
+    x = r * (wide ? cs : sn);
+    y = r * (wide ? sn : cs);
 }
 
-// The direction strata of an m × m batch in the order its rays are cast: 4 × 4 tiles of the
+// A stratum (x, y) of an m × m grid, m ≤ kMaxStrataSide, packed in one word: no division by m
+// to unpack it (four of them a ray cost as much as the shuffle).
+inline std::uint32_t pack_stratum(std::uint32_t x, std::uint32_t y) { return x | (y << 16); }
+inline std::uint32_t stratum_x(std::uint32_t s) { return s & 0xFFFFu; }
+inline std::uint32_t stratum_y(std::uint32_t s) { return s >> 16; }
+
+// The direction strata of an m × m batch (packed) in the order its rays are cast: 4 × 4 tiles of the
 // square, row after row of tiles (clipped at the edges), so that the 16 rays of a packet leave in
 // neighbouring directions and Embree's packet traversal (RTC_INTERSECT_CONTEXT_FLAG_COHERENT)
 // visits the same nodes for most of them: half the CPU of single incoherent rays on a city.
@@ -63,7 +66,7 @@ inline void tile_order(std::uint32_t m, std::vector<std::uint32_t>& order) {
     for (std::uint32_t ty = 0; ty < m; ty += 4)
         for (std::uint32_t tx = 0; tx < m; tx += 4)
             for (std::uint32_t y = ty; y < std::min(ty + 4, m); ++y)
-                for (std::uint32_t x = tx; x < std::min(tx + 4, m); ++x) order.push_back(y * m + x);
+                for (std::uint32_t x = tx; x < std::min(tx + 4, m); ++x) order.push_back(pack_stratum(x, y));
 }
 
 }  // namespace ffcube::raycast_sampling
