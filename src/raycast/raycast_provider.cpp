@@ -62,7 +62,7 @@ struct Packet {
 
 // What a row's rays need of their sender, in Embree's coordinates where marked.
 struct Sender {
-    Vec3 c[4];              // corners (scene coordinates; c[3] unused for a triangle)
+    Vec3 c[4]{};            // corners (scene coordinates; c[3] zero and unused for a triangle)
     int count = 3;
     bool parallelogram = true;
     Vec3 tu, tv, n;         // tangent frame, n the normal
@@ -73,9 +73,10 @@ struct Sender {
 // Lanes [0, lanes) of pk from their (u, v, r1, r2): the point on the sender (area-uniform: on a
 // triangle through √u, on a quad bilinear with weight |∂x/∂u × ∂x/∂v| unless a parallelogram)
 // lifted offset along the normal, and the cosine-weighted direction (concentric_disk lifted to
-// the hemisphere about the sender's frame). Loops over plain arrays, so the compiler vectorizes them (with this
-// file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 copy where the CPU has
-// it (make_rays picks one at start-up: a plain check, not an ifunc, which sanitizers dislike).
+// the hemisphere about the sender's frame). Loops over plain arrays, so the compiler vectorizes
+// them (with this file's -fno-math-errno -fno-trapping-math, src/CMakeLists.txt); an AVX2 copy
+// where the CPU has it (make_rays picks one at start-up: a plain check, not an ifunc, which
+// sanitizers dislike).
 // The same bits either way (checked: the same .ffm with either copy): IEEE +, ×, ÷ and √ round
 // alike in any width, and neither copy contracts to FMA (no fma target).
 __attribute__((always_inline)) inline void make_rays_body(Packet& pk, const Sender& s) {
@@ -151,7 +152,9 @@ __attribute__((always_inline)) inline void make_rays_body(Packet& pk, const Send
 }
 
 #define FFCUBE_VECTORIZE optimize("tree-vectorize", "vect-cost-model=dynamic")
-__attribute__((target("avx2"), FFCUBE_VECTORIZE)) void make_rays_avx2(Packet& pk, const Sender& s) { make_rays_body(pk, s); }
+__attribute__((target("avx2"), FFCUBE_VECTORIZE)) void make_rays_avx2(Packet& pk, const Sender& s) {
+    make_rays_body(pk, s);
+}
 __attribute__((FFCUBE_VECTORIZE)) void make_rays_plain(Packet& pk, const Sender& s) { make_rays_body(pk, s); }
 #undef FFCUBE_VECTORIZE
 void make_rays(Packet& pk, const Sender& s) {
