@@ -8,12 +8,16 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <map>
+#include <span>
+#include <tuple>
 #include <numbers>
 #include <thread>
 #include <vector>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/ordered_pool.hpp"
+#include "ffcube/hemicube/pieces.hpp"
 #include "raycast/embree_mesh.hpp"
 #include "raycast/sampling.hpp"
 
@@ -162,6 +166,68 @@ void make_rays(Packet& pk, const Sender& s) {
     chosen(pk, s);
 }
 
+// Whether point x lies in the convex polygon poly (its plane, normal n), edges included within a
+// relative 1e-9 of the polygon's size.
+bool in_convex_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n, double size) {
+    for (std::size_t k = 0; k < poly.size(); ++k) {
+        const Vec3& a = poly[k];
+        const Vec3& b = poly[(k + 1) % poly.size()];
+        if (glm::dot(glm::cross(b - a, x - a), n) < -1e-9 * size * size) return false;
+    }
+    return true;
+}
+
+// Per patch, its twin: the patch of the other face of a two-sided plate (two one-sided pieces
+// with the same corners, facing opposite ways: hemicube/pieces.hpp's find_twins) that covers the
+// same place, or kNoPatch. The hemicube never shows such a piece's back (its twin's front covers
+// the same pixels); the ray caster does the same with a hit on the back of a patch that has a
+// twin (Embree picks either of two coincident triangles). A patch's twin is the patch of the
+// twin piece that contains its centroid: the same patch where both sides are meshed alike, the
+// nearest cover otherwise. Pieces of more than kMaxTwinCells patches are left without twins
+// (the pairing is a scan, cells²; docs/accuracy.md, "Coincident and touching geometry").
+std::vector<std::uint32_t> twin_patches(const Scene& scene) {
+    constexpr std::uint32_t kMaxTwinCells = 4096;
+    std::vector<std::uint32_t> twin(scene.size(), kNoPatch);
+    const std::vector<std::uint8_t> has_twin = find_twins(scene.grids);
+    std::map<std::array<double, 13>, std::vector<std::uint32_t>> by_corners;
+    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
+        if (!has_twin[g]) continue;
+        const PatchGrid& pg = scene.grids[g];
+        std::vector<Vec3> c(pg.corners.begin(), pg.corners.begin() + pg.count);
+        std::sort(c.begin(), c.end(),
+                  [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
+        std::array<double, 13> key{};
+        key[0] = pg.count;
+        for (std::uint32_t k = 0; k < pg.count; ++k)
+            for (int d = 0; d < 3; ++d) key[1 + 3 * k + static_cast<std::size_t>(d)] = c[k][d];
+        by_corners[key].push_back(g);
+    }
+    const auto cells = [&](std::uint32_t g) {
+        const std::uint32_t end =
+            g + 1 < scene.grids.size() ? scene.grids[g + 1].first_patch : static_cast<std::uint32_t>(scene.patches.size());
+        return std::pair{scene.grids[g].first_patch, end};
+    };
+    for (const auto& [key, gs] : by_corners)
+        for (const std::uint32_t a : gs)
+            for (const std::uint32_t b : gs) {
+                const auto [a0, a1] = cells(a);
+                const auto [b0, b1] = cells(b);
+                if (a == b || a1 - a0 > kMaxTwinCells || b1 - b0 > kMaxTwinCells) continue;
+                if (glm::dot(scene.patches[a0].normal, scene.patches[b0].normal) >= 0) continue;
+                for (std::uint32_t p = a0; p < a1; ++p) {
+                    if (twin[p] != kNoPatch) continue;
+                    for (std::uint32_t q = b0; q < b1 && twin[p] == kNoPatch; ++q) {
+                        const auto v = scene.patch_vertices(q);
+                        const Patch& pq = scene.patches[q];
+                        if (in_convex_polygon(scene.patches[p].centroid, std::span<const Vec3>(v.data(), pq.count),
+                                              pq.normal, pq.size))
+                            twin[p] = q;
+                    }
+                }
+            }
+    return twin;
+}
+
 }  // namespace
 
 struct RaycastRowProvider::Impl {
@@ -171,6 +237,7 @@ struct RaycastRowProvider::Impl {
     EmbreeMesh mesh;                          // the scene in Embree coordinates
     std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
     std::vector<Vec3> normal;                 // per patch, packed: every hit reads one
+    std::vector<std::uint32_t> twin;          // per patch: twin_patches (kNoPatch: none)
     mutable std::atomic<std::uint64_t> traced{0};
 
     Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
@@ -181,6 +248,7 @@ struct RaycastRowProvider::Impl {
         parallelogram.resize(scene.size());
         normal.resize(scene.size());
         for (std::uint32_t i = 0; i < scene.size(); ++i) normal[i] = scene.patches[i].normal;
+        twin = twin_patches(scene);
         for (std::uint32_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             if (p.count != 4) continue;
@@ -268,7 +336,11 @@ struct RaycastRowProvider::Impl {
                                     kRetraces - 1);
                 // A front face receives; so does either side of an obstruction-only patch, whose
                 // factor is measured only to be left out (Scene::drawn), so that it is not sky.
-                if (j != kNoPatch && (glm::dot(d, normal[j]) < 0.0 || j >= scene.obstruction_first)) {
+                // The back of one face of a two-sided plate is its twin's front.
+                if (j == kNoPatch) continue;
+                bool front = glm::dot(d, normal[j]) < 0.0;
+                if (!front && twin[j] != kNoPatch) j = twin[j], front = true;
+                if (front || j >= scene.obstruction_first) {
                     if (acc[j] == 0.0) touched.push_back(j);
                     acc[j] += pk.w[l];
                 }
