@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <cstring>
+#include <limits>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
@@ -62,6 +63,60 @@ TEST(PipelineOptions, OneResolutionRule) {
     EXPECT_NO_THROW(validate(o));
     o.rays = 0;
     EXPECT_NE(error_of([&] { validate(o); }).find("--rays 0"), std::string::npos);
+}
+
+// --method auto: the ray caster on a scene of kFineRowsByRaysMinPieces pieces or more (here
+// separate tiles, one piece each), at the fine-row ray count for the resolution unless --rays or
+// --fine-row-rays says otherwise; the hemicube below that, with obstruction-only surfaces, or
+// with --fine-rows hemicubes; options without method_auto unchanged. The reason is kept for the
+// report; the words parse into the same options.
+TEST(PipelineOptions, MethodAutoFollowsThePieces) {
+    const auto tiles = [](std::size_t n) {
+        std::vector<test::NamedPolygon> polys;
+        for (std::size_t k = 0; k < n; ++k) {
+            const double x = static_cast<double>(k % 40) * 1.5, y = static_cast<double>(k / 40) * 1.5;
+            polys.push_back({"t" + std::to_string(k), {{x, y, 0}, {x + 1, y, 0}, {x + 1, y + 1, 0}, {x, y + 1, 0}}});
+        }
+        return test::make_scene(polys, 2.0);
+    };
+    const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
+    RowOptions o;
+    set_row_method("auto", o);
+    EXPECT_TRUE(o.method_auto);
+    o.resolution = 128;
+    Scene many = tiles(min);
+    RowOptions r = resolve_row_method(o, many);
+    EXPECT_EQ(r.method, RowMethod::Raycast);
+    EXPECT_FALSE(r.method_auto);
+    EXPECT_TRUE(r.auto_raycast);
+    EXPECT_EQ(r.rays, 65536u);  // max(N², min(4 N², 65,536)) at N = 128
+    EXPECT_EQ(r.method_choice, fmt::format("auto: {} pieces, {} or more", min, min));
+    EXPECT_EQ(resolve_row_method(r, many).rays, 65536u);  // resolved once: a second call keeps it
+    o.resolution = 64;
+    EXPECT_EQ(resolve_row_method(o, many).rays, 16384u);
+    RowOptions given = o;
+    given.rays = 1000, given.rays_given = true;
+    EXPECT_EQ(resolve_row_method(given, many).rays, 1000u);
+    given = o;
+    given.fine_row_rays = 2048;
+    EXPECT_EQ(resolve_row_method(given, many).rays, 2048u);
+    given = o;
+    given.fine_rows = FineRows::hemicubes;
+    EXPECT_EQ(resolve_row_method(given, many).method, RowMethod::Hemicube);
+    EXPECT_EQ(resolve_row_method(o, tiles(min - 1)).method, RowMethod::Hemicube);
+    many.obstruction_first = static_cast<std::uint32_t>(many.size() - 1);
+    r = resolve_row_method(o, many);
+    EXPECT_EQ(r.method, RowMethod::Hemicube);
+    EXPECT_EQ(r.method_choice, fmt::format("auto: {} pieces, obstruction-only surfaces", min));
+    many.obstruction_first = std::numeric_limits<std::uint32_t>::max();
+    RowOptions named;
+    set_row_method("hemicube", named);
+    EXPECT_FALSE(named.method_auto);
+    EXPECT_EQ(resolve_row_method(named, many).method, RowMethod::Hemicube);
+    EXPECT_TRUE(resolve_row_method(named, many).method_choice.empty());
+    set_row_method("raycast", named);
+    EXPECT_EQ(named.method, RowMethod::Raycast);
+    EXPECT_NE(error_of([&] { set_row_method("rays", named); }).find("must be auto, hemicube or raycast"), std::string::npos);
 }
 
 // What .ffm files and checkpoints record: these strings are compared when a run resumes or a
