@@ -136,8 +136,8 @@ std::string_view to_string(RowMethod m);
 // where the scene has at least HemicubeOptions::kFineRowsByRaysMinPieces pieces (a mesh of that
 // many facets), no obstruction-only surfaces (the ray caster credits either side of them) and
 // --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays costs a third of one
-// hemicube that draws the whole city and is more accurate (docs/benchmarks.md, "Rows by rays on
-// scenes of many pieces"). Its rays: --rays if given, else --fine-row-rays, else
+// hemicube that draws the whole city and is more accurate (docs/accuracy.md, "Rows by rays on a
+// mesh of many pieces"; docs/benchmarks.md, "Rays in coherent packets"). Its rays: --rays if given, else --fine-row-rays, else
 // HemicubeOptions::default_fine_row_rays(--resolution). Everywhere else the hemicube. Options
 // without method_auto come back as they are.
 RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn);
