@@ -317,7 +317,7 @@ int run(const Options& o) {
 
 void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
-    CLI::App* sub = app.add_subcommand("formfactors", "compute the form-factor matrix of a scene (hemicubes, or rays with --method raycast)");
+    CLI::App* sub = app.add_subcommand("formfactors", "compute the form-factor matrix of a scene (hemicubes or rays: --method)");
     add_scene_options(*sub, opts->scene);
     add_row_options(*sub, opts->rows);
     add_enforce_option(*sub, opts->rows);

@@ -84,7 +84,8 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     o.method_auto = true;  // --method's default
     app.add_option_function<std::string>(
            "--method", [&o](const std::string& word) { set_row_method(word, o); },
-           "auto (rays on a mesh of 1000 pieces or more without obstruction-only surfaces, else hemicubes), "
+           "auto (rays on a mesh of 1000 pieces or more, or of 100 or more with at most 4 patches a piece, without "
+           "obstruction-only surfaces; else hemicubes), "
            "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)")
         ->check(CLI::IsMember({"auto", "hemicube", "raycast"}))
         ->default_str("auto");

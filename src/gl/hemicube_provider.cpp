@@ -107,7 +107,7 @@ struct HemicubeRowProvider::Impl {
                 fine_by_rays = true;
                 break;
             case HemicubeOptions::FineRows::automatic:
-                fine_by_rays = !obstructions && n_pieces >= HemicubeOptions::kFineRowsByRaysMinPieces;
+                fine_by_rays = !obstructions && HemicubeOptions::rays_preferred(n_pieces, scene->patches.size());
                 break;
         }
         caster.reset();  // built on the next scene when it is needed

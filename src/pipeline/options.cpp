@@ -119,13 +119,23 @@ RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn) {
     if (!o.method_auto) return r;
     r.method_auto = false;
     const bool obstructions = drawn.obstruction_first < drawn.patches.size();
-    const bool many = drawn.grids.size() >= HemicubeOptions::kFineRowsByRaysMinPieces;
-    r.auto_raycast = many && !obstructions && o.fine_rows != FineRows::hemicubes;
-    r.method_choice = fmt::format("auto: {} pieces{}", drawn.grids.size(),
-                                  !many              ? fmt::format(", fewer than {}", HemicubeOptions::kFineRowsByRaysMinPieces)
-                                  : obstructions     ? ", obstruction-only surfaces"
-                                  : !r.auto_raycast  ? ", --fine-rows hemicubes"
-                                                     : fmt::format(", {} or more", HemicubeOptions::kFineRowsByRaysMinPieces));
+    const std::size_t pieces = drawn.grids.size(), patches = drawn.patches.size();
+    const bool mesh = HemicubeOptions::rays_preferred(pieces, patches);
+    r.auto_raycast = mesh && !obstructions && o.fine_rows != FineRows::hemicubes;
+    const auto why_mesh = [&] {
+        return pieces >= HemicubeOptions::kFineRowsByRaysMinPieces
+                   ? fmt::format(", {} or more", HemicubeOptions::kFineRowsByRaysMinPieces)
+                   : fmt::format(" of {} patches, {} or more of at most {} patches each", patches,
+                                 HemicubeOptions::kRaysMinMeshPieces, HemicubeOptions::kRaysMaxPatchesPerPiece);
+    };
+    r.method_choice = fmt::format("auto: {} pieces{}", pieces,
+                                  !mesh ? fmt::format(" of {} patches: rays need {} pieces, or {} of at most {} patches each",
+                                                      patches, HemicubeOptions::kFineRowsByRaysMinPieces,
+                                                      HemicubeOptions::kRaysMinMeshPieces,
+                                                      HemicubeOptions::kRaysMaxPatchesPerPiece)
+                                  : obstructions    ? ", obstruction-only surfaces"
+                                  : !r.auto_raycast ? ", --fine-rows hemicubes"
+                                                    : why_mesh());
     r.method = r.auto_raycast ? RowMethod::Raycast : RowMethod::Hemicube;
     if (r.auto_raycast && !o.rays_given)
         r.rays = o.fine_row_rays ? o.fine_row_rays : HemicubeOptions::default_fine_row_rays(o.resolution);

@@ -74,9 +74,8 @@ std::vector<std::string> describe(const RowSource& rows) {
     if (const RaycastRowProvider* r = rows.raycast())
         lines.push_back(fmt::format("raycast (Embree), {} thread(s), {} rays per patch{}", r->threads(), r->rays(),
                                     rows.options().auto_raycast
-                                        ? fmt::format(" (--method auto: a mesh of {} pieces or more; --method hemicube "
-                                                      "draws hemicubes)",
-                                                      HemicubeOptions::kFineRowsByRaysMinPieces)
+                                        ? fmt::format(" (--method {}; --method hemicube draws hemicubes)",
+                                                      rows.options().method_choice)
                                         : ""));
     if (const HemicubeRowProvider* h = rows.hemicube())
         lines.push_back(fmt::format("hemicube on {} ({}), {} {}, resolution {}", h->backend(), h->renderer(), h->threads(),

@@ -135,7 +135,7 @@ TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
     ASSERT_EQ(test::gen_city(city, 600, 2), 0);
     std::map<std::string, std::uint64_t> left_out;
     for (const std::string mode : {"on", "off"}) {
-        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --resolution 64 -q --occlusion-culling " + mode +
+        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --method hemicube --resolution 64 -q --occlusion-culling " + mode +
                                   " -o " + (dir / (mode + ".ffm")) + " --report " + (dir / (mode + ".json")));
         ASSERT_EQ(r.code, 0) << r.output;
         const auto report = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
@@ -213,7 +213,8 @@ TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
 
 // --method auto (the default): a mesh of 1,000 pieces or more (the 1,200-facet city) gets the
 // ray caster at the fine-row count for its resolution (4,096 at N = 32), the same bytes as that
-// run named; --fine-rows hemicubes, or a scene of fewer pieces (the built-in box), the hemicube.
+// run named; --fine-rows hemicubes, or a scene of few pieces of many patches (the built-in box),
+// the hemicube.
 // The log and the report say which and why; a bad word is refused without output.
 TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
     TempDir dir;
@@ -240,7 +241,8 @@ TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
     ASSERT_EQ(box.code, 0) << box.output;
     const auto rb = nlohmann::json::parse(test::read_text(dir / "box.json"));
     EXPECT_EQ(rb["method"], "hemicube");
-    EXPECT_NE(rb["method_choice"].get<std::string>().find("fewer than 1000"), std::string::npos) << rb["method_choice"];
+    EXPECT_NE(rb["method_choice"].get<std::string>().find("rays need 1000 pieces"), std::string::npos)
+        << rb["method_choice"];
 
     const auto bad = run_ffcube(base + " --method maybe -o " + (dir / "x.ffm"));
     EXPECT_EQ(bad.code, 2) << bad.output;

@@ -93,7 +93,8 @@ TEST(FineRowsByRays, AFineRowIsTheRayCastersRowAndOtherRowsTheHemicubes) {
     }
 }
 
-// automatic: rays on a scene of kFineRowsByRaysMinPieces pieces or more, hemicubes below; never
+// automatic: rays where HemicubeOptions::rays_preferred (kFineRowsByRaysMinPieces pieces or more,
+// or kRaysMinMeshPieces of one patch each), hemicubes below; never
 // where the scene has obstruction-only surfaces (the ray caster credits either side of those),
 // where an explicit `rays` is refused. The default ray count follows the resolution.
 TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions) {
@@ -111,8 +112,10 @@ TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions)
     o.fine_rows = FineRows::automatic;
     const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
     {
-        const Scene few = tiles(min - 1);
+        const Scene few = tiles(HemicubeOptions::kRaysMinMeshPieces - 1);
         EXPECT_FALSE(HemicubeRowProvider(few, o).fine_rows_by_rays());
+        const Scene mesh = tiles(HemicubeOptions::kRaysMinMeshPieces);  // one patch a piece
+        EXPECT_TRUE(HemicubeRowProvider(mesh, o).fine_rows_by_rays());
     }
     Scene many = tiles(min);
     {

@@ -65,19 +65,19 @@ TEST(PipelineOptions, OneResolutionRule) {
     EXPECT_NE(error_of([&] { validate(o); }).find("--rays 0"), std::string::npos);
 }
 
-// --method auto: the ray caster on a scene of kFineRowsByRaysMinPieces pieces or more (here
-// separate tiles, one piece each), at the fine-row ray count for the resolution unless --rays or
-// --fine-row-rays says otherwise; the hemicube below that, with obstruction-only surfaces, or
-// with --fine-rows hemicubes; options without method_auto unchanged. The reason is kept for the
-// report; the words parse into the same options.
+// --method auto: the ray caster where HemicubeOptions::rays_preferred (here separate tiles, one
+// piece each: 1,000 or more pieces, or 100 or more of at most 4 patches each), at the fine-row
+// ray count for the resolution unless --rays or --fine-row-rays says otherwise; the hemicube
+// below that, with obstruction-only surfaces, or with --fine-rows hemicubes; options without
+// method_auto unchanged. The reason is kept for the report; the words parse into the same options.
 TEST(PipelineOptions, MethodAutoFollowsThePieces) {
-    const auto tiles = [](std::size_t n) {
+    const auto tiles = [](std::size_t n, double edge = 2.0) {  // edge 0.5: 4 patches a tile, 0.4: 9
         std::vector<test::NamedPolygon> polys;
         for (std::size_t k = 0; k < n; ++k) {
             const double x = static_cast<double>(k % 40) * 1.5, y = static_cast<double>(k / 40) * 1.5;
             polys.push_back({"t" + std::to_string(k), {{x, y, 0}, {x + 1, y, 0}, {x + 1, y + 1, 0}, {x, y + 1, 0}}});
         }
-        return test::make_scene(polys, 2.0);
+        return test::make_scene(polys, edge * (1 + 1e-9));
     };
     const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
     RowOptions o;
@@ -103,7 +103,16 @@ TEST(PipelineOptions, MethodAutoFollowsThePieces) {
     given = o;
     given.fine_rows = FineRows::hemicubes;
     EXPECT_EQ(resolve_row_method(given, many).method, RowMethod::Hemicube);
-    EXPECT_EQ(resolve_row_method(o, tiles(min - 1)).method, RowMethod::Hemicube);
+    const std::size_t mesh = HemicubeOptions::kRaysMinMeshPieces;
+    EXPECT_EQ(resolve_row_method(o, tiles(mesh - 1)).method, RowMethod::Hemicube);
+    const RowOptions small_mesh = resolve_row_method(o, tiles(mesh, 0.5));  // 4 patches a piece
+    EXPECT_EQ(small_mesh.method, RowMethod::Raycast);
+    EXPECT_EQ(small_mesh.method_choice, "auto: 100 pieces of 400 patches, 100 or more of at most 4 patches each");
+    const RowOptions subdivided = resolve_row_method(o, tiles(mesh, 0.4));  // 9 patches a piece
+    EXPECT_EQ(subdivided.method, RowMethod::Hemicube);
+    EXPECT_EQ(subdivided.method_choice,
+              "auto: 100 pieces of 900 patches: rays need 1000 pieces, or 100 of at most 4 patches each");
+    EXPECT_EQ(resolve_row_method(o, tiles(min - 1, 0.4)).method, RowMethod::Hemicube);
     many.obstruction_first = static_cast<std::uint32_t>(many.size() - 1);
     r = resolve_row_method(o, many);
     EXPECT_EQ(r.method, RowMethod::Hemicube);

@@ -76,14 +76,30 @@ struct HemicubeOptions {
     // sub-hemicubes do, but at a cost that follows the rays and not the scene's pieces × 16
     // hemicubes. 0: max(N², min(4 N², 65,536)): 16,384 at N = 64, 65,536 at N = 128 and 256
     // (where it measured as accurate as the 16 sub-hemicubes or more: docs/benchmarks.md), N²
-    // beyond. automatic: on scenes of at least kFineRowsByRaysMinPieces pieces (a mesh of that
-    // many facets), where the rays cost no more than the 16 sub-hemicubes on llvmpipe. Never on a scene
-    // with obstruction-only surfaces (the ray caster credits either side of them; hemicubes the
+    // beyond. automatic: where rays_preferred (below: a mesh of kFineRowsByRaysMinPieces
+    // facets or more, or of kRaysMinMeshPieces with one patch a facet or nearly), where the rays
+    // cost no more than the 16 sub-hemicubes on llvmpipe and are the more accurate. Never on a
+    // scene with obstruction-only surfaces (the ray caster credits either side of them; hemicubes the
     // facing one): automatic keeps hemicubes there, rays is an InputError.
     enum class FineRows { hemicubes, rays, automatic };
     FineRows fine_rows = FineRows::hemicubes;
     std::uint64_t fine_row_rays = 0;
     static constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
+    // Rays also for a mesh of kRaysMinMeshPieces pieces or more with at most
+    // kRaysMaxPatchesPerPiece patches a piece on average (one patch a facet, as --no-subdivide
+    // makes): on cities of 100, 300 and 600 facets the rays were faster and about twice as
+    // accurate, and the drawn 4 × 4 rows biased towards sky (a wall standing on the sender is a
+    // near-singular integrand that sixteen points miss); a scene of few pieces and many patches
+    // (the Cornell box, 170 a piece) keeps hemicubes, whose rows there are the more accurate
+    // (docs/benchmarks.md, "Rays in coherent packets, and --method auto").
+    static constexpr std::size_t kRaysMinMeshPieces = 100;
+    static constexpr std::size_t kRaysMaxPatchesPerPiece = 4;
+    // Whether rows of a scene of these pieces and patches are better cast than drawn (on
+    // llvmpipe; obstruction-only surfaces are the caller's to rule out).
+    static bool rays_preferred(std::size_t pieces, std::size_t patches) {
+        return pieces >= kFineRowsByRaysMinPieces ||
+               (pieces >= kRaysMinMeshPieces && patches <= kRaysMaxPatchesPerPiece * pieces);
+    }
     // fine_row_rays' default at resolution N: max(N², min(4 N², 65,536)).
     static std::uint64_t default_fine_row_rays(int resolution) {
         const auto n = static_cast<std::uint64_t>(resolution > 0 ? resolution : 0);

@@ -133,8 +133,8 @@ const char* to_string(ContactCuts c);
 std::string_view to_string(RowMethod m);
 
 // --method auto, resolved for the scene whose rows are made (its drawn scene): the ray caster
-// where the scene has at least HemicubeOptions::kFineRowsByRaysMinPieces pieces (a mesh of that
-// many facets), no obstruction-only surfaces (the ray caster credits either side of them) and
+// where HemicubeOptions::rays_preferred (a mesh of 1,000 facets or more, or of 100 or more with
+// one patch a facet or nearly), no obstruction-only surfaces (the ray caster credits either side of them) and
 // --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays costs a third of one
 // hemicube that draws the whole city and is more accurate (docs/accuracy.md, "Rows by rays on a
 // mesh of many pieces"; docs/benchmarks.md, "Rays in coherent packets"). Its rays: --rays if given, else --fine-row-rays, else
