@@ -14,7 +14,7 @@
 
 namespace ffcube {
 
-std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids) {
+std::vector<std::pair<std::uint32_t, std::uint32_t>> twin_pairs(std::span<const PatchGrid> grids) {
     using Key = std::array<double, 13>;  // count, then the corners sorted, 3 doubles each
     std::map<Key, std::vector<std::uint32_t>> by_corners;
     for (std::uint32_t g = 0; g < grids.size(); ++g) {
@@ -28,15 +28,21 @@ std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids) {
             for (int d = 0; d < 3; ++d) key[1 + 3 * k + static_cast<std::size_t>(d)] = c[k][d];
         by_corners[key].push_back(g);
     }
-    std::vector<std::uint8_t> has_twin(grids.size(), 0);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
     for (const auto& [key, gs] : by_corners)
         for (std::size_t a = 0; a < gs.size(); ++a)
             for (std::size_t b = a + 1; b < gs.size(); ++b) {
                 const PatchGrid &ga = grids[gs[a]], &gb = grids[gs[b]];
                 const Vec3 na = polygon_normal(std::span<const Vec3>(ga.corners.data(), ga.count));
                 const Vec3 nb = polygon_normal(std::span<const Vec3>(gb.corners.data(), gb.count));
-                if (glm::dot(na, nb) < 0) has_twin[gs[a]] = has_twin[gs[b]] = 1;
+                if (glm::dot(na, nb) < 0) pairs.emplace_back(gs[a], gs[b]);
             }
+    return pairs;
+}
+
+std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids) {
+    std::vector<std::uint8_t> has_twin(grids.size(), 0);
+    for (const auto& [a, b] : twin_pairs(grids)) has_twin[a] = has_twin[b] = 1;
     return has_twin;
 }
 

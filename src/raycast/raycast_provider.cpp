@@ -8,9 +8,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
-#include <map>
 #include <span>
-#include <tuple>
 #include <numbers>
 #include <thread>
 #include <vector>
@@ -178,7 +176,7 @@ bool in_convex_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n,
 }
 
 // Per patch, its twin: the patch of the other face of a two-sided plate (two one-sided pieces
-// with the same corners, facing opposite ways: hemicube/pieces.hpp's find_twins) that covers the
+// with the same corners, facing opposite ways: hemicube/pieces.hpp's twin_pairs) that covers the
 // same place, or kNoPatch. The hemicube never shows such a piece's back (its twin's front covers
 // the same pixels); the ray caster does the same with a hit on the back of a patch that has a
 // twin (Embree picks either of two coincident triangles). A patch's twin is the patch of the
@@ -188,43 +186,29 @@ bool in_convex_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n,
 std::vector<std::uint32_t> twin_patches(const Scene& scene) {
     constexpr std::uint32_t kMaxTwinCells = 4096;
     std::vector<std::uint32_t> twin(scene.size(), kNoPatch);
-    const std::vector<std::uint8_t> has_twin = find_twins(scene.grids);
-    std::map<std::array<double, 13>, std::vector<std::uint32_t>> by_corners;
-    for (std::uint32_t g = 0; g < scene.grids.size(); ++g) {
-        if (!has_twin[g]) continue;
-        const PatchGrid& pg = scene.grids[g];
-        std::vector<Vec3> c(pg.corners.begin(), pg.corners.begin() + pg.count);
-        std::sort(c.begin(), c.end(),
-                  [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); });
-        std::array<double, 13> key{};
-        key[0] = pg.count;
-        for (std::uint32_t k = 0; k < pg.count; ++k)
-            for (int d = 0; d < 3; ++d) key[1 + 3 * k + static_cast<std::size_t>(d)] = c[k][d];
-        by_corners[key].push_back(g);
-    }
     const auto cells = [&](std::uint32_t g) {
         const std::uint32_t end =
             g + 1 < scene.grids.size() ? scene.grids[g + 1].first_patch : static_cast<std::uint32_t>(scene.patches.size());
         return std::pair{scene.grids[g].first_patch, end};
     };
-    for (const auto& [key, gs] : by_corners)
-        for (const std::uint32_t a : gs)
-            for (const std::uint32_t b : gs) {
-                const auto [a0, a1] = cells(a);
-                const auto [b0, b1] = cells(b);
-                if (a == b || a1 - a0 > kMaxTwinCells || b1 - b0 > kMaxTwinCells) continue;
-                if (glm::dot(scene.patches[a0].normal, scene.patches[b0].normal) >= 0) continue;
-                for (std::uint32_t p = a0; p < a1; ++p) {
-                    if (twin[p] != kNoPatch) continue;
-                    for (std::uint32_t q = b0; q < b1 && twin[p] == kNoPatch; ++q) {
-                        const auto v = scene.patch_vertices(q);
-                        const Patch& pq = scene.patches[q];
-                        if (in_convex_polygon(scene.patches[p].centroid, std::span<const Vec3>(v.data(), pq.count),
-                                              pq.normal, pq.size))
-                            twin[p] = q;
-                    }
-                }
+    // Each patch of one piece against the patches of the other, both ways.
+    const auto pair_up = [&](std::uint32_t a, std::uint32_t b) {
+        const auto [a0, a1] = cells(a);
+        const auto [b0, b1] = cells(b);
+        if (a1 - a0 > kMaxTwinCells || b1 - b0 > kMaxTwinCells) return;
+        for (std::uint32_t p = a0; p < a1; ++p)
+            for (std::uint32_t q = b0; q < b1 && twin[p] == kNoPatch; ++q) {
+                const auto v = scene.patch_vertices(q);
+                const Patch& pq = scene.patches[q];
+                if (in_convex_polygon(scene.patches[p].centroid, std::span<const Vec3>(v.data(), pq.count), pq.normal,
+                                      pq.size))
+                    twin[p] = q;
             }
+    };
+    for (const auto& [a, b] : twin_pairs(scene.grids)) {
+        pair_up(a, b);
+        pair_up(b, a);
+    }
     return twin;
 }
 

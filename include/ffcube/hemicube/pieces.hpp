@@ -67,8 +67,10 @@ struct ScenePieces {
 // Pieces without T-vertices keep exactly the triangles (c0, c1, c2), (c0, c2, c3).
 ScenePieces prepare_pieces(std::span<const PatchGrid> grids);
 
-// has_twin per piece: another piece has the same corner set (bitwise equal positions) and an
-// opposite normal.
+// The twin pieces: every pair (a, b), a < b, of pieces with the same corner set (bitwise equal
+// positions) and opposite normals (a two-sided plate of two one-sided faces).
+std::vector<std::pair<std::uint32_t, std::uint32_t>> twin_pairs(std::span<const PatchGrid> grids);
+// has_twin per piece: it is in one of twin_pairs.
 std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids);
 
 // A corner of another piece strictly inside edge k (corner k → k + 1) of piece g.
