@@ -23,13 +23,14 @@ namespace {
 // the seconds, which are timings).
 // Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
 // its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 32 * 8, "add the new NearFieldStats field to add_row_stats");
+static_assert(sizeof(NearFieldStats) == 33 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
     a.near_pairs += b.near_pairs;
     a.replaced += b.replaced;
     a.refused += b.refused;
+    a.below_value += b.below_value;
     a.quadrature += b.quadrature;
     a.rows_quadrature += b.rows_quadrature;
     a.rows_untouched += b.rows_untouched;

@@ -32,7 +32,7 @@ namespace {
 // Every facing pair of the row has its value (with the far field on): nothing refused or unproven,
 // no obstruction in sight.
 bool known_without_measuring(const NearAnalysis& a) {
-    return a.refused == 0 && a.far_unproven == 0 && !a.faces_obstruction;
+    return a.refused == 0 && a.below_value == 0 && a.far_unproven == 0 && !a.faces_obstruction;
 }
 
 }  // namespace
@@ -247,6 +247,13 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
             out.faces_obstruction = true;
             continue;
         }
+        if (options.min_near_value > 0) {  // F_ij ≤ A_j / (π gap²): left as measured below the bound
+            const double gap = d - patches.radius[i] - patches.radius[j];
+            if (gap > 0 && pj.area < options.min_near_value * std::numbers::pi * gap * gap) {
+                ++out.below_value;
+                continue;
+            }
+        }
         ++out.near_pairs;
         if (!shaft_unoccluded(patches, grid, i, j, b.shaft)) {
             if (needs_sub_hemicubes(i, j)) {
@@ -310,6 +317,9 @@ NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOption
     if (!(options.sub_hemicube_k >= 0) || !std::isfinite(options.sub_hemicube_k))
         throw InputError(fmt::format("near-field correction: sub-hemicube k = {} must be a number >= 0",
                                      options.sub_hemicube_k));
+    if (!(options.min_near_value >= 0 && options.min_near_value <= 1))
+        throw InputError(fmt::format("near-field correction: min_near_value = {} must be a form factor, 0 to 1",
+                                     options.min_near_value));
     impl_ = std::make_unique<Impl>(scene, options);
 }
 
@@ -426,6 +436,7 @@ namespace {
 void add_analysis_stats(const NearAnalysis& a, NearFieldStats& stats) {
     stats.near_pairs += a.near_pairs;
     stats.refused += a.refused;
+    stats.below_value += a.below_value;
     stats.refused_sampled += a.refused_sampled;
     stats.far_rows += a.far;
     stats.far_entries += a.far_entries;

@@ -127,42 +127,52 @@ bool visit_shaft(const PatchSet& patches, const SpatialGrid& grid, std::uint32_t
     // between the two parts' vertex means (points of the hull) deep inside: not separated by any
     // axis, so the answer is known before the axes are made.
     const bool tried = first < patches.size() && first != i && first != j && patches.boxes[first].overlaps(inflated);
-    if (tried) {
-        Vec3 ci(0.0), cj(0.0);
-        for (std::size_t k = 0; k < split; ++k) ci += hull[k];
-        for (std::size_t k = split; k < m; ++k) cj += hull[k];
-        ci /= static_cast<double>(split);
-        cj /= static_cast<double>(m - split);
-        if (crosses_deep(patches.polys[first], scene.patches[first].normal, ci, cj, tol) && !on_candidate(first, false)) {
-            ++scratch.deep_crossings;
-            return false;
-        }
+    Vec3 ci(0.0), cj(0.0);
+    for (std::size_t k = 0; k < split; ++k) ci += hull[k];
+    for (std::size_t k = split; k < m; ++k) cj += hull[k];
+    ci /= static_cast<double>(split);
+    cj /= static_cast<double>(m - split);
+    if (tried && crosses_deep(patches.polys[first], scene.patches[first].normal, ci, cj, tol) &&
+        !on_candidate(first, false)) {
+        ++scratch.deep_crossings;
+        return false;
     }
-    // Hull-only axes are the same for every q: precompute them.
+    // The axes of the full test, made when a candidate first needs them: the hull-only axes are
+    // the same for every q (the normals of i, j and of every plane through three hull points,
+    // the hull's face planes among them) and so are their hull extents; the segments between
+    // hull points make q's edge–edge axes.
     std::vector<Vec3>& axes = scratch.axes;
-    axes.clear();
-    axes.push_back(scene.patches[i].normal);
-    axes.push_back(scene.patches[j].normal);
-    for (std::size_t a = 0; a < m; ++a)
-        for (std::size_t b = a + 1; b < m; ++b)
-            for (std::size_t c = b + 1; c < m; ++c) {
-                const Vec3 nrm = glm::cross(hull[b] - hull[a], hull[c] - hull[a]);
-                if (glm::dot(nrm, nrm) > 1e-24 * scale * scale * scale * scale) axes.push_back(glm::normalize(nrm));
-            }
-    // Their hull extents too (the same numbers separated() computed per candidate before).
     std::vector<std::pair<double, double>>& extent = scratch.axis_extent;
-    extent.clear();
-    for (const Vec3& axis : axes) extent.push_back(hull_extent(axis, hull));
     std::vector<Vec3>& seg = scratch.segments;
-    seg.clear();
-    for (std::size_t a = 0; a < m; ++a)
-        for (std::size_t b = a + 1; b < m; ++b) seg.push_back(hull[b] - hull[a]);
+    bool made = false;
+    const auto make_axes = [&]() {
+        made = true;
+        axes.clear();
+        axes.push_back(scene.patches[i].normal);
+        axes.push_back(scene.patches[j].normal);
+        for (std::size_t a = 0; a < m; ++a)
+            for (std::size_t b = a + 1; b < m; ++b)
+                for (std::size_t c = b + 1; c < m; ++c) {
+                    const Vec3 nrm = glm::cross(hull[b] - hull[a], hull[c] - hull[a]);
+                    if (glm::dot(nrm, nrm) > 1e-24 * scale * scale * scale * scale) axes.push_back(glm::normalize(nrm));
+                }
+        extent.clear();
+        for (const Vec3& axis : axes) extent.push_back(hull_extent(axis, hull));
+        seg.clear();
+        for (std::size_t a = 0; a < m; ++a)
+            for (std::size_t b = a + 1; b < m; ++b) seg.push_back(hull[b] - hull[a]);
+    };
 
     // Every candidate must be separated: the answer does not depend on the order, so the grid's
-    // visit stops at the first that is not (refused pairs, most of a city's, stop early).
+    // visit stops at the first that is not (refused pairs, most of a city's, stop early). A q
+    // that the segment between the parts' centres crosses deep inside is not separated by any
+    // axis (crosses_deep): the same answer as the full test, without its axes.
     const auto test = [&](std::uint32_t qi) {
         const Poly& q = patches.polys[qi];
-        bool sep = separated(scene.patches[qi].normal, hull, q, tol);
+        const Vec3& nq = scene.patches[qi].normal;
+        bool sep = separated(nq, hull, q, tol);
+        if (!sep && crosses_deep(q, nq, ci, cj, tol)) return on_candidate(qi, false);
+        if (!sep && !made) make_axes();
         for (std::size_t a = 0; !sep && a < axes.size(); ++a) sep = separated(axes[a], extent[a], q, tol);
         for (std::size_t e = 0; !sep && e < q.n; ++e) {
             const Vec3 edge = q.v[(e + 1) % q.n] - q.v[e];

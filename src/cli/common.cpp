@@ -111,6 +111,11 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
         ->default_val(3.0);
+    app.add_option("--near-min-ff", o.near_min_ff,
+                   "--correct near, raycast: a near pair whose form factor is provably below F (A_j / (pi gap^2)) "
+                   "keeps its ray estimate, without a shaft test or an exact value (docs/accuracy.md); 0: every near pair")
+        ->check(CLI::Range(0.0, 1.0))
+        ->default_val(0.03);
     app.add_option("--sub-hemicube-k", o.sub_hemicube_k,
                    "--correct near: a possibly occluded near pair makes its row use sub-hemicubes when it lies within "
                    "K x the sender's size (docs/accuracy.md); 0: every such pair")

@@ -179,6 +179,8 @@ void validate(const RowOptions& o) {
         throw InputError("--rays 0: at least 1 ray per patch");
     if (!(o.near_k > 0) || !std::isfinite(o.near_k))
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
+    if (!(o.near_min_ff >= 0 && o.near_min_ff <= 1))
+        throw InputError(fmt::format("--near-min-ff {}: must be a number from 0 to 1 (a form factor)", o.near_min_ff));
     if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))
         throw InputError(fmt::format("--sub-hemicube-k {}: must be a finite number >= 0", o.sub_hemicube_k));
     if (!(o.sub_hemicube_range_k >= 1) || !std::isfinite(o.sub_hemicube_range_k))
@@ -224,6 +226,7 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         NearFieldOptions nf;
         nf.k = o.near_k;
         nf.rays = static_cast<double>(o.rays);
+        nf.min_near_value = o.near_min_ff;
         nf.obstruction_receivers = false;  // it credits either side of an obstruction (raycast_provider.cpp)
         nf.exact_visibility_occluders = o.exact_visibility_auto ? 0 : o.exact_visibility_occluders;
         return nf;

@@ -82,8 +82,12 @@ std::vector<std::string> describe(const RowSource& rows) {
                                     h->workers(), h->resolution()));
     if (const CorrectedRowProvider* c = rows.corrected()) {
         const NearFieldOptions nf = near_field_options(rows.options());
-        lines.push_back(fmt::format("near-field correction: k = {}{}, far field {}", nf.k,
-                                    nf.sender_quadrature ? ", sender quadrature" : "", c->corrector().far_field_status()));
+        lines.push_back(fmt::format(
+            "near-field correction: k = {}{}{}, far field {}", nf.k, nf.sender_quadrature ? ", sender quadrature" : "",
+            nf.min_near_value > 0
+                ? fmt::format(", near pairs provably below F = {} keep their ray estimate (--near-min-ff)", nf.min_near_value)
+                : "",
+            c->corrector().far_field_status()));
         if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
             lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
                                         m.source, m.pixel_ns, m.cpu_scale));
@@ -114,6 +118,7 @@ FfmMetadata row_metadata(const RowOptions& o) {
     // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
     if (o.correct == Correction::Near) {
         meta.settings += fmt::format(" correct=near k={}", o.near_k);
+        if (o.method == RowMethod::Raycast) meta.settings += fmt::format(" near_min_ff={}", o.near_min_ff);
         if (o.far_field != FarFieldMode::automatic) meta.settings += fmt::format(" far_field={}", to_string(o.far_field));
         if (o.method == RowMethod::Hemicube && o.sub_hemicube_k != 10.0)
             meta.settings += fmt::format(" sub_hemicube_k={}", o.sub_hemicube_k);
@@ -159,6 +164,7 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.near_pairs", c.near_pairs);
     r.set("corrections.entries_replaced", c.replaced);
     r.set("corrections.pairs_refused_possibly_occluded", c.refused);
+    r.set("corrections.near_pairs_below_value", c.below_value);
     r.set("corrections.entries_quadrature", c.quadrature);
     r.set("corrections.rows_quadrature", c.rows_quadrature);
     r.set("corrections.rows_untouched", c.rows_untouched);

@@ -169,6 +169,7 @@ void Kwargs::read_row_options(RowOptions& o, bool enforce) {
     }
     if (py::object v = take("correct"); !v.is_none()) o.correct = parse_correction(word("correct", v));
     if (py::object v = take("near_k"); !v.is_none()) o.near_k = number("near_k", v);
+    if (py::object v = take("near_min_ff"); !v.is_none()) o.near_min_ff = number("near_min_ff", v);
     if (py::object v = take("exact_visibility"); !v.is_none()) {  // its range: validate(RowOptions)
         if (py::isinstance<py::str>(v)) {
             parse_exact_visibility(word("exact_visibility", v), o);  // "auto" | "off" | a number, as the CLI

@@ -275,7 +275,7 @@ PYBIND11_MODULE(ffcube, m) {
     m.def("form_factors", &form_factors, py::arg("scene_or_path") = py::none(),
           "form_factors(scene_or_path=None, **options) -> scipy.sparse.csr_matrix (float32): F[i, j] = fraction of "
           "the energy leaving patch i that arrives at patch j; the rows `ffcube formfactors` writes for the same "
-          "options. Options: method, resolution, backend, threads, rotate/no_rotate, seed, rays, correct, near_k, "
+          "options. Options: method, resolution, backend, threads, rotate/no_rotate, seed, rays, correct, near_k, near_min_ff, "
           "far_field, enforce, quiet, and the mesh options when given a path. report=True: (F, report dict) with the "
           "keys of `ffcube formfactors --report`.");
     m.def("solve", &solve, py::arg("scene_or_path") = py::none(),

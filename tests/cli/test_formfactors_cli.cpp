@@ -230,6 +230,19 @@ TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
     const auto ra = nlohmann::json::parse(test::read_text(dir / "auto.json"));
     EXPECT_EQ(ra["method"], "raycast");
     EXPECT_EQ(ra["method_choice"], "auto: 1200 pieces, 1000 or more");
+    // The rays keep near pairs provably below --near-min-ff (0.03) as cast, and say so; 0 tries
+    // every near pair: the same pairs in all, the ones left out now examined.
+    EXPECT_NE(a.output.find("keep their ray estimate (--near-min-ff)"), std::string::npos) << a.output;
+    const auto all = run_ffcube(base + " --near-min-ff 0 -q -o " + (dir / "all.ffm") + " --report " + (dir / "all.json"));
+    ASSERT_EQ(all.code, 0) << all.output;
+    const auto rall = nlohmann::json::parse(test::read_text(dir / "all.json"));
+    const auto below = ra["corrections"]["near_pairs_below_value"].get<std::uint64_t>();
+    EXPECT_GT(below, 0u);
+    EXPECT_EQ(rall["corrections"]["near_pairs_below_value"].get<std::uint64_t>(), 0u);
+    EXPECT_EQ(rall["corrections"]["near_pairs"].get<std::uint64_t>(),
+              ra["corrections"]["near_pairs"].get<std::uint64_t>() + below);
+    EXPECT_GT(rall["corrections"]["entries_replaced"].get<std::uint64_t>(),
+              ra["corrections"]["entries_replaced"].get<std::uint64_t>());
 
     const auto h = run_ffcube(base + " --fine-rows hemicubes -o " + (dir / "h.ffm") + " --report " + (dir / "h.json"));
     ASSERT_EQ(h.code, 0) << h.output;
@@ -264,6 +277,7 @@ TEST(FormfactorsCli, BadInvocationsAreRefusedWithoutOutput) {
         {"formfactors --objects-by groups -o " + out, 2, "--objects-by"},
         {"formfactors --patches 10 --max-patch-edge 1 -o " + out, 2, "excludes"},
         {"formfactors --max-patch-edge 1e-9 -o " + out, 2, "patches"},
+        {"formfactors --near-min-ff 2 -o " + out, 2, "--near-min-ff"},
     };
     for (const auto& c : cases) {
         const auto r = run_ffcube(c.args);

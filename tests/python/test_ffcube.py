@@ -118,7 +118,7 @@ class FormFactors(unittest.TestCase):
 
     def test_options_reach_the_pipeline(self):
         # Non-default options on both sides. Each of these changes F on its own (correct, rotate,
-        # enforce, resolution; rays, seed, near_k: checked when this test was written), so an
+        # enforce, resolution; rays, seed, near_k, near_min_ff: checked when this test was written), so an
         # option the module dropped or misread would make its F differ from the command line's.
         self.assert_same_as_cli(CUBE, ["--max-patch-edge", 0.5, "--resolution", 16, "--correct", "none", "--no-rotate",
                                        "--enforce", "both", "--threads", 1],
@@ -126,6 +126,13 @@ class FormFactors(unittest.TestCase):
         self.assert_same_as_cli(SQUARES, ["--max-patch-edge", 0.5, "--method", "raycast", "--rays", 256, "--seed", 7,
                                           "--near-k", 2],
                                 max_patch_edge=0.5, method="raycast", rays=256, seed=7, near_k=2)
+        # near_min_ff 0.6 leaves 24 of the 32 near pairs to the rays (their bounds are 0.47 and
+        # 0.29; straight across 0.93): F differs from the default's (0.03: all 32 exact).
+        F = self.assert_same_as_cli(SQUARES, ["--max-patch-edge", 0.5, "--method", "raycast", "--rays", 256,
+                                              "--near-min-ff", 0.6],
+                                    max_patch_edge=0.5, method="raycast", rays=256, near_min_ff=0.6)
+        F0 = ffcube.form_factors(SQUARES, max_patch_edge=0.5, method="raycast", rays=256, quiet=True)
+        self.assertNotEqual((F != F0).nnz, 0)
 
     def test_exact_visibility_is_the_command_lines(self):
         # --exact-visibility changes F on the unsubdivided L-room (its refused near pairs get the

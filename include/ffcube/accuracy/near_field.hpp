@@ -131,6 +131,16 @@ struct NearFieldOptions {
     // radiosity in a room lit by a lamp), where the hemicube's far entries are off by up to 0.24%
     // on the Cornell box and the analytic values are exact. Off: the far field as before.
     bool far_field_emitters = false;
+    // Near pairs worth an exact value, for an inner provider whose entries are unbiased with
+    // noise that grows with the entry (the ray caster: variance ≤ F(1 − F)/rays): a near pair
+    // whose unoccluded factor is provably below min_near_value, A_j / (π gap²) < min_near_value
+    // (gap = centroid distance − both bounding radii > 0: no point of i is nearer j than gap, and
+    // j subtends at most A_j / gap² there, F ≤ Ω/π), keeps its measured entry without a shaft
+    // test or an exact value. Such a pair would remove at most min_near_value / rays of the row's
+    // variance; on a city most are far-reaching wall triangles that other buildings block, whose
+    // shaft tests were a third of the run (docs/accuracy.md, "Which near pairs the rays keep").
+    // 0: every near pair (the hemicube's: its near error is a bias, not noise).
+    double min_near_value = 0;
     // (New fields go last: tests initialise the first ones by position, {k, sender_quadrature}.)
 };
 
@@ -154,6 +164,7 @@ struct NearFieldStats {
     std::uint64_t near_pairs = 0;    // near, facing pairs examined
     std::uint64_t replaced = 0;      // entries replaced by the exact value
     std::uint64_t refused = 0;       // near, facing pairs left alone: possibly occluded
+    std::uint64_t below_value = 0;   // near, facing pairs left as measured: below min_near_value
     std::uint64_t quadrature = 0;    // entries rescaled by the sender quadrature
     std::uint64_t rows_quadrature = 0;  // rows with an entry within quadrature_k sizes
     std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
@@ -198,6 +209,7 @@ struct NearAnalysis {
     std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     std::uint64_t near_pairs = 0;                         // near, facing pairs examined
     std::uint64_t refused = 0;                            // of which possibly occluded
+    std::uint64_t below_value = 0;                        // not counted there: below min_near_value
     std::uint64_t refused_sampled = 0;                    // of which asking for sub-hemicubes
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven

@@ -76,6 +76,10 @@ struct RowOptions {
     // The near-field correction (accuracy/near_field.hpp) and its far field.
     Correction correct = Correction::Near;
     double near_k = 3.0;
+    // NearFieldOptions::min_near_value for the ray caster's rows (--near-min-ff; 0: every near
+    // pair): 0.03 keeps a city's rows within 1% of every pair's (docs/accuracy.md). The hemicube
+    // ignores it.
+    double near_min_ff = 0.03;
     double sub_hemicube_k = 10.0;  // NearFieldOptions::sub_hemicube_k (0: every refused near pair)
     // NearFieldOptions::exact_visibility_occluders (0: off). With exact_visibility_auto (the
     // default, `--exact-visibility auto`) the hemicube uses kAutoExactVisibilityOccluders within
