@@ -1,7 +1,9 @@
 #include "ffcube/raycast/raycast_provider.hpp"
 
 #include <embree3/rtcore.h>
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -15,6 +17,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/ordered_pool.hpp"
+#include "ffcube/geometry/polygon.hpp"
 #include "ffcube/hemicube/pieces.hpp"
 #include "raycast/embree_mesh.hpp"
 #include "raycast/sampling.hpp"
@@ -179,31 +182,67 @@ bool in_convex_polygon(const Vec3& x, std::span<const Vec3> poly, const Vec3& n,
 // with the same corners, facing opposite ways: hemicube/pieces.hpp's twin_pairs) that covers the
 // same place, or kNoPatch. The hemicube never shows such a piece's back (its twin's front covers
 // the same pixels); the ray caster does the same with a hit on the back of a patch that has a
-// twin (Embree picks either of two coincident triangles). A patch's twin is the patch of the
-// twin piece that contains its centroid: the same patch where both sides are meshed alike, the
-// nearest cover otherwise. Pieces of more than kMaxTwinCells patches are left without twins
-// (the pairing is a scan, cells²; docs/accuracy.md, "Coincident and touching geometry").
+// twin (Embree picks either of two coincident triangles). A patch's twin is the lowest-numbered
+// patch of the twin piece that contains its centroid: the same patch where both sides are meshed
+// alike, the nearest cover otherwise (docs/accuracy.md, "Coincident and touching geometry"). The
+// twin piece's patches are put in buckets of a uniform grid over the piece (about one a bucket,
+// each in the buckets its box meets), so a piece of any size pairs in linear time.
 std::vector<std::uint32_t> twin_patches(const Scene& scene) {
-    constexpr std::uint32_t kMaxTwinCells = 4096;
     std::vector<std::uint32_t> twin(scene.size(), kNoPatch);
     const auto cells = [&](std::uint32_t g) {
         const std::uint32_t end =
             g + 1 < scene.grids.size() ? scene.grids[g + 1].first_patch : static_cast<std::uint32_t>(scene.patches.size());
         return std::pair{scene.grids[g].first_patch, end};
     };
-    // Each patch of one piece against the patches of the other, both ways.
+    std::vector<std::vector<std::uint32_t>> bucket;
+    // Each patch of piece a against the patches of piece b.
     const auto pair_up = [&](std::uint32_t a, std::uint32_t b) {
         const auto [a0, a1] = cells(a);
         const auto [b0, b1] = cells(b);
-        if (a1 - a0 > kMaxTwinCells || b1 - b0 > kMaxTwinCells) return;
-        for (std::uint32_t p = a0; p < a1; ++p)
-            for (std::uint32_t q = b0; q < b1 && twin[p] == kNoPatch; ++q) {
-                const auto v = scene.patch_vertices(q);
-                const Patch& pq = scene.patches[q];
-                if (in_convex_polygon(scene.patches[p].centroid, std::span<const Vec3>(v.data(), pq.count), pq.normal,
-                                      pq.size))
-                    twin[p] = q;
+        const PatchGrid& gb = scene.grids[b];
+        // b's plane coordinates: u along its first edge, v across it.
+        const Vec3 o = gb.corners[0];
+        const Vec3 u = glm::normalize(gb.corners[1] - gb.corners[0]);
+        const Vec3 v = glm::normalize(glm::cross(polygon_normal(std::span<const Vec3>(gb.corners.data(), gb.count)), u));
+        const auto at = [&](const Vec3& x) { return glm::dvec2(glm::dot(x - o, u), glm::dot(x - o, v)); };
+        std::vector<std::pair<glm::dvec2, glm::dvec2>> box(b1 - b0);
+        glm::dvec2 lo(INFINITY), hi(-INFINITY);
+        for (std::uint32_t q = b0; q < b1; ++q) {
+            const auto c = scene.patch_vertices(q);
+            const double slack = 1e-6 * scene.patches[q].size;  // beyond in_convex_polygon's 1e-9
+            glm::dvec2 qlo(INFINITY), qhi(-INFINITY);
+            for (std::uint32_t k = 0; k < scene.patches[q].count; ++k) {
+                const glm::dvec2 p = at(c[k]);
+                qlo = glm::min(qlo, p - slack), qhi = glm::max(qhi, p + slack);
             }
+            box[q - b0] = {qlo, qhi};
+            lo = glm::min(lo, qlo), hi = glm::max(hi, qhi);
+        }
+        const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(b1 - b0))));
+        const glm::dvec2 scale = static_cast<double>(side) / glm::max(hi - lo, glm::dvec2(1e-300));
+        const auto cell = [&](double x, double lo_x, double s) {
+            return std::clamp(static_cast<int>(std::floor((x - lo_x) * s)), 0, side - 1);
+        };
+        bucket.assign(static_cast<std::size_t>(side) * side, {});
+        for (std::uint32_t q = b0; q < b1; ++q) {  // ascending: a bucket lists its patches in order
+            const auto& [qlo, qhi] = box[q - b0];
+            for (int y = cell(qlo.y, lo.y, scale.y); y <= cell(qhi.y, lo.y, scale.y); ++y)
+                for (int x = cell(qlo.x, lo.x, scale.x); x <= cell(qhi.x, lo.x, scale.x); ++x)
+                    bucket[static_cast<std::size_t>(y) * side + x].push_back(q);
+        }
+        for (std::uint32_t p = a0; p < a1; ++p) {
+            const Vec3& x = scene.patches[p].centroid;
+            const glm::dvec2 xp = at(x);
+            for (const std::uint32_t q : bucket[static_cast<std::size_t>(cell(xp.y, lo.y, scale.y)) * side +
+                                                cell(xp.x, lo.x, scale.x)]) {
+                const auto corners = scene.patch_vertices(q);
+                const Patch& pq = scene.patches[q];
+                if (in_convex_polygon(x, std::span<const Vec3>(corners.data(), pq.count), pq.normal, pq.size)) {
+                    twin[p] = q;
+                    break;
+                }
+            }
+        }
     };
     for (const auto& [a, b] : twin_pairs(scene.grids)) {
         pair_up(a, b);

@@ -326,6 +326,45 @@ TEST(RaycastRows, TwoSidedPlateShowsBothFrontsAndLeaksNothing) {
     }
 }
 
+// The same with a plate of 72 × 72 patches a side (more than the 4,096 cells the first pairing,
+// a scan of cells², left unpaired): rows of the ceiling patches above the plate and the floor
+// patches below it, which see it most, sum to 1 within the bound above. Unpaired, about half of
+// their plate hits land on a back face and are absorbed: the ceiling sees the plate at about
+// 0.2, so their rows would sum to about 0.9.
+TEST(RaycastRows, LargeTwoSidedPlatePairsEveryPatch) {
+    std::vector<NamedPolygon> polys = test::inward_box(1, 1, 1);
+    polys.push_back(test::square_z("plate_up", 0.5, true, 0.5, Vec3(0.25, 0.25, 0)));
+    polys.push_back(test::square_z("plate_down", 0.5, false, 0.5, Vec3(0.25, 0.25, 0)));
+    const Scene scene = test::make_scene(polys, (0.5 / 72) * (1 + 1e-9));
+    const std::size_t up = object_index(scene, "plate_up"), down = object_index(scene, "plate_down");
+    std::size_t plate = 0;
+    for (const Patch& p : scene.patches) plate += p.object == up;
+    ASSERT_EQ(plate, 72u * 72u);
+    RaycastRowProvider provider(scene, options(4096));
+    RaycastRowProvider::RowScratch scratch;
+    scratch.acc.assign(scene.size(), 0.0);
+    const std::size_t floor = object_index(scene, "z0"), ceiling = object_index(scene, "z1");
+    int rows = 0;
+    for (std::uint32_t i = 0; i < scene.size(); i += 97) {
+        const Patch& p = scene.patches[i];
+        if ((p.object != floor && p.object != ceiling) || std::abs(p.centroid.x - 0.5) > 0.2 ||
+            std::abs(p.centroid.y - 0.5) > 0.2)
+            continue;
+        SparseRow row;
+        provider.cast_row(i, row, scratch);
+        double on_plate = 0;
+        for (std::size_t k = 0; k < row.col.size(); ++k) {
+            const std::size_t o = scene.patches[row.col[k]].object;
+            on_plate += row.val[k] * (o == up || o == down);
+            EXPECT_NE(o, p.object == floor ? up : down) << "row " << i << " sees the plate's far side";
+        }
+        EXPECT_NEAR(row.sum(), 1.0, 1e-4) << "row " << i;
+        EXPECT_GT(on_plate, 0.1) << "row " << i;
+        ++rows;
+    }
+    EXPECT_GT(rows, 20);
+}
+
 TEST(RaycastRows, ZeroRaysIsAnInputError) {
     const Scene scene = test::make_scene({test::square_z("a", 0.0, true)}, 1.0);
     EXPECT_THROW(RaycastRowProvider(scene, options(0)), InputError);
