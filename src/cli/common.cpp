@@ -92,7 +92,7 @@ void add_row_options(CLI::App& app, RowOptions& o) {
     app.add_option_function<std::uint64_t>(
            "--rays", [&o](std::uint64_t r) { o.rays = r, o.rays_given = true; },
            "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays); default 4096 with --method raycast, "
-           "max(N^2, min(4 N^2, 65536)) where --method auto casts rays)")
+           "max(N^2/2, min(2 N^2, 32768)) where --method auto casts rays)")
         ->default_str("4096");
     app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
         ->default_val(256);
@@ -158,7 +158,7 @@ void add_row_options(CLI::App& app, RowOptions& o) {
                     "hemicubes; rays (docs/accuracy.md, \"Rows an occluder touches, by rays\")",
                     "auto");
     app.add_option("--fine-row-rays", o.fine_row_rays,
-                   "--fine-rows: rays per ray-cast row (default 0: max(N^2, min(4 N^2, 65536)): 65536 at N = 128 and 256)")
+                   "--fine-rows: rays per ray-cast row (default 0: max(N^2/2, min(2 N^2, 32768)): 32768 at N = 128 and 256)")
         ->check(CLI::NonNegativeNumber);
     add_word_option(app, "--vertex-upload", o.vertex_upload, parse_vertex_upload, {"once", "per-hemicube"},
                     "hemicube: once (default): the scene's world positions go to the GL once, as doubles, and the "

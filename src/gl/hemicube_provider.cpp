@@ -91,7 +91,7 @@ struct HemicubeRowProvider::Impl {
     }
     ~Impl() { pool.reset(); }
 
-    // HemicubeOptions::fine_row_rays, or its default: max(N², min(4 N², 65,536)).
+    // HemicubeOptions::fine_row_rays, or its default: max(N²/2, min(2 N², 32,768)).
     std::uint64_t fine_rays() const {
         return opt.fine_row_rays ? opt.fine_row_rays : HemicubeOptions::default_fine_row_rays(opt.resolution);
     }

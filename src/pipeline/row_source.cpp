@@ -110,7 +110,8 @@ FfmMetadata row_metadata(const RowOptions& o) {
     FfmMetadata meta;
     meta.method = std::string(to_string(o.method));
     if (o.method == RowMethod::Raycast) {
-        meta.settings = fmt::format("rays={} seed={}", o.rays, o.seed);
+        // sampler: the rays of an older build (padded strata) are other rows: not resumed into.
+        meta.settings = fmt::format("rays={} seed={} sampler=sobol", o.rays, o.seed);
     } else {
         meta.resolution = static_cast<std::uint32_t>(o.resolution);
         meta.settings = fmt::format("rotate={} seed={}", o.rotate ? 1 : 0, o.seed);

@@ -28,7 +28,7 @@ namespace {
 using namespace raycast_sampling;
 
 // splitmix64: a full-period 64-bit generator that passes BigCrush; seeded per row, so a row's
-// numbers depend on (seed, row) only.
+// scrambling seeds depend on (seed, row) only.
 struct Rng {
     std::uint64_t s;
     std::uint64_t next() {
@@ -37,15 +37,6 @@ struct Rng {
         z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
         return z ^ (z >> 31);
     }
-    // Uniform in [0, k) for 0 < k < 2^32, by a multiply and a shift (Lemire 2019) instead of a
-    // 64-bit division, a tenth of a ray's cost in the shuffle; its bias, at most k / 2^64, is
-    // that of the modulo it replaced.
-    std::uint32_t below(std::uint32_t k) {
-        __extension__ using u128 = unsigned __int128;
-        return static_cast<std::uint32_t>((static_cast<u128>(next()) * k) >> 64);
-    }
-    // Uniform in [0, 1) with 53 random bits.
-    double uniform() { return static_cast<double>(next() >> 11) * 0x1.0p-53; }
 };
 
 Rng row_rng(std::uint64_t seed, std::uint32_t row) {
@@ -60,6 +51,7 @@ Rng row_rng(std::uint64_t seed, std::uint32_t row) {
 struct Packet {
     RTCRayHit16 rh;  // RTC_ALIGN(64) members
     alignas(64) int valid[16];
+    alignas(64) std::uint32_t word[4][16] = {};  // the sample's r1, r2, u, v as 32-bit fractions
     alignas(64) double u[16] = {}, v[16] = {}, r1[16] = {}, r2[16] = {};
     alignas(64) double ox[16], oy[16], oz[16], dx[16], dy[16], dz[16], w[16];
     int lanes = 0;
@@ -93,6 +85,14 @@ __attribute__((always_inline)) inline void make_rays_body(Packet& pk, const Send
     double* __restrict dx = pk.dx;
     double* __restrict dy = pk.dy;
     double* __restrict dz = pk.dz;
+    // The words as doubles: cell midpoints of the 2^-32 grid, (w + 0.5) · 2^-32 exactly, through
+    // a signed conversion (which vectorizes; every value is exact in a double either way).
+    for (int d = 0; d < 4; ++d) {
+        double* __restrict out = d == 0 ? pk.r1 : d == 1 ? pk.r2 : d == 2 ? pk.u : pk.v;
+        const std::uint32_t* __restrict w = pk.word[d];
+        for (int l = 0; l < L; ++l)
+            out[l] = (static_cast<double>(static_cast<std::int32_t>(w[l] ^ 0x80000000u)) + 2147483648.5) * 0x1.0p-32;
+    }
     const double* __restrict r1 = pk.r1;
     const double* __restrict r2 = pk.r2;
     for (int l = 0; l < L; ++l) {
@@ -161,11 +161,24 @@ __attribute__((target("avx2"), FFCUBE_VECTORIZE)) void make_rays_avx2(Packet& pk
     make_rays_body(pk, s);
 }
 __attribute__((FFCUBE_VECTORIZE)) void make_rays_plain(Packet& pk, const Sender& s) { make_rays_body(pk, s); }
-#undef FFCUBE_VECTORIZE
 void make_rays(Packet& pk, const Sender& s) {
     static const auto chosen = __builtin_cpu_supports("avx2") ? &make_rays_avx2 : &make_rays_plain;
     chosen(pk, s);
 }
+
+// scramble_body (sampling.hpp) the same way: an AVX2 copy where the CPU has it.
+__attribute__((target("avx2"), FFCUBE_VECTORIZE)) void scramble_avx2(std::uint32_t* words, std::size_t n,
+                                                                      const std::uint32_t seed[4]) {
+    scramble_body(words, n, seed);
+}
+__attribute__((FFCUBE_VECTORIZE)) void scramble_plain(std::uint32_t* words, std::size_t n, const std::uint32_t seed[4]) {
+    scramble_body(words, n, seed);
+}
+void scramble(std::uint32_t* words, std::size_t n, const std::uint32_t seed[4]) {
+    static const auto chosen = __builtin_cpu_supports("avx2") ? &scramble_avx2 : &scramble_plain;
+    chosen(words, n, seed);
+}
+#undef FFCUBE_VECTORIZE
 
 // Whether point x lies in the convex polygon poly (its plane, normal n), edges included within a
 // relative 1e-9 of the polygon's size.
@@ -253,6 +266,11 @@ std::vector<std::uint32_t> twin_patches(const Scene& scene) {
 
 }  // namespace
 
+constexpr std::uint32_t kChunk = 65536;  // points made and sorted at a time (1 MiB of scratch)
+
+// The top b bits of a 32-bit fraction: its cell in a grid of 2^b.
+inline std::uint32_t top_bits(std::uint32_t x, int b) { return b == 0 ? 0u : x >> (32 - b); }
+
 struct RaycastRowProvider::Impl {
     const Scene& scene;
     RaycastOptions opt;
@@ -294,20 +312,19 @@ struct RaycastRowProvider::Impl {
     // Row i into out; the scratch's acc (size n, all zero) and touched (empty) are left as they
     // were found.
     //
-    // Sampling (header comment): the row's rays come in batches of S = m² rays, m = min(⌊√left⌋,
-    // kMaxStrataSide), until none are left. In a batch, the k-th ray cast leaves in direction
-    // stratum order[k] of an m × m grid over the unit square that the cosine-weighted map takes to
-    // the hemisphere (tile_order: neighbouring directions one after another) and starts in
-    // stratum perm[k] of an m × m grid over the patch, perm a uniformly random permutation
-    // ("padded" stratification: each of the two 2-D projections is stratified, the pairing is
-    // random). Every ray's (position, direction) is then uniform on its own, so the row is
-    // unbiased for any number of rays; the stratified directions are what lower the error on a
-    // receiver seen from most of the sender (a far one), the stratified positions on a near one.
-    // Rays are traced 16 at a time (rtcIntersect16) and their hits counted in the order cast.
+    // Sampling (sampling.hpp): the row's rays are the first R points of a 4-D Sobol' sequence,
+    // Owen-scrambled with seeds drawn from (seed, row): (r1, r2) the direction, through the
+    // cosine-weighted concentric map, (u, v) the origin on the patch. Every ray is uniform on its
+    // own, so the row is unbiased for any R; the first 4^k rays put one direction in each cell of a
+    // 2^k × 2^k grid and spread the origins as evenly, jointly with the directions. They are made
+    // kChunk at a time and cast in the tile order of their direction cells (tile_key), traced 16
+    // at a time (rtcIntersect16), their hits counted in that order.
     void row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
         std::vector<double>& acc = scratch.acc;
         std::vector<std::uint32_t>& touched = scratch.touched;
-        std::vector<std::uint32_t>& perm = scratch.perm;
+        std::vector<std::uint32_t>& points = scratch.points;
+        std::vector<std::uint32_t>& sorted = scratch.sorted;
+        std::vector<std::uint32_t>& start = scratch.start;
         std::vector<std::uint32_t>& order = scratch.order;
         out.clear();
         const Patch& p = scene.patches[i];
@@ -373,26 +390,41 @@ struct RaycastRowProvider::Impl {
             }
             pk.lanes = 0;
         };
-        for (std::uint64_t left = opt.rays; left > 0;) {
-            const std::uint64_t m = strata_side(left);
-            const std::uint32_t S = static_cast<std::uint32_t>(m * m);
-            perm.resize(S);
-            for (std::uint32_t y = 0, k = 0; y < m; ++y)
-                for (std::uint32_t x = 0; x < m; ++x) perm[k++] = pack_stratum(x, y);
-            for (std::uint32_t k = S; k > 1; --k)  // Fisher–Yates
-                std::swap(perm[k - 1], perm[rng.below(k)]);
-            if (order.size() != S) tile_order(static_cast<std::uint32_t>(m), order);
-            const double inv = 1.0 / static_cast<double>(m);
-            for (std::uint32_t k = 0; k < S; ++k) {
-                const int l = pk.lanes++;
-                pk.u[l] = (static_cast<double>(stratum_x(perm[k])) + rng.uniform()) * inv;
-                pk.v[l] = (static_cast<double>(stratum_y(perm[k])) + rng.uniform()) * inv;
-                pk.r1[l] = (static_cast<double>(stratum_x(order[k])) + rng.uniform()) * inv;
-                pk.r2[l] = (static_cast<double>(stratum_y(order[k])) + rng.uniform()) * inv;
-                if (pk.lanes == 16) trace();
+        // The row's Sobol' points in chunks of at most kChunk (each an aligned block of the
+        // sequence, so a net of its own), each chunk cast in its direction cells' tile order.
+        std::uint32_t state[4] = {0, 0, 0, 0}, seed[4];
+        for (std::uint32_t& sd : seed) sd = static_cast<std::uint32_t>(rng.next() >> 32);
+        for (std::uint64_t first = 0; first < opt.rays;) {
+            const auto count = static_cast<std::uint32_t>(std::min<std::uint64_t>(kChunk, opt.rays - first));
+            points.resize(4 * static_cast<std::size_t>(count));
+            sobol_walk(first, count, state, points.data());
+            scramble(points.data(), count, seed);
+            // Counting sort by the direction cell of a 2^b × 2^b grid, 16 · 4^b ≤ count: about one
+            // packet a cell (exactly 16 points each for a count of 4^k: the directions are a
+            // (0,2)-net), the cells in tile order.
+            int b = 0;
+            while (b < 12 && (std::uint64_t{64} << (2 * b)) <= count) ++b;
+            const std::uint32_t cells = 1u << (2 * b);
+            start.assign(cells + 1, 0);
+            order.resize(count);  // each point's cell, then the points sorted, one dimension after another
+            for (std::uint32_t k = 0; k < count; ++k) {
+                const std::uint32_t* q = &points[4 * static_cast<std::size_t>(k)];
+                order[k] = tile_key(top_bits(q[0], b), top_bits(q[1], b), b);
+                ++start[order[k] + 1];
+            }
+            for (std::uint32_t cell = 0; cell < cells; ++cell) start[cell + 1] += start[cell];
+            sorted.resize(4 * static_cast<std::size_t>(count));
+            for (std::uint32_t k = 0; k < count; ++k)
+                std::copy_n(&points[4 * static_cast<std::size_t>(k)], 4, &sorted[4 * static_cast<std::size_t>(start[order[k]]++)]);
+            for (std::uint32_t at = 0; at < count; at += 16) {
+                pk.lanes = static_cast<int>(std::min<std::uint32_t>(16, count - at));
+                const std::uint32_t* q = &sorted[4 * static_cast<std::size_t>(at)];
+                for (int l = 0; l < pk.lanes; ++l)
+                    for (int d = 0; d < 4; ++d) pk.word[d][l] = q[4 * l + d];
+                trace();
             }
             trace();
-            left -= S;
+            first += count;
         }
         traced.fetch_add(traced_here, std::memory_order_relaxed);
         std::sort(touched.begin(), touched.end());

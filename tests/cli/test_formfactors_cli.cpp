@@ -167,7 +167,7 @@ TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
         const auto r = run_ffcube("formfactors " + city + " --no-subdivide --method hemicube --resolution 32" + args +
                                   " -o " + (dir / (mode + ".mtx")) + " --report " + (dir / (mode + ".json")));
         ASSERT_EQ(r.code, 0) << r.output;
-        EXPECT_EQ(r.output.find("ray-cast, 4096 rays each") != std::string::npos, mode == "auto") << r.output;
+        EXPECT_EQ(r.output.find("ray-cast, 2048 rays each") != std::string::npos, mode == "auto") << r.output;
         report[mode] = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
         std::istringstream mtx(test::read_text(dir / (mode + ".mtx")));
         std::string line;
@@ -212,7 +212,7 @@ TEST(FormfactorsCli, FineRowsByRaysOnAMeshOfManyFacetsAndOnlyThoseRowsChange) {
 }
 
 // --method auto (the default): a mesh of 1,000 pieces or more (the 1,200-facet city) gets the
-// ray caster at the fine-row count for its resolution (4,096 at N = 32), the same bytes as that
+// ray caster at the fine-row count for its resolution (2,048 at N = 32), the same bytes as that
 // run named; --fine-rows hemicubes, or a scene of few pieces of many patches (the built-in box),
 // the hemicube.
 // The log and the report say which and why; a bad word is refused without output.
@@ -223,8 +223,8 @@ TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
     const std::string base = "formfactors " + city + " --no-subdivide --resolution 32 --threads 2";
     const auto a = run_ffcube(base + " -o " + (dir / "auto.ffm") + " --report " + (dir / "auto.json"));
     ASSERT_EQ(a.code, 0) << a.output;
-    EXPECT_NE(a.output.find("4096 rays per patch (--method auto"), std::string::npos) << a.output;
-    const auto named = run_ffcube(base + " --method raycast --rays 4096 -o " + (dir / "named.ffm"));
+    EXPECT_NE(a.output.find("2048 rays per patch (--method auto"), std::string::npos) << a.output;
+    const auto named = run_ffcube(base + " --method raycast --rays 2048 -o " + (dir / "named.ffm"));
     ASSERT_EQ(named.code, 0) << named.output;
     EXPECT_EQ(test::read_text(dir / "auto.ffm"), test::read_text(dir / "named.ffm"));
     const auto ra = nlohmann::json::parse(test::read_text(dir / "auto.json"));

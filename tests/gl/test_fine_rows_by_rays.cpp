@@ -121,12 +121,12 @@ TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions)
     {
         HemicubeRowProvider p(many, o);
         EXPECT_TRUE(p.fine_rows_by_rays());
-        EXPECT_EQ(p.fine_row_rays(), 16384u);  // max(N², min(4 N², 65,536)) at N = 64
+        EXPECT_EQ(p.fine_row_rays(), 8192u);  // max(N²/2, min(2 N², 32,768)) at N = 64
     }
     o.resolution = 256;
-    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 65536u);
+    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 32768u);
     o.resolution = 512;
-    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 262144u);
+    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 131072u);
     o.resolution = 64;
     many.obstruction_first = static_cast<std::uint32_t>(many.size() - 1);  // the last tile: an obstruction
     EXPECT_FALSE(HemicubeRowProvider(many, o).fine_rows_by_rays());
@@ -138,7 +138,7 @@ TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions)
 // each, and a two-sided fin standing on the floor near their shared edge (the floor patches it
 // stands on are planned at 4 × 4). Reference: the ray caster with 4e5 rays per patch and
 // another seed (object value's σ ≈ √(F/rays)/4 ≈ 2e-4). The floor→wall value with the 4 × 4
-// rows ray-cast (65,536 rays: σ of the object value from those rows below 1e-4) must be within
+// rows ray-cast (32,768 rays: σ of the object value from those rows below 1e-4) must be within
 // 5σ of the reference's noise, as the sub-hemicubes' is (tests/bench/test_sub_hemicubes.cpp).
 TEST(FineRowsByRays, ThroughTheCorrectionAsCloseToTheReferenceAsSubHemicubes) {
     const Scene s = make(test::floor_wall_fin(), 0.25);

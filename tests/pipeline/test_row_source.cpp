@@ -89,11 +89,11 @@ TEST(PipelineOptions, MethodAutoFollowsThePieces) {
     EXPECT_EQ(r.method, RowMethod::Raycast);
     EXPECT_FALSE(r.method_auto);
     EXPECT_TRUE(r.auto_raycast);
-    EXPECT_EQ(r.rays, 65536u);  // max(N², min(4 N², 65,536)) at N = 128
+    EXPECT_EQ(r.rays, 32768u);  // max(N²/2, min(2 N², 32,768)) at N = 128
     EXPECT_EQ(r.method_choice, fmt::format("auto: {} pieces, {} or more", min, min));
-    EXPECT_EQ(resolve_row_method(r, many).rays, 65536u);  // resolved once: a second call keeps it
+    EXPECT_EQ(resolve_row_method(r, many).rays, 32768u);  // resolved once: a second call keeps it
     o.resolution = 64;
-    EXPECT_EQ(resolve_row_method(o, many).rays, 16384u);
+    EXPECT_EQ(resolve_row_method(o, many).rays, 8192u);
     RowOptions given = o;
     given.rays = 1000, given.rays_given = true;
     EXPECT_EQ(resolve_row_method(given, many).rays, 1000u);
@@ -153,7 +153,7 @@ TEST(PipelineOptions, MetadataIsStable) {
     m = row_metadata(o);
     EXPECT_EQ(m.method, "raycast");
     EXPECT_EQ(m.resolution, 0u);
-    EXPECT_EQ(m.settings, "rays=1000 seed=24301");
+    EXPECT_EQ(m.settings, "rays=1000 seed=24301 sampler=sobol");
 }
 
 void expect_same_rows(const CsrMatrix& a, const CsrMatrix& b) {

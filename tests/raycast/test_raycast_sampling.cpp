@@ -64,31 +64,85 @@ TEST(RaycastSampling, ConcentricDiskIsShirleyAndChiusMap) {
         }
 }
 
-// tile_order lists every stratum of the m × m batch once, and each run of 16 consecutive strata
-// (a packet) lies within one 4 × 4 tile when m is a multiple of 4; for other m, within a tile
-// clipped at the edge, so a packet may span two of those but never leaves a 4-row band.
-TEST(RaycastSampling, TileOrderIsAPermutationInFourByFourTiles) {
-    for (std::uint32_t m : {1u, 3u, 4u, 7u, 16u, 181u, 256u}) {
-        std::vector<std::uint32_t> order;
-        tile_order(m, order);
-        ASSERT_EQ(order.size(), static_cast<std::size_t>(m) * m);
-        EXPECT_EQ(std::set<std::uint32_t>(order.begin(), order.end()).size(), order.size());
-        for (std::size_t k = 0; k + 16 <= order.size(); k += 16) {
-            std::uint32_t xmin = m, xmax = 0, ymin = m, ymax = 0;
+// tile_key is a bijection of the 2^b × 2^b direction grid onto [0, 4^b), and the 16 cells of
+// each run of 16 consecutive keys (a packet) lie in one 4 × 4 tile.
+TEST(RaycastSampling, TileKeysAreAPermutationInFourByFourTiles) {
+    for (int b : {0, 1, 2, 3, 8}) {
+        const std::uint32_t side = 1u << b;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> cell(static_cast<std::size_t>(side) * side, {side, side});
+        for (std::uint32_t y = 0; y < side; ++y)
+            for (std::uint32_t x = 0; x < side; ++x) {
+                const std::uint32_t k = tile_key(x, y, b);
+                ASSERT_LT(k, cell.size());
+                ASSERT_EQ(cell[k].first, side) << "key " << k << " given twice";
+                cell[k] = {x, y};
+            }
+        if (b < 2) continue;
+        for (std::size_t k = 0; k < cell.size(); k += 16)
             for (std::size_t l = k; l < k + 16; ++l) {
-                const std::uint32_t x = stratum_x(order[l]), y = stratum_y(order[l]);
-                ASSERT_LT(x, m);
-                ASSERT_LT(y, m);
-                xmin = std::min(xmin, x), xmax = std::max(xmax, x);
-                ymin = std::min(ymin, y), ymax = std::max(ymax, y);
+                EXPECT_EQ(cell[l].first / 4, cell[k].first / 4) << "b " << b << " packet " << k / 16;
+                EXPECT_EQ(cell[l].second / 4, cell[k].second / 4) << "b " << b << " packet " << k / 16;
             }
-            if (m % 4 == 0) {
-                EXPECT_EQ(xmin / 4, xmax / 4) << "m " << m << " packet " << k / 16;
-                EXPECT_EQ(ymin / 4, ymax / 4) << "m " << m << " packet " << k / 16;
-            } else {
-                EXPECT_LE(ymax - ymin, 7u) << "m " << m << " packet " << k / 16;
-            }
+    }
+}
+
+// The scrambled Sobol' points. Unscrambled (seed 0 is not the identity, so the raw sequence is
+// checked through the table): dimension 0 is van der Corput's sequence, dimensions 1–3 follow
+// Joe and Kuo's recurrences (v_3 = 5/8, 3/8, 1/8 from m = 1, 3, 5; 1, 3, 3; 1, 3, 1). Scrambled with any seeds: the first 4^k points put exactly
+// one point in each cell of a 2^k × 2^k grid of the direction square (dimensions 0, 1), the
+// origins (dimensions 2, 3) at most 2 a cell, and the 4-D points are a net: every box of 2^a ×
+// 2^b × 2^c × 2^d cells with a + b + c + d = 2k − t holds exactly 2^t points (t = 3 for these
+// four dimensions, as Joe and Kuo's table gives for the first four); and a chunk walked from
+// point `first` continues the walk from 0 exactly.
+TEST(RaycastSampling, SobolPointsAreScrambledNets) {
+    const SobolTable& t = sobol_table();
+    // Point n of the unscrambled sequence in natural order (sobol_points walks the Gray code:
+    // the same set of points in each aligned block of 2^j).
+    const auto raw = [&](std::uint32_t n, int d) {
+        std::uint32_t x = 0;
+        for (std::uint32_t j = 0; n; n >>= 1, ++j)
+            if (n & 1u) x ^= t.reversed[d][j];
+        return reverse_bits(x) * 0x1.0p-32;
+    };
+    const double expected[5][4] = {{0, 0, 0, 0},
+                                   {0.5, 0.5, 0.5, 0.5},
+                                   {0.25, 0.75, 0.75, 0.75},
+                                   {0.75, 0.25, 0.25, 0.25},
+                                   {0.125, 0.625, 0.375, 0.125}};
+    for (std::uint32_t n = 0; n < 5; ++n)
+        for (int d = 0; d < 4; ++d) EXPECT_EQ(raw(n, d), expected[n][d]) << "point " << n << " dimension " << d;
+    for (const std::uint32_t s0 : {0u, 12345u, 0xdeadbeefu}) {
+        const std::uint32_t seed[4] = {s0, s0 * 3 + 1, s0 ^ 0x9e3779b9u, s0 + 77};
+        const int k = 6;
+        const std::uint32_t n = 1u << (2 * k);
+        std::vector<std::uint32_t> p(4 * n);
+        std::uint32_t state[4] = {0, 0, 0, 0};
+        sobol_points(0, n / 2, state, seed, p.data());
+        sobol_points(n / 2, n / 2, state, seed, p.data() + 2 * n);
+        std::vector<std::uint32_t> whole(4 * n);
+        std::uint32_t fresh[4] = {0, 0, 0, 0};
+        sobol_points(0, n, fresh, seed, whole.data());
+        EXPECT_EQ(p, whole);
+        std::vector<int> dir(n, 0), org(n, 0);
+        for (std::uint32_t q = 0; q < n; ++q) {
+            ++dir[(p[4 * q] >> (32 - k)) << k | (p[4 * q + 1] >> (32 - k))];
+            ++org[(p[4 * q + 2] >> (32 - k)) << k | (p[4 * q + 3] >> (32 - k))];
         }
+        EXPECT_EQ(*std::min_element(dir.begin(), dir.end()), 1);
+        EXPECT_EQ(*std::max_element(dir.begin(), dir.end()), 1);
+        EXPECT_LE(*std::max_element(org.begin(), org.end()), 2);
+        const int m = 2 * k, tq = 3;
+        for (int a = 0; a <= m - tq; ++a)
+            for (int b = 0; a + b <= m - tq; ++b)
+                for (int c = 0; a + b + c <= m - tq; ++c) {
+                    const int d = m - tq - a - b - c;
+                    std::vector<int> box(std::size_t{1} << (m - tq), 0);
+                    for (std::uint32_t q = 0; q < n; ++q) {
+                        const auto top = [&](int dim, int bits) { return bits ? p[4 * q + dim] >> (32 - bits) : 0u; };
+                        ++box[(((top(0, a) << b | top(1, b)) << c | top(2, c)) << d) | top(3, d)];
+                    }
+                    for (const int v : box) ASSERT_EQ(v, 1 << tq) << a << b << c << d << " seed " << s0;
+                }
     }
 }
 

@@ -95,7 +95,7 @@ struct RowOptions {
     // HemicubeOptions::fine_sub_resolution (--fine-sub-hemicubes half|three-eighths|quarter): 4 × 4 rows at N/2, 3N/8 or N/4.
     FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
     // HemicubeOptions::fine_rows, fine_row_rays (--fine-rows auto|hemicubes|rays, --fine-row-rays R;
-    // 0: max(N², min(4 N², 65,536))): rows planned at 4 × 4 ray-cast instead, automatically on
+    // 0: max(N²/2, min(2 N², 32,768))): rows planned at 4 × 4 ray-cast instead, automatically on
     // scenes of many pieces.
     FineRows fine_rows = FineRows::automatic;
     std::uint64_t fine_row_rays = 0;
@@ -139,7 +139,7 @@ std::string_view to_string(RowMethod m);
 // --method auto, resolved for the scene whose rows are made (its drawn scene): the ray caster
 // where HemicubeOptions::rays_preferred (a mesh of 1,000 facets or more, or of 100 or more with
 // one patch a facet or nearly), no obstruction-only surfaces (the ray caster credits either side of them) and
-// --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays costs a third of one
+// --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays cost a third of one
 // hemicube that draws the whole city and is more accurate (docs/accuracy.md, "Rows by rays on a
 // mesh of many pieces"; docs/benchmarks.md, "Rays in coherent packets"). Its rays: --rays if given, else --fine-row-rays, else
 // HemicubeOptions::default_fine_row_rays(--resolution). Everywhere else the hemicube. Options

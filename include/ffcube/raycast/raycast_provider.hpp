@@ -61,7 +61,7 @@ public:
     // row compute_rows makes. Thread-safe: any number at once, each with its own scratch.
     struct RowScratch {
         std::vector<double> acc;  // one per patch, all zero between rows
-        std::vector<std::uint32_t> touched, perm, order;
+        std::vector<std::uint32_t> touched, points, sorted, start, order;
     };
     void cast_row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const;
 
