@@ -233,8 +233,8 @@ std::vector<std::uint32_t> twin_patches(const Scene& scene) {
         }
         const int side = std::max(1, static_cast<int>(std::sqrt(static_cast<double>(b1 - b0))));
         const glm::dvec2 scale = static_cast<double>(side) / glm::max(hi - lo, glm::dvec2(1e-300));
-        const auto cell = [&](double x, double lo_x, double s) {
-            return std::clamp(static_cast<int>(std::floor((x - lo_x) * s)), 0, side - 1);
+        const auto cell = [&](double x, double lo_x, double s) {  // clamped before the cast
+            return static_cast<int>(std::clamp(std::floor((x - lo_x) * s), 0.0, static_cast<double>(side - 1)));
         };
         bucket.assign(static_cast<std::size_t>(side) * side, {});
         for (std::uint32_t q = b0; q < b1; ++q) {  // ascending: a bucket lists its patches in order
@@ -264,12 +264,12 @@ std::vector<std::uint32_t> twin_patches(const Scene& scene) {
     return twin;
 }
 
-}  // namespace
-
 constexpr std::uint32_t kChunk = 65536;  // points made and sorted at a time (1 MiB of scratch)
 
 // The top b bits of a 32-bit fraction: its cell in a grid of 2^b.
-inline std::uint32_t top_bits(std::uint32_t x, int b) { return b == 0 ? 0u : x >> (32 - b); }
+std::uint32_t top_bits(std::uint32_t x, int b) { return b == 0 ? 0u : x >> (32 - b); }
+
+}  // namespace
 
 struct RaycastRowProvider::Impl {
     const Scene& scene;
