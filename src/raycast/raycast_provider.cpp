@@ -301,12 +301,13 @@ struct RaycastRowProvider::Impl {
     static constexpr double kSameNormal = 1.0 - 1e-12;
     // Whether a hit on patch j, for a ray leaving patch i, is a float artefact to pass through:
     // a ray leaving i's front can hit neither i nor a patch in i's plane.
+    // The normals from the packed array first: most hits need not read the patches.
     bool pass_through(std::uint32_t i, std::uint32_t j) const {
         if (i == j) return true;
+        if (!(glm::dot(normal[i], normal[j]) > kSameNormal)) return false;
         const Patch& a = scene.patches[i];
         const Patch& b = scene.patches[j];
-        return glm::dot(a.normal, b.normal) > kSameNormal &&
-               std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
+        return std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
     }
 
     // Row i into out; the scratch's acc (size n, all zero) and touched (empty) are left as they
@@ -370,9 +371,7 @@ struct RaycastRowProvider::Impl {
                 const Vec3 d(pk.dx[l], pk.dy[l], pk.dz[l]);
                 // A hit on the ray's own patch (or its plane) can only be float rounding: trace
                 // on past it, a few times at most (then the ray is dropped, as if absorbed).
-                // pass_through's normal test first, on the packed normals: most hits need not
-                // read the patches.
-                if ((j == i || glm::dot(snd.n, normal[j]) > kSameNormal) && pass_through(i, j))
+                if (pass_through(i, j))
                     j = first_patch(mesh, ctx, Vec3(pk.ox[l], pk.oy[l], pk.oz[l]), d,
                                     [&](std::uint32_t q) { return pass_through(i, q); }, traced_here,
                                     std::nextafter(pk.rh.ray.tfar[l], std::numeric_limits<float>::infinity()),

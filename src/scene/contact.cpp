@@ -173,7 +173,7 @@ struct Piece {
 // cells (a ground plane under a city) goes to a list every query returns.
 class FaceGrid {
 public:
-    FaceGrid(const std::vector<FaceInfo>& info) {
+    explicit FaceGrid(const std::vector<FaceInfo>& info) {
         Vec3 lo(std::numeric_limits<double>::max()), hi(std::numeric_limits<double>::lowest());
         double extent = 0.0;
         std::size_t n = 0;
