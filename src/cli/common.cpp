@@ -172,6 +172,14 @@ void add_row_options(CLI::App& app, RowOptions& o) {
            "the frustum is drawn. The same rows either way (docs/architecture.md, \"Culling\")")
         ->check(CLI::IsMember({"on", "off"}))
         ->default_str("on");
+    app.add_option_function<std::string>(
+           "--enclosure", [&o](const std::string& w) { o.enclosure_without_depth = w == "on"; },
+           "hemicube: on (default): the pieces whose plane has the whole scene in front (a convex room's walls, "
+           "a flat ground) are drawn without the depth test from eyes inside them, the rest over them; off: every "
+           "piece depth-tested. The same rows but on contact lines, where the piece standing in front now wins "
+           "the depth test's ties (docs/architecture.md, \"Culling\")")
+        ->check(CLI::IsMember({"on", "off"}))
+        ->default_str("on");
     app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
                    "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
         ->default_val(24.0);

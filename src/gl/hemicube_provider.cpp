@@ -53,6 +53,8 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.occlusion_hemicubes += b.occlusion_hemicubes;
     a.nodes_occluded += b.nodes_occluded;
     a.pieces_occluded_by_node += b.pieces_occluded_by_node;
+    a.enclosure_hemicubes += b.enclosure_hemicubes;
+    a.enclosure_pieces_drawn += b.enclosure_pieces_drawn;
     for (std::size_t f = 0; f < 5; ++f) {
         a.pieces_drawn[f] += b.pieces_drawn[f];
         a.pieces_culled[f] += b.pieces_culled[f];
@@ -307,6 +309,13 @@ HemicubeStats HemicubeRowProvider::stats() const {
 std::string HemicubeRowProvider::backend() const { return impl_->backend; }
 std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
 unsigned HemicubeRowProvider::threads() const { return impl_->pool->size(); }
+std::size_t HemicubeRowProvider::enclosure_planes() const {
+    return impl_->opt.enclosure_without_depth ? impl_->pieces.enclosure.planes.size() : 0;
+}
+std::size_t HemicubeRowProvider::enclosure_pieces() const {
+    const auto& e = impl_->pieces.enclosure.piece;
+    return impl_->opt.enclosure_without_depth ? static_cast<std::size_t>(std::count(e.begin(), e.end(), 1)) : 0;
+}
 std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
 bool HemicubeRowProvider::range_limited_sub_hemicubes() const {
     return range_limits_sub_hemicubes(impl_->opt, impl_->scene->grids.size(), impl_->opt.resolution);

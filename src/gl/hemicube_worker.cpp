@@ -284,6 +284,8 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     const double angle = opt_.rotate ? hemicube_angle(opt_.seed, p) : 0.0;
     const HemicubeFrame fr = make_frame(pa.normal, angle);
     const Vec3 eye = at + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
+    enclosure_now_ = opt_.enclosure_without_depth && !pieces_.enclosure.piece.empty() && pieces_.enclosure.contains(eye);
+    st.enclosure_hemicubes += enclosure_now_;
     // Only the pieces that may lie in front of the hemicube plane (PieceBvh; the others would
     // be found wholly behind it by cull()): their vertex slots (piece corners, T-vertices)
     // relative to the eye in the local frame, subtracted in double before they become floats:
@@ -348,7 +350,10 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     const GLuint zero_id[4] = {0, 0, 0, 0};
     const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
     gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
-    gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
+    // Only depth-tested pieces read depth: a hemicube that sees the enclosure alone (inside an
+    // empty room) needs no depth buffer at all.
+    if (std::any_of(lists_, lists_ + kEnclosureLists, [](const auto& l) { return !l.empty(); }))
+        gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
     draw_lists(faces, near, 2);
     gl.Finish();
     st.draw_seconds += watch.seconds();
@@ -754,29 +759,48 @@ void Worker::cull(HemicubeStats& st) {
 // The index lists of drawn_'s pieces per face and pass, in piece order (the draw order, which
 // decides exact depth ties): every piece, or (occluders_only) the front pieces the last hemicube
 // showed. st: counts the drawn pieces per face.
+//
+// Inside the enclosure (enclosure_now_), its front pieces go to their own lists, in reverse piece
+// order: drawn first without the depth test, where they never overlap (hemicube/pieces.hpp,
+// Enclosure), the last drawn is the first piece, as the depth test's GL_GREATER let the first
+// drawn win an exact tie (two pieces with the same corners).
 void Worker::build_lists(bool occluders_only, HemicubeStats* st) {
     for (auto& l : lists_) l.clear();
+    const bool split = enclosure_now_ && !occluders_only;
+    const auto in_enclosure = [&](const Drawn& d) { return split && !d.back && pieces_.enclosure.piece[d.g]; };
     for (const Drawn& d : drawn_) {
         if (occluders_only && !d.occluder) continue;
-        const std::uint32_t base = pieces_.first[d.g];
-        const std::uint32_t count = scene_.grids[d.g].count;
-        const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[d.g];
-        const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[d.g + 1];
-        for (std::size_t f = 0; f < 5; ++f) {
-            if (!(d.faces & (1u << f))) continue;
-            if (st) ++st->pieces_drawn[f];
-            auto& l = lists_[f + (d.back ? kBackLists : 5 * group_of_kind_[pieces_.gpu[d.g].count])];
-            if (tri_begin == tri_end) {
-                l.insert(l.end(), {base, base + 1, base + 2});
-                if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
-            } else {
-                l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
-            }
+        if (in_enclosure(d)) continue;
+        add_to_lists(d, d.back ? kBackLists : 5 * group_of_kind_[pieces_.gpu[d.g].count], st);
+    }
+    if (!split) return;
+    for (auto it = drawn_.rbegin(); it != drawn_.rend(); ++it) {
+        if (!in_enclosure(*it)) continue;
+        add_to_lists(*it, kEnclosureLists + 5 * group_of_kind_[pieces_.gpu[it->g].count], st);
+        if (st) st->enclosure_pieces_drawn += static_cast<std::uint64_t>(std::popcount(it->faces));
+    }
+}
+
+// Piece d's triangles into the lists [list0, list0 + 5) of the faces it goes to.
+void Worker::add_to_lists(const Drawn& d, std::size_t list0, HemicubeStats* st) {
+    const std::uint32_t base = pieces_.first[d.g];
+    const std::uint32_t count = scene_.grids[d.g].count;
+    const std::uint32_t* tri_begin = pieces_.tris.data() + pieces_.tri_first[d.g];
+    const std::uint32_t* tri_end = pieces_.tris.data() + pieces_.tri_first[d.g + 1];
+    for (std::size_t f = 0; f < 5; ++f) {
+        if (!(d.faces & (1u << f))) continue;
+        if (st) ++st->pieces_drawn[f];
+        auto& l = lists_[list0 + f];
+        if (tri_begin == tri_end) {
+            l.insert(l.end(), {base, base + 1, base + 2});
+            if (count == 4) l.insert(l.end(), {base, base + 2, base + 3});
+        } else {
+            l.insert(l.end(), tri_begin, tri_end);  // a polygon with T-vertices
         }
     }
 }
 
-// The ten index lists back to back into the element buffer.
+// The index lists back to back into the element buffer.
 void Worker::upload_lists(HemicubeStats& st) {
     all_idx_.clear();
     for (const auto& l : lists_) all_idx_.insert(all_idx_.end(), l.begin(), l.end());
@@ -814,6 +838,16 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
                             reinterpret_cast<const void*>(first[list0 + f] * sizeof(std::uint32_t)));
         }
     };
+    // The enclosure's pieces first, without the depth test (build_lists); programs_[0] last, as
+    // the loop below expects.
+    if (std::any_of(lists_ + kEnclosureLists, lists_ + kLists, [](const auto& l) { return !l.empty(); })) {
+        gl.Disable(GL_DEPTH_TEST);
+        for (std::uint32_t k = groups_; k-- > 0;) {
+            if (groups_ > 1) gl.UseProgram(programs_[k].id());
+            draw(kEnclosureLists + 5 * k, u_face_[k]);
+        }
+        gl.Enable(GL_DEPTH_TEST);
+    }
     // Front pieces, a program per kind of piece (their lookups differ), then the back ones.
     for (std::uint32_t k = 0; k < groups_; ++k) {
         if (groups_ > 1) gl.UseProgram(programs_[k].id());

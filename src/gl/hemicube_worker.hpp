@@ -100,6 +100,7 @@ private:
         return res == Res::full ? layout_ : res == Res::half ? half_layout_ : quarter_layout_;
     }
     void build_lists(bool occluders_only, HemicubeStats* st);
+    void add_to_lists(const Drawn& d, std::size_t list0, HemicubeStats* st);
     void upload_lists(HemicubeStats& st);
     void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes);
 
@@ -131,8 +132,11 @@ private:
     std::vector<std::uint32_t> visit_;  // per piece: == visit_stamp_ when it may be in front (PieceBvh)
     std::uint32_t visit_stamp_ = 0;
     std::vector<Drawn> drawn_;                          // cull()'s pieces, in piece order
-    // Index lists per face: front pieces of group k at [5k, 5k + 5), back pieces at [kBackLists, kLists).
-    static constexpr std::size_t kBackLists = 15, kLists = 20;
+    // Index lists per face: front pieces of group k at [5k, 5k + 5), back pieces at [kBackLists, kBackLists + 5).
+    // The enclosure's front pieces of group k (drawn without the depth test, first) at
+    // [kEnclosureLists + 5k, + 5), in reverse piece order.
+    static constexpr std::size_t kBackLists = 15, kEnclosureLists = 20, kLists = 35;
+    bool enclosure_now_ = false;  // this hemicube's eye lies inside the enclosure (pieces_.enclosure)
     std::vector<std::uint32_t> lists_[kLists], all_idx_;
     // Occlusion culling (occlude()): the pieces that showed in this worker's last hemicube are
     // drawn first, as occluders, and what lies wholly behind them is left out.

@@ -46,6 +46,112 @@ std::vector<std::uint8_t> find_twins(std::span<const PatchGrid> grids) {
     return has_twin;
 }
 
+bool Enclosure::contains(const Vec3& eye) const {
+    for (const Plane& p : planes)
+        if (!(glm::dot(p.normal, eye) - p.offset > tolerance)) return false;
+    return true;
+}
+
+Enclosure find_enclosure(std::span<const PatchGrid> grids) {
+    Enclosure en;
+    if (grids.size() < 2) return en;
+    std::vector<Vec3> pts;  // every corner, once
+    for (const PatchGrid& pg : grids) pts.insert(pts.end(), pg.corners.begin(), pg.corners.begin() + pg.count);
+    const auto less = [](const Vec3& a, const Vec3& b) { return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z); };
+    std::sort(pts.begin(), pts.end(), less);
+    pts.erase(std::unique(pts.begin(), pts.end()), pts.end());
+    Vec3 lo(INFINITY), hi(-INFINITY);
+    for (const Vec3& q : pts) {
+        lo = glm::min(lo, q);
+        hi = glm::max(hi, q);
+    }
+    const double diag = glm::length(hi - lo);
+    if (!(diag > 0) || !std::isfinite(diag)) return en;
+    const Vec3 m = glm::max(glm::abs(lo), glm::abs(hi));
+    // 1e-10 of the scene, plus the rounding of n·x at the coordinates' magnitude (a scene far
+    // from the origin): far below a pixel of any hemicube, and below what a float depth buffer
+    // resolves, so nothing the depth test would have decided is decided differently.
+    en.tolerance = 1e-10 * diag + 64 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
+    const double tol = en.tolerance;
+    // Points that reject most planes at once: the extremes along the axes and the diagonals.
+    std::vector<Vec3> probes;
+    for (int a = -1; a <= 1; ++a)
+        for (int b = -1; b <= 1; ++b)
+            for (int c = -1; c <= 1; ++c) {
+                if (a == 0 && b == 0 && c == 0) continue;
+                const Vec3 dir(a, b, c);
+                const auto it = std::min_element(pts.begin(), pts.end(),
+                                                 [&](const Vec3& p, const Vec3& q) { return glm::dot(dir, p) < glm::dot(dir, q); });
+                probes.push_back(*it);
+            }
+    // At most this many corner tests in all (an inward-facing sphere of many facets has every
+    // facet supporting, each found by a scan of every corner): past it, no more planes.
+    std::uint64_t budget = 50'000'000;
+    const auto supports = [&](const Vec3& n, double d) {
+        for (const Vec3& q : probes)
+            if (glm::dot(n, q) - d < -tol) return false;
+        bool box = true;  // the box's corners all in front: so is every point
+        for (int c = 0; c < 8 && box; ++c) {
+            const Vec3 b(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z);
+            box = glm::dot(n, b) - d >= -tol;
+        }
+        if (box) return true;
+        if (budget < pts.size()) {
+            budget = 0;
+            return false;
+        }
+        budget -= pts.size();
+        for (const Vec3& q : pts)
+            if (glm::dot(n, q) - d < -tol) return false;
+        return true;
+    };
+    constexpr int kNone = -1;
+    std::vector<int> plane_of(grids.size(), kNone);
+    const auto on_plane = [&](const PatchGrid& pg, const Enclosure::Plane& pl) {
+        for (std::uint32_t k = 0; k < pg.count; ++k)
+            if (std::abs(glm::dot(pl.normal, pg.corners[k]) - pl.offset) > tol) return false;
+        return true;
+    };
+    for (std::size_t g = 0; g < grids.size(); ++g) {
+        const PatchGrid& pg = grids[g];
+        const std::span<const Vec3> c(pg.corners.data(), pg.count);
+        const Vec3 n = polygon_normal(c);
+        if (glm::dot(n, n) == 0) continue;
+        double d = 0;
+        for (const Vec3& q : c) d += glm::dot(n, q);
+        const Enclosure::Plane own{n, d / static_cast<double>(c.size())};
+        if (!on_plane(pg, own)) continue;  // not planar
+        for (std::size_t k = 0; k < en.planes.size() && plane_of[g] == kNone; ++k)
+            if (glm::dot(n, en.planes[k].normal) > 0 && on_plane(pg, en.planes[k])) plane_of[g] = static_cast<int>(k);
+        if (plane_of[g] != kNone || en.planes.size() >= kMaxEnclosurePlanes || budget == 0) continue;
+        if (supports(own.normal, own.offset)) {
+            plane_of[g] = static_cast<int>(en.planes.size());
+            en.planes.push_back(own);
+        }
+    }
+    // A plane another piece lies in (within the tolerance: a plate on the floor, either way up)
+    // is left out: there the depth test decided an exact tie.
+    std::vector<std::uint8_t> keep(en.planes.size(), 1);
+    for (std::size_t g = 0; g < grids.size(); ++g) {
+        if (plane_of[g] != kNone) continue;
+        for (std::size_t k = 0; k < en.planes.size(); ++k)
+            if (keep[k] && on_plane(grids[g], en.planes[k])) keep[k] = 0;
+    }
+    std::vector<int> renumber(en.planes.size(), kNone);
+    std::vector<Enclosure::Plane> kept;
+    for (std::size_t k = 0; k < en.planes.size(); ++k)
+        if (keep[k]) {
+            renumber[k] = static_cast<int>(kept.size());
+            kept.push_back(en.planes[k]);
+        }
+    en.planes = std::move(kept);
+    if (en.planes.empty()) return en;
+    en.piece.assign(grids.size(), 0);
+    for (std::size_t g = 0; g < grids.size(); ++g)
+        en.piece[g] = plane_of[g] != kNone && renumber[static_cast<std::size_t>(plane_of[g])] != kNone;
+    return en;
+}
+
 double edge_tolerance(const Vec3& a, const Vec3& b) {
     const Vec3 m = glm::max(glm::abs(a), glm::abs(b));
     return 1e-6 * glm::length(b - a) + 4 * std::numeric_limits<double>::epsilon() * std::max({m.x, m.y, m.z});
@@ -265,6 +371,7 @@ ScenePieces prepare_pieces(std::span<const PatchGrid> grids) {
     }
     sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
     sp.has_twin = find_twins(grids);
+    sp.enclosure = find_enclosure(grids);
     sp.bvh = PieceBvh(PieceBvh::piece_boxes(grids));
     return sp;
 }

@@ -208,6 +208,7 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.fine_row_rays = o.fine_row_rays;
     h.vertex_upload = o.vertex_upload;
     h.occlusion_culling = o.occlusion_culling;
+    h.enclosure_without_depth = o.enclosure_without_depth;
     return h;
 }
 

@@ -254,6 +254,12 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("left_out.occlusion_hemicubes", st.occlusion_hemicubes);
     r.set("left_out.nodes_occluded", st.nodes_occluded);
     r.set("left_out.pieces_occluded_by_node", st.pieces_occluded_by_node);
+    // The enclosure drawn without the depth test (--enclosure on|off): its planes and pieces,
+    // the hemicubes whose eye lay inside it, the pieces × faces they drew so.
+    r.set("drawn.enclosure_planes", provider.enclosure_planes());
+    r.set("drawn.enclosure_pieces", provider.enclosure_pieces());
+    r.set("drawn.enclosure_hemicubes", st.enclosure_hemicubes);
+    r.set("drawn.enclosure_pieces_drawn", st.enclosure_pieces_drawn);
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);

@@ -240,5 +240,100 @@ TEST(Pieces, ParallelogramFarFromTheOriginKeepsItsKind) {
     EXPECT_EQ(bent.gpu[0].count, 4u);
 }
 
+
+// The six inward walls of the box [0,1]³ (floor first), shifted by o.
+std::vector<PatchGrid> inward_box(const Vec3& o) {
+    const auto p = [&](double x, double y, double z) { return o + Vec3(x, y, z); };
+    return {quad(p(0, 0, 0), p(1, 0, 0), p(1, 1, 0), p(0, 1, 0)),   // floor, +z
+            quad(p(0, 0, 1), p(0, 1, 1), p(1, 1, 1), p(1, 0, 1)),   // ceiling, -z
+            quad(p(0, 0, 0), p(0, 1, 0), p(0, 1, 1), p(0, 0, 1)),   // x = 0, +x
+            quad(p(1, 0, 0), p(1, 0, 1), p(1, 1, 1), p(1, 1, 0)),   // x = 1, -x
+            quad(p(0, 0, 0), p(0, 0, 1), p(1, 0, 1), p(1, 0, 0)),   // y = 0, +y
+            quad(p(0, 1, 0), p(1, 1, 0), p(1, 1, 1), p(0, 1, 1))};  // y = 1, -y
+}
+
+std::vector<PatchGrid> with(std::vector<PatchGrid> a, const std::vector<PatchGrid>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return numbered(a);
+}
+
+// The walls of a closed box are its enclosure, a two-sided plate inside it is not; the eye test
+// is strict. Near the origin and 1e5 away from it (the tolerance follows the coordinates).
+TEST(Enclosure, ClosedBoxWallsAroundAPlate) {
+    for (const Vec3 o : {Vec3(0.0), Vec3(1e5, -2e5, 3e5)}) {
+        const auto q = [&](double x, double y, double z) { return o + Vec3(x, y, z); };
+        const auto gs = with(inward_box(o), {quad(q(.25, .25, .5), q(.75, .25, .5), q(.75, .75, .5), q(.25, .75, .5)),
+                                             quad(q(.25, .25, .5), q(.25, .75, .5), q(.75, .75, .5), q(.75, .25, .5))});
+        const Enclosure e = find_enclosure(gs);
+        ASSERT_EQ(e.planes.size(), 6u);
+        EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 0, 0}));
+        EXPECT_GT(e.tolerance, 0);
+        EXPECT_LT(e.tolerance, 1e-8);
+        EXPECT_TRUE(e.contains(q(.5, .5, .5)));
+        EXPECT_TRUE(e.contains(q(1e-6, .5, .5)));
+        EXPECT_FALSE(e.contains(q(0, .5, .5))) << "on a wall: not strictly inside";
+        EXPECT_FALSE(e.contains(q(.5, .5, 1 + 1e-6)));
+        EXPECT_FALSE(e.contains(q(-3, .5, .5)));
+    }
+}
+
+// Seen from outside, a box's faces overlap: an outward box has no enclosure, nor has a single
+// plate (nothing to enclose).
+TEST(Enclosure, OutwardBoxAndLonePlateHaveNone) {
+    std::vector<PatchGrid> out = inward_box(Vec3(0.0));
+    for (PatchGrid& g : out) std::swap(g.corners[1], g.corners[3]);  // every face turned over
+    EXPECT_TRUE(find_enclosure(numbered(out)).planes.empty());
+    EXPECT_TRUE(find_enclosure(numbered(out)).piece.empty());
+    EXPECT_TRUE(find_enclosure(numbered({quad(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(0, 1, 0))})).planes.empty());
+}
+
+// A piece lying on the floor facing down would tie in depth with the floor, and the depth test
+// decided: the floor's plane is left out, the others stay. One facing up joins the floor's plane
+// (drawn in reverse piece order, the floor, first, still wins where they overlap).
+TEST(Enclosure, APieceLyingOnTheFloor) {
+    const Vec3 a(.2, .2, 0), b(.4, .2, 0), c(.4, .4, 0), d(.2, .4, 0);
+    Enclosure e = find_enclosure(with(inward_box(Vec3(0.0)), {quad(a, d, c, b)}));
+    EXPECT_EQ(e.planes.size(), 5u);
+    EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{0, 1, 1, 1, 1, 1, 0}));
+    e = find_enclosure(with(inward_box(Vec3(0.0)), {quad(a, b, c, d)}));
+    EXPECT_EQ(e.planes.size(), 6u);
+    EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 1}));
+    // A block standing on the floor touches it along edges only: the floor stays.
+    const Vec3 A(.2, .2, .3), B(.4, .2, .3), C(.4, .4, .3), D(.2, .4, .3);
+    e = find_enclosure(with(inward_box(Vec3(0.0)), {quad(A, B, C, D), quad(a, b, B, A), quad(b, c, C, B),
+                                                                    quad(c, d, D, C), quad(d, a, A, D)}));
+    EXPECT_EQ(e.planes.size(), 6u);
+    EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0}));
+}
+
+// A city: the ground's tiles (one plane, pieces in any order) under buildings; walls and roofs are
+// not supporting.
+TEST(Enclosure, TheGroundOfACity) {
+    std::vector<PatchGrid> gs;
+    for (int i = 0; i < 3; ++i)
+        gs.push_back(tri(Vec3(i, 0, 0), Vec3(i + 1, 0, 0), Vec3(i + 1, 1, 0)));
+    const Vec3 a(.2, .2, 0), b(.6, .2, 0), A(.2, .2, 2), B(.6, .2, 2);
+    gs.push_back(quad(a, b, B, A));                                                 // a wall, -y
+    gs.push_back(quad(A, B, B + Vec3(0, .4, 0), A + Vec3(0, .4, 0)));               // a roof, +z
+    gs.push_back(tri(Vec3(5, 5, 0), Vec3(6, 5, 0), Vec3(6, 6, 0)));                 // more ground
+    Enclosure e = find_enclosure(numbered(gs));
+    ASSERT_EQ(e.planes.size(), 1u);
+    EXPECT_NEAR(e.planes[0].normal.z, 1.0, 1e-15);
+    EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 0, 0, 1}));
+    EXPECT_TRUE(e.contains(Vec3(100, 100, 1e-6)));
+    EXPECT_FALSE(e.contains(Vec3(100, 100, -1e-6)));
+    // One corner a thousandth below the ground: no plane has the whole city in front of it.
+    gs[5] = tri(Vec3(5, 5, 0), Vec3(6, 5, 0), Vec3(6, 6, -1e-3));
+    e = find_enclosure(numbered(gs));
+    EXPECT_TRUE(e.planes.empty());
+    EXPECT_TRUE(e.piece.empty());
+    // A quad bent a thousandth up out of the ground's plane: the ground still supports the city;
+    // the bent quad is no enclosure piece (not planar), nor does it lie in the ground's plane.
+    gs[5] = quad(Vec3(5, 5, 0), Vec3(6, 5, 0), Vec3(6, 6, 1e-3), Vec3(5, 6, 0));
+    e = find_enclosure(numbered(gs));
+    EXPECT_EQ(e.planes.size(), 1u);
+    EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 0, 0, 0}));
+}
+
 }  // namespace
 }  // namespace ffcube

@@ -37,6 +37,11 @@ struct HemicubeOptions {
     // (hemicube/occlusion.hpp, hide_hidden_nodes): the same pieces as testing each, fewer tests.
     // false: every piece tested on its own (tests compare the two).
     bool occlusion_nodes = true;
+    // The scene's enclosure (hemicube/pieces.hpp, Enclosure: a convex room's walls, a city's flat
+    // ground) drawn without the depth test from every eye inside it, the other pieces over it
+    // with the depth test (docs/architecture.md, "Culling"). The item buffers are the same bits
+    // either way (tested); false: every piece depth-tested.
+    bool enclosure_without_depth = true;
     // Adaptive sender sampling (docs/accuracy.md, "Adaptive sender sampling"): a row planned at
     // 4 × 4 sub-hemicubes is measured at 2 × 2 (and the centre) first, and refined to 4 × 4 only
     // where the 2 × 2 rule's estimated error exceeds 5e-4 (gl/sample_agreement.hpp). Off by
@@ -129,6 +134,10 @@ struct HemicubeStats {
     std::uint64_t occlusion_hemicubes = 0;            // hemicubes that drew occluders first
     std::uint64_t nodes_occluded = 0;                 // hierarchy nodes × faces found hidden whole
     std::uint64_t pieces_occluded_by_node = 0;        // of pieces_occluded (all faces): left out by those
+    // Hemicubes whose eye lay inside the scene's enclosure (enclosure_without_depth), and the
+    // pieces × faces of it they drew without the depth test.
+    std::uint64_t enclosure_hemicubes = 0;
+    std::uint64_t enclosure_pieces_drawn = 0;
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
@@ -200,6 +209,10 @@ public:
     // or when forking is unsafe: this process already made a GL context or runs other threads).
     std::string workers() const;
     int resolution() const;
+    // The scene's enclosure drawn without the depth test (HemicubeOptions::enclosure_without_depth;
+    // hemicube/pieces.hpp): its planes and pieces, 0 when off or when the scene has none.
+    std::size_t enclosure_planes() const;
+    std::size_t enclosure_pieces() const;
     // Whether rows of sub-hemicubes are range-limited on this scene (HemicubeOptions::
     // sub_hemicube_range automatic, enough pieces, a half resolution of exactly N/2).
     bool range_limited_sub_hemicubes() const;

@@ -104,6 +104,10 @@ struct RowOptions {
     // HemicubeOptions::occlusion_culling (--occlusion-culling on|off): the same rows either way;
     // off leaves out the occluders' depth pass and the tests (docs/architecture.md, "Culling").
     bool occlusion_culling = true;
+    // HemicubeOptions::enclosure_without_depth (--enclosure on|off): a convex room's walls or a
+    // flat ground drawn without the depth test from eyes inside; the same rows but for ties on
+    // contact lines, which the piece standing in front now wins.
+    bool enclosure_without_depth = true;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
     // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
