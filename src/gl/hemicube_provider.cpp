@@ -55,6 +55,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.pieces_occluded_by_node += b.pieces_occluded_by_node;
     a.enclosure_hemicubes += b.enclosure_hemicubes;
     a.enclosure_pieces_drawn += b.enclosure_pieces_drawn;
+    a.depth_free_hemicubes += b.depth_free_hemicubes;
     for (std::size_t f = 0; f < 5; ++f) {
         a.pieces_drawn[f] += b.pieces_drawn[f];
         a.pieces_culled[f] += b.pieces_culled[f];

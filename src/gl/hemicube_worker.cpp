@@ -285,7 +285,9 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     const HemicubeFrame fr = make_frame(pa.normal, angle);
     const Vec3 eye = at + pa.normal * (HemicubeRowProvider::kEyeOffset * pa.size);
     enclosure_now_ = opt_.enclosure_without_depth && !pieces_.enclosure.piece.empty() && pieces_.enclosure.contains(eye);
+    depth_free_ = enclosure_now_ && pieces_.enclosure.inner_flat;
     st.enclosure_hemicubes += enclosure_now_;
+    st.depth_free_hemicubes += depth_free_;
     // Only the pieces that may lie in front of the hemicube plane (PieceBvh; the others would
     // be found wholly behind it by cull()): their vertex slots (piece corners, T-vertices)
     // relative to the eye in the local frame, subtracted in double before they become floats:
@@ -352,7 +354,7 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
     // Only depth-tested pieces read depth: a hemicube that sees the enclosure alone (inside an
     // empty room) needs no depth buffer at all.
-    if (std::any_of(lists_, lists_ + kEnclosureLists, [](const auto& l) { return !l.empty(); }))
+    if (!depth_free_ && std::any_of(lists_, lists_ + kEnclosureLists, [](const auto& l) { return !l.empty(); }))
         gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
     draw_lists(faces, near, 2);
     gl.Finish();
@@ -763,21 +765,29 @@ void Worker::cull(HemicubeStats& st) {
 // Inside the enclosure (enclosure_now_), its front pieces go to their own lists, in reverse piece
 // order: drawn first without the depth test, where they never overlap (hemicube/pieces.hpp,
 // Enclosure), the last drawn is the first piece, as the depth test's GL_GREATER let the first
-// drawn win an exact tie (two pieces with the same corners).
+// drawn win an exact tie (two pieces with the same corners). When no piece needs the depth test
+// at all (depth_free_: Enclosure::inner_flat), the other lists are made in reverse order too.
 void Worker::build_lists(bool occluders_only, HemicubeStats* st) {
     for (auto& l : lists_) l.clear();
     const bool split = enclosure_now_ && !occluders_only;
+    const bool reverse_all = split && depth_free_;
     const auto in_enclosure = [&](const Drawn& d) { return split && !d.back && pieces_.enclosure.piece[d.g]; };
-    for (const Drawn& d : drawn_) {
-        if (occluders_only && !d.occluder) continue;
-        if (in_enclosure(d)) continue;
-        add_to_lists(d, d.back ? kBackLists : 5 * group_of_kind_[pieces_.gpu[d.g].count], st);
-    }
+    const auto list0 = [&](const Drawn& d) -> std::size_t {
+        if (d.back) return kBackLists;
+        const std::size_t group = 5 * group_of_kind_[pieces_.gpu[d.g].count];
+        return in_enclosure(d) ? kEnclosureLists + group : group;
+    };
+    if (!reverse_all)
+        for (const Drawn& d : drawn_) {
+            if (occluders_only && !d.occluder) continue;
+            if (!in_enclosure(d)) add_to_lists(d, list0(d), st);
+        }
     if (!split) return;
     for (auto it = drawn_.rbegin(); it != drawn_.rend(); ++it) {
-        if (!in_enclosure(*it)) continue;
-        add_to_lists(*it, kEnclosureLists + 5 * group_of_kind_[pieces_.gpu[it->g].count], st);
-        if (st) st->enclosure_pieces_drawn += static_cast<std::uint64_t>(std::popcount(it->faces));
+        const bool enclosed = in_enclosure(*it);
+        if (!enclosed && !reverse_all) continue;
+        add_to_lists(*it, list0(*it), st);
+        if (enclosed && st) st->enclosure_pieces_drawn += static_cast<std::uint64_t>(std::popcount(it->faces));
     }
 }
 
@@ -839,17 +849,20 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
         }
     };
     // The enclosure's pieces first, without the depth test (build_lists); programs_[0] last, as
-    // the loop below expects.
-    if (std::any_of(lists_ + kEnclosureLists, lists_ + kLists, [](const auto& l) { return !l.empty(); })) {
-        gl.Disable(GL_DEPTH_TEST);
+    // the loops below expect.
+    const bool enclosure = std::any_of(lists_ + kEnclosureLists, lists_ + kLists, [](const auto& l) { return !l.empty(); });
+    if (enclosure || depth_free_) gl.Disable(GL_DEPTH_TEST);
+    if (enclosure) {
         for (std::uint32_t k = groups_; k-- > 0;) {
             if (groups_ > 1) gl.UseProgram(programs_[k].id());
             draw(kEnclosureLists + 5 * k, u_face_[k]);
         }
-        gl.Enable(GL_DEPTH_TEST);
     }
-    // Front pieces, a program per kind of piece (their lookups differ), then the back ones.
-    for (std::uint32_t k = 0; k < groups_; ++k) {
+    if (!depth_free_) gl.Enable(GL_DEPTH_TEST);
+    // Front pieces, a program per kind of piece (their lookups differ), then the back ones;
+    // without the depth test, in reverse order (the lists are too), so the first still wins.
+    for (std::uint32_t g = 0; g < groups_; ++g) {
+        const std::uint32_t k = depth_free_ ? groups_ - 1 - g : g;
         if (groups_ > 1) gl.UseProgram(programs_[k].id());
         draw(5 * k, u_face_[k]);
     }
@@ -860,6 +873,7 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
         draw(kBackLists, u_back_face_);
         gl.Disable(GL_POLYGON_OFFSET_FILL);
     }
+    if (depth_free_) gl.Enable(GL_DEPTH_TEST);
     if (passes > 1 || groups_ > 1) gl.UseProgram(programs_[0].id());
 }
 

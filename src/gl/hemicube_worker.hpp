@@ -137,6 +137,7 @@ private:
     // [kEnclosureLists + 5k, + 5), in reverse piece order.
     static constexpr std::size_t kBackLists = 15, kEnclosureLists = 20, kLists = 35;
     bool enclosure_now_ = false;  // this hemicube's eye lies inside the enclosure (pieces_.enclosure)
+    bool depth_free_ = false;     // ... and the other pieces need no depth test (Enclosure::inner_flat)
     std::vector<std::uint32_t> lists_[kLists], all_idx_;
     // Occlusion culling (occlude()): the pieces that showed in this worker's last hemicube are
     // drawn first, as occluders, and what lies wholly behind them is left out.

@@ -52,7 +52,7 @@ bool Enclosure::contains(const Vec3& eye) const {
     return true;
 }
 
-Enclosure find_enclosure(std::span<const PatchGrid> grids) {
+Enclosure find_enclosure(std::span<const PatchGrid> grids, std::span<const std::uint8_t> has_twin) {
     Enclosure en;
     if (grids.size() < 2) return en;
     std::vector<Vec3> pts;  // every corner, once
@@ -149,6 +149,23 @@ Enclosure find_enclosure(std::span<const PatchGrid> grids) {
     en.piece.assign(grids.size(), 0);
     for (std::size_t g = 0; g < grids.size(); ++g)
         en.piece[g] = plane_of[g] != kNone && renumber[static_cast<std::size_t>(plane_of[g])] != kNone;
+    // The other pieces: in one plane, facing one way or each with a twin?
+    en.inner_flat = true;
+    bool first = true, one_way = true, twins = true;
+    Enclosure::Plane inner;
+    for (std::size_t g = 0; g < grids.size() && en.inner_flat; ++g) {
+        if (en.piece[g]) continue;
+        const PatchGrid& pg = grids[g];
+        const Vec3 n = polygon_normal(std::span<const Vec3>(pg.corners.data(), pg.count));
+        if (first) {
+            inner = {n, glm::dot(n, pg.corners[0])};
+            first = false;
+        }
+        en.inner_flat = glm::dot(n, n) > 0 && on_plane(pg, inner);
+        one_way = one_way && glm::dot(n, inner.normal) > 0;
+        twins = twins && g < has_twin.size() && has_twin[g];
+    }
+    en.inner_flat = en.inner_flat && (one_way || twins);
     return en;
 }
 
@@ -371,7 +388,7 @@ ScenePieces prepare_pieces(std::span<const PatchGrid> grids) {
     }
     sp.first.push_back(static_cast<std::uint32_t>(sp.pos.size()));
     sp.has_twin = find_twins(grids);
-    sp.enclosure = find_enclosure(grids);
+    sp.enclosure = find_enclosure(grids, sp.has_twin);
     sp.bvh = PieceBvh(PieceBvh::piece_boxes(grids));
     return sp;
 }

@@ -260,6 +260,7 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("drawn.enclosure_pieces", provider.enclosure_pieces());
     r.set("drawn.enclosure_hemicubes", st.enclosure_hemicubes);
     r.set("drawn.enclosure_pieces_drawn", st.enclosure_pieces_drawn);
+    r.set("drawn.depth_free_hemicubes", st.depth_free_hemicubes);
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);

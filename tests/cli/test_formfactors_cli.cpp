@@ -153,7 +153,7 @@ TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
 
 // --enclosure off depth-tests every piece; on (the default) draws the closed box's six walls
 // without the depth test from every eye inside it (all of them) and the two-sided plate over
-// them. Nothing touches the walls, so the rows are the same bits (the .ffm bytes); the report says
+// them, also without it (its sides are one plane). Nothing touches the walls, so the rows are the same bits (the .ffm bytes); the report says
 // what was drawn so, and only `on` draws any.
 TEST(FormfactorsCli, EnclosureOffGivesTheSameBytesOnTheBoxedBlocker) {
     TempDir dir;
@@ -170,6 +170,9 @@ TEST(FormfactorsCli, EnclosureOffGivesTheSameBytesOnTheBoxedBlocker) {
     EXPECT_EQ(report["on"]["drawn"]["enclosure_pieces"], 6);
     EXPECT_EQ(report["on"]["drawn"]["enclosure_hemicubes"], report["on"]["hemicubes"]);
     EXPECT_GT(report["on"]["drawn"]["enclosure_pieces_drawn"].get<std::uint64_t>(), 0u);
+    // The plate's two sides are one plane of twins: no hemicube needs the depth test at all.
+    EXPECT_EQ(report["on"]["drawn"]["depth_free_hemicubes"], report["on"]["hemicubes"]);
+    EXPECT_EQ(report["off"]["drawn"]["depth_free_hemicubes"], 0);
     EXPECT_EQ(report["off"]["drawn"]["enclosure_planes"], 0);
     EXPECT_EQ(report["off"]["drawn"]["enclosure_hemicubes"], 0);
     const auto bad = run_ffcube("formfactors " + box + " --enclosure maybe -o " + (dir / "x.ffm"));

@@ -306,6 +306,26 @@ TEST(Enclosure, APieceLyingOnTheFloor) {
     EXPECT_EQ(e.piece, (std::vector<std::uint8_t>{1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0}));
 }
 
+// The other pieces of a closed box need no depth test when they lie in one plane and either
+// face one way or come in twins (a two-sided plate): only one of each twin pair is drawn.
+TEST(Enclosure, InnerPiecesInOnePlaneNeedNoDepthTest) {
+    const Vec3 a(.2, .2, .5), b(.8, .2, .5), c(.8, .8, .5), d(.2, .8, .5), e(.2, .2, .7), f(.8, .2, .7);
+    const auto box = inward_box(Vec3(0.0));
+    const auto flat = [&](const std::vector<PatchGrid>& inner) {
+        const auto gs = with(box, inner);
+        return find_enclosure(gs, find_twins(gs)).inner_flat;
+    };
+    EXPECT_TRUE(flat({})) << "an empty room";
+    EXPECT_TRUE(flat({quad(a, b, c, d), quad(a, d, c, b)})) << "a two-sided plate";
+    EXPECT_TRUE(flat({quad(a, b, c, d), quad(Vec3(.2, .85, .5), Vec3(.8, .85, .5), Vec3(.8, .95, .5), Vec3(.2, .95, .5))}))
+        << "two one-sided pieces of one plane, facing up";
+    EXPECT_FALSE(flat({quad(a, b, c, d), tri(a + Vec3(0, .1, 0), c, b)})) << "one up, one down, no twins";
+    EXPECT_FALSE(flat({quad(a, b, c, d), quad(a, b, f, e)})) << "two planes";
+    // Without the twins given, a two-sided plate is two pieces facing apart.
+    const auto gs = with(box, {quad(a, b, c, d), quad(a, d, c, b)});
+    EXPECT_FALSE(find_enclosure(gs).inner_flat);
+}
+
 // A city: the ground's tiles (one plane, pieces in any order) under buildings; walls and roofs are
 // not supporting.
 TEST(Enclosure, TheGroundOfACity) {

@@ -138,6 +138,9 @@ struct HemicubeStats {
     // pieces × faces of it they drew without the depth test.
     std::uint64_t enclosure_hemicubes = 0;
     std::uint64_t enclosure_pieces_drawn = 0;
+    // Of those, hemicubes drawn with no depth test at all (Enclosure::inner_flat: the other
+    // pieces lie in one plane, a blocker or a partition).
+    std::uint64_t depth_free_hemicubes = 0;
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)

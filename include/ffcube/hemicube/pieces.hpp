@@ -60,6 +60,12 @@ struct Enclosure {
     std::vector<Plane> planes;
     std::vector<std::uint8_t> piece;  // per piece: it lies on one of planes (empty: none)
     double tolerance = 0;             // of "on the plane" and "in front", in scene units
+    // The other pieces all lie in one plane (within the tolerance), and either all face one way
+    // or each has a twin (a two-sided plate: a blocker, a partition, a radiation shield): from an
+    // eye inside, no two of them that are drawn overlap either, but where coplanar pieces
+    // overlap in their plane, so a hemicube needs no depth test at all (drawn in reverse piece
+    // order, the first wins such overlaps, as with the test). True for an empty room.
+    bool inner_flat = false;
     // The eye lies in front of every plane by more than the tolerance (true when there is none).
     bool contains(const Vec3& eye) const;
 };
@@ -68,7 +74,8 @@ struct Enclosure {
 // them (a piece on none of the kept planes is simply drawn with the depth test), found in piece
 // order; pieces that are not planar within the tolerance are never enclosure pieces.
 inline constexpr std::size_t kMaxEnclosurePlanes = 64;
-Enclosure find_enclosure(std::span<const PatchGrid> grids);
+// has_twin: per piece, as find_twins (empty: no twins).
+Enclosure find_enclosure(std::span<const PatchGrid> grids, std::span<const std::uint8_t> has_twin = {});
 
 struct ScenePieces {
     std::vector<GpuGrid> gpu;
