@@ -217,6 +217,9 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
         for (std::size_t c = scene.grids[g].first_patch; c < end; ++c) piece_of_[c] = static_cast<std::uint32_t>(g);
     }
     seen_.assign(scene.grids.size(), 0u);
+    // occlude() runs only in hemicubes of kOcclusionMinPieces pieces or more: in a smaller scene
+    // no hemicube needs the pieces the last one showed.
+    occluders_ = opt.occlusion_culling && scene.grids.size() >= kOcclusionMinPieces;
     // Per piece its corners' mean and their largest distance from it, in world coordinates
     // (occlude()'s angular sizes; a distance does not depend on the frame).
     sphere_.assign(scene.grids.size(), Sphere{});
@@ -543,7 +546,7 @@ void Worker::accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& 
             back += s;
         } else {
             const std::uint32_t j = column_of(p, a, id);
-            seen_[piece_of_[j]] = seen_stamp_;
+            if (occluders_) seen_[piece_of_[j]] = seen_stamp_;
             touch(j);
             acc_[j] += weight * s;
         }

@@ -286,11 +286,20 @@ TEST(Runs, RunsOfEqualIdsMatchAPlainScan) {
                 expected.emplace_back(a, b);
                 a = b;
             }
-            std::vector<std::uint64_t> bits((n + 63) / 64 + 1, ~std::uint64_t{0});
-            mark_run_starts(ids, bits.data());
-            for_each_run(bits.data(), n, [&](std::size_t a, std::size_t b) { got.emplace_back(a, b); });
-            ASSERT_EQ(got, expected) << "n " << n << " values " << values;
-            ASSERT_EQ(bits.back(), ~std::uint64_t{0}) << "wrote past its words, n " << n;
+            // The dispatched marker, and each SIMD variant the CPU has.
+            std::vector<void (*)(std::span<const std::uint32_t>, std::uint64_t*)> markers{
+                &mark_run_starts, &runs_detail::mark_run_starts_sse2};
+#if defined(__x86_64__)
+            if (__builtin_cpu_supports("avx2")) markers.push_back(&runs_detail::mark_run_starts_avx2);
+#endif
+            for (const auto mark : markers) {
+                got.clear();
+                std::vector<std::uint64_t> bits((n + 63) / 64 + 1, ~std::uint64_t{0});
+                mark(ids, bits.data());
+                for_each_run(bits.data(), n, [&](std::size_t a, std::size_t b) { got.emplace_back(a, b); });
+                ASSERT_EQ(got, expected) << "n " << n << " values " << values;
+                ASSERT_EQ(bits.back(), ~std::uint64_t{0}) << "wrote past its words, n " << n;
+            }
         }
     }
 }
