@@ -354,7 +354,8 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     upload_lists(st);
     const GLuint zero_id[4] = {0, 0, 0, 0};
     const GLfloat zero_depth = 0.0f;  // reversed Z: 0 is infinitely far
-    gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
+    // Inside a closed enclosure every pixel is drawn (Enclosure::closed): no clear.
+    if (!(enclosure_now_ && pieces_.enclosure.closed)) gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
     // Only depth-tested pieces read depth: a hemicube that sees the enclosure alone (inside an
     // empty room) needs no depth buffer at all.
     if (!depth_free_ && std::any_of(lists_, lists_ + kEnclosureLists, [](const auto& l) { return !l.empty(); }))

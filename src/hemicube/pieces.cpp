@@ -166,6 +166,22 @@ Enclosure find_enclosure(std::span<const PatchGrid> grids, std::span<const std::
         twins = twins && g < has_twin.size() && has_twin[g];
     }
     en.inner_flat = en.inner_flat && (one_way || twins);
+    // Closed: the directed edges a → b of the enclosure pieces, each met once by b → a.
+    using Edge = std::array<double, 6>;
+    std::vector<Edge> edges, reversed;
+    for (std::size_t g = 0; g < grids.size(); ++g) {
+        if (!en.piece[g]) continue;
+        const PatchGrid& pg = grids[g];
+        for (std::uint32_t k = 0; k < pg.count; ++k) {
+            const Vec3& a = pg.corners[k];
+            const Vec3& b = pg.corners[(k + 1) % pg.count];
+            edges.push_back({a.x, a.y, a.z, b.x, b.y, b.z});
+            reversed.push_back({b.x, b.y, b.z, a.x, a.y, a.z});
+        }
+    }
+    std::sort(edges.begin(), edges.end());
+    std::sort(reversed.begin(), reversed.end());
+    en.closed = std::adjacent_find(edges.begin(), edges.end()) == edges.end() && edges == reversed;
     return en;
 }
 

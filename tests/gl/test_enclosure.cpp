@@ -67,10 +67,13 @@ HemicubeOptions options(bool enclosure) {
 }
 
 // A box with a two-sided plate and a floating block: the walls drawn without the depth test,
-// the plate and the block with it; without the block, nothing needs the depth test.
+// the plate and the block with it; without the block, nothing needs the depth test. The box is
+// closed, so its hemicubes are not cleared either.
 TEST(Enclosure, ClosedBoxRowsAreBitwiseTheSameAsDepthTestingEverything) {
     for (const bool block : {true, false}) {
         const Scene s = box_plate_block(0.05, block);
+        // Closed: no hemicube is cleared, and a pixel left undrawn would show the last one's id.
+        ASSERT_TRUE(find_enclosure(s.grids).closed);
         for (const auto plan : {RowProvider::RowPlan::centre, RowProvider::RowPlan::sampled}) {
             const test::AllRows depth = test::all_rows(s, options(false), plan);
             const test::AllRows free = test::all_rows(s, options(true), plan);

@@ -326,6 +326,26 @@ TEST(Enclosure, InnerPiecesInOnePlaneNeedNoDepthTest) {
     EXPECT_FALSE(find_enclosure(gs).inner_flat);
 }
 
+// A closed box is a closed enclosure (its hemicubes need no clear); without its ceiling, or with a
+// wall cut in two (whose middle corners lie inside the neighbours' edges), it is not.
+TEST(Enclosure, ClosedOnlyWhenEveryEdgeIsSharedTheOtherWayRound) {
+    auto box = inward_box(Vec3(0.0));
+    EXPECT_TRUE(find_enclosure(numbered(box)).closed);
+    EXPECT_TRUE(find_enclosure(with(box, {quad(Vec3(.2, .2, .5), Vec3(.8, .2, .5), Vec3(.8, .8, .5), Vec3(.2, .8, .5))})).closed)
+        << "a plate inside does not open it";
+    auto open = box;
+    open.erase(open.begin() + 1);  // the ceiling
+    const Enclosure e = find_enclosure(numbered(open));
+    EXPECT_EQ(e.planes.size(), 5u);
+    EXPECT_FALSE(e.closed);
+    auto cut = box;
+    cut[0] = quad(Vec3(0, 0, 0), Vec3(.5, 0, 0), Vec3(.5, 1, 0), Vec3(0, 1, 0));  // the floor in two halves
+    cut.push_back(quad(Vec3(.5, 0, 0), Vec3(1, 0, 0), Vec3(1, 1, 0), Vec3(.5, 1, 0)));
+    const Enclosure c = find_enclosure(numbered(cut));
+    EXPECT_EQ(c.planes.size(), 6u);
+    EXPECT_FALSE(c.closed) << "(.5, 0, 0) and (.5, 1, 0) lie inside the walls' edges";
+}
+
 // A city: the ground's tiles (one plane, pieces in any order) under buildings; walls and roofs are
 // not supporting.
 TEST(Enclosure, TheGroundOfACity) {

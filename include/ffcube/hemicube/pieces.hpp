@@ -66,6 +66,14 @@ struct Enclosure {
     // overlap in their plane, so a hemicube needs no depth test at all (drawn in reverse piece
     // order, the first wins such overlaps, as with the test). True for an empty room.
     bool inner_flat = false;
+    // The enclosure pieces make a closed surface: every edge (corner to corner) of one is an edge
+    // of another, met the other way round, with bitwise equal corners. They then cover the whole
+    // boundary of P, every direction from an eye inside shows one of them, and since GL's
+    // rasterization gives a pixel centre on an edge shared by two triangles with identical
+    // endpoints to exactly one of them, every pixel of the hemicube is drawn: it need not be
+    // cleared first. False where a corner of one lies inside another's edge (a T-vertex), or a
+    // wall is missing (an open box, a city).
+    bool closed = false;
     // The eye lies in front of every plane by more than the tolerance (true when there is none).
     bool contains(const Vec3& eye) const;
 };
