@@ -220,6 +220,9 @@ Worker::Worker(GlContext& ctx, const Scene& scene, const ScenePieces& pieces, co
     // occlude() runs only in hemicubes of kOcclusionMinPieces pieces or more: in a smaller scene
     // no hemicube needs the pieces the last one showed.
     occluders_ = opt.occlusion_culling && scene.grids.size() >= kOcclusionMinPieces;
+    // Rows listed by a pass over acc_ (take_row) where the scene has at most 3N²/8 patches (an
+    // eighth of a hemicube's pixels): that pass costs less than a stamp test per run of pixels.
+    dense_ = scene.patches.size() <= 3 * static_cast<std::size_t>(layout.resolution()) * layout.resolution() / 8;
     // Per piece its corners' mean and their largest distance from it, in world coordinates
     // (occlude()'s angular sizes; a distance does not depend on the frame).
     sphere_.assign(scene.grids.size(), Sphere{});
@@ -447,8 +450,23 @@ bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
 // log2 m above n) is listed by one pass over stamp_ in column order instead of sorting touched_:
 // the same columns in the same order (each touched once), at n compares against m log m (at 5k
 // patches, N = 128, about 1,600 of 5,010 columns: sorting was 3% of a worker's CPU).
+//
+// Dense scenes (dense_) keep no touched_ list: acc_ is zero outside a row (the row's entries are
+// zeroed as they are taken) and every entry added is positive (ΔF sums, positive weights), so
+// the row is acc_'s nonzero entries, found by one pass.
 void Worker::take_row(SparseRow& out, HemicubeStats& st) {
     Stopwatch watch;
+    if (dense_) {
+        out.clear();
+        for (std::uint32_t j = 0; j < acc_.size(); ++j) {
+            if (acc_[j] == 0.0) continue;
+            out.col.push_back(j);
+            out.val.push_back(acc_[j]);
+            acc_[j] = 0.0;
+        }
+        st.accumulate_seconds += watch.seconds();
+        return;
+    }
     const std::size_t m = touched_.size(), n = stamp_.size();
     if (m * static_cast<std::size_t>(std::bit_width(m)) > n) {
         std::size_t k = 0;
@@ -500,7 +518,7 @@ inline __attribute__((always_inline)) std::uint32_t Worker::column_of(std::uint3
 // Starts column j of the row being made (epoch_) at 0 the first time a pixel shows it. The test
 // is inlined into the accumulation's loop over runs; the first touch is a call.
 inline __attribute__((always_inline)) void Worker::touch(std::uint32_t j) {
-    if (stamp_[j] != epoch_) first_touch(j);
+    if (!dense_ && stamp_[j] != epoch_) first_touch(j);
 }
 
 __attribute__((noinline)) void Worker::first_touch(std::uint32_t j) {

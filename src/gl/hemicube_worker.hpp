@@ -144,6 +144,7 @@ private:
     std::vector<std::uint32_t> piece_of_;  // per patch: its piece
     std::vector<std::uint32_t> seen_;      // per piece: == seen_stamp_ when the last hemicube showed it
     bool occluders_ = true;                // occlude() may run: accumulate() keeps seen_ (else unused)
+    bool dense_ = false;                   // rows taken by a pass over acc_, not by touched_ (take_row)
     std::uint32_t seen_stamp_ = 1, last_stamp_ = 0;
     std::vector<float> depth_;
     std::array<FaceDepthRows, 5> depth_rows_;
