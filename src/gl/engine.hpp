@@ -33,6 +33,9 @@ public:
     // Draw `scene` (cut into `pieces`) from the next request on; from the provider's thread,
     // between runs. Both must outlive the engine or the next call.
     virtual void set_scene(const Scene& scene, const ScenePieces& pieces) = 0;
+    // Tells the engine to wind down before it is destroyed (a worker process: its socket closed,
+    // so it exits while the other engines are told too); nothing may be asked of it after.
+    virtual void hang_up() {}
 };
 
 // a += b, field by field.

@@ -92,7 +92,12 @@ struct HemicubeRowProvider::Impl {
     Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {
         resolve_fine_rows();
     }
-    ~Impl() { pool.reset(); }
+    ~Impl() {
+        pool.reset();
+        // Every worker process told at once, then each reaped (as the engines go): they wind
+        // down side by side, not one after the other.
+        for (auto& e : engines) e->hang_up();
+    }
 
     // HemicubeOptions::fine_row_rays, or its default: max(N²/2, min(2 N², 32,768)).
     std::uint64_t fine_rays() const {

@@ -241,8 +241,13 @@ ProcessEngine::ProcessEngine(const Scene& scene, const ScenePieces& pieces, cons
     fd_ = sv[0];
 }
 
-ProcessEngine::~ProcessEngine() {
+void ProcessEngine::hang_up() {
     if (fd_ >= 0) ::close(fd_);  // the child sees the end of its requests and exits
+    fd_ = -1;
+}
+
+ProcessEngine::~ProcessEngine() {
+    hang_up();
     if (pid_ > 0) {
         int status = 0;
         while (::waitpid(pid_, &status, 0) < 0 && errno == EINTR) {

@@ -33,6 +33,7 @@ public:
     // can_fork_workers(). Everything referenced is the child's copy-on-write from then on.
     ProcessEngine(const Scene& scene, const ScenePieces& pieces, const HemicubeLayout& layout, const HemicubeOptions& opt);
     ~ProcessEngine() override;  // closes the socket (the child then exits) and reaps the child
+    void hang_up() override;    // closes the socket now: the child exits while others are told
     // Reads the child's hello: its backend and GL_RENDERER, or throws why it could not start.
     std::pair<std::string, std::string> hello();
     void start() override {}
