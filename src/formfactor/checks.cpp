@@ -146,12 +146,23 @@ void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
 }
 
 StreamedPatchReciprocity::StreamedPatchReciprocity(std::span<const double> areas, std::uint64_t max_entries)
-    : areas_(areas), max_entries_(max_entries), check_(areas), rows_(areas.size()), vals_(areas.size()) {}
+    : areas_(areas), max_entries_(max_entries), check_(areas) {
+    const std::uint64_t n = areas.size();
+    // The lists cost 16 bytes an entry held (max_entries_ of them); the dense triangle 4 bytes
+    // for every pair: taken when it fits the same bytes.
+    if (n >= 2 && n * (n - 1) / 2 * 4 <= max_entries_ * 16) {
+        dense_.assign(n * (n - 1) / 2, 0.0f);
+    } else {
+        rows_.resize(n);
+        vals_.resize(n);
+    }
+}
 
 void StreamedPatchReciprocity::give_up() {
     failed_ = true;
     std::vector<std::vector<std::uint32_t>>().swap(rows_);
     std::vector<std::vector<float>>().swap(vals_);
+    std::vector<float>().swap(dense_);
     held_ = 0;
 #if defined(__GLIBC__)
     // The lists were many small blocks: hand the freed heap back, so that the passes over the
@@ -169,6 +180,28 @@ void StreamedPatchReciprocity::add(std::uint32_t i, RowView row) {
     ++next_;
     // Row i left of the diagonal with column i above it (every row k < i has come).
     const auto left = static_cast<std::size_t>(std::lower_bound(row.col.begin(), row.col.end(), i) - row.col.begin());
+    if (!dense_.empty()) {
+        // Column i's nonzero entries (F_ki > 0 is what the lists hold), then row i's right part
+        // into the triangle.
+        const float* const column = dense_.data() + static_cast<std::size_t>(i) * (i == 0 ? 0 : i - 1) / 2;
+        dense_col_.clear();
+        col_vals_.clear();
+        for (std::uint32_t k = 0; k < i; ++k)
+            if (column[k] != 0.0f) {
+                dense_col_.push_back(k);
+                col_vals_.push_back(column[k]);
+            }
+        check_.add(i, RowView{row.col.first(left), row.val.first(left)}, RowView{dense_col_, col_vals_});
+        held_ -= dense_col_.size();
+        for (std::size_t x = left; x < row.col.size(); ++x) {
+            const std::uint32_t j = row.col[x];
+            if (j == i) continue;
+            dense_[static_cast<std::size_t>(j) * (j - 1) / 2 + i] = row.val[x];
+            held_ += row.val[x] != 0.0f;
+        }
+        peak_ = std::max(peak_, held_);
+        return;
+    }
     check_.add(i, RowView{row.col.first(left), row.val.first(left)}, RowView{rows_[i], vals_[i]});
     held_ -= rows_[i].size();
     std::vector<std::uint32_t>().swap(rows_[i]);

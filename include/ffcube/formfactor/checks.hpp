@@ -112,6 +112,11 @@ private:
     PatchReciprocity check_;
     std::vector<std::vector<std::uint32_t>> rows_;  // per column j: the rows k < j with F_kj > 0 so far
     std::vector<std::vector<float>> vals_;          // ... and their F_kj
+    // A small scene (the whole lower triangle, 4 bytes an entry, within the budget): F_kj, k < j,
+    // at dense_[j (j − 1) / 2 + k], zero where absent, instead of the lists: no list to grow.
+    std::vector<float> dense_;
+    std::vector<std::uint32_t> dense_col_;  // add()'s scratch: column i's rows with F_ki ≠ 0 ...
+    std::vector<float> col_vals_;           // ... and those F_ki
     std::uint64_t held_ = 0, peak_ = 0;
     std::uint32_t next_ = 0;
     bool failed_ = false;
