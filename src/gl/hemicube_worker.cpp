@@ -363,7 +363,7 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     // empty room) needs no depth buffer at all.
     if (!depth_free_ && std::any_of(lists_, lists_ + kEnclosureLists, [](const auto& l) { return !l.empty(); }))
         gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
-    draw_lists(faces, near, 2);
+    draw_lists(faces, near, 2, depth_free_);
     gl.Finish();
     st.draw_seconds += watch.seconds();
     watch.restart();
@@ -841,8 +841,9 @@ void Worker::upload_lists(HemicubeStats& st) {
     st.upload_index_bytes += all_idx_.size() * sizeof(std::uint32_t);
 }
 
-// Draws the uploaded lists into the bound target: the front pass, then (passes 2) the back one.
-void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes) {
+// Draws the uploaded lists into the bound target: the front pass, then (passes 2) the back one;
+// depth_free: all of it without the depth test (render(), inside an inner_flat enclosure).
+void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes, bool depth_free) {
     const gl::Api& gl = gl_;
     // Front-facing pieces first, then back-facing ones pushed 64 depth units farther
     // (reversed Z: negative offset), so a two-sided plate made of two one-sided faces back to
@@ -873,18 +874,18 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
     // The enclosure's pieces first, without the depth test (build_lists); programs_[0] last, as
     // the loops below expect.
     const bool enclosure = std::any_of(lists_ + kEnclosureLists, lists_ + kLists, [](const auto& l) { return !l.empty(); });
-    if (enclosure || depth_free_) gl.Disable(GL_DEPTH_TEST);
+    if (enclosure || depth_free) gl.Disable(GL_DEPTH_TEST);
     if (enclosure) {
         for (std::uint32_t k = groups_; k-- > 0;) {
             if (groups_ > 1) gl.UseProgram(programs_[k].id());
             draw(kEnclosureLists + 5 * k, u_face_[k]);
         }
     }
-    if (!depth_free_) gl.Enable(GL_DEPTH_TEST);
+    if (!depth_free) gl.Enable(GL_DEPTH_TEST);
     // Front pieces, a program per kind of piece (their lookups differ), then the back ones;
     // without the depth test, in reverse order (the lists are too), so the first still wins.
     for (std::uint32_t g = 0; g < groups_; ++g) {
-        const std::uint32_t k = depth_free_ ? groups_ - 1 - g : g;
+        const std::uint32_t k = depth_free ? groups_ - 1 - g : g;
         if (groups_ > 1) gl.UseProgram(programs_[k].id());
         draw(5 * k, u_face_[k]);
     }
@@ -895,7 +896,7 @@ void Worker::draw_lists(const std::array<FaceSpec, 5>& faces, double near, int p
         draw(kBackLists, u_back_face_);
         gl.Disable(GL_POLYGON_OFFSET_FILL);
     }
-    if (depth_free_) gl.Enable(GL_DEPTH_TEST);
+    if (depth_free) gl.Enable(GL_DEPTH_TEST);
     if (passes > 1 || groups_ > 1) gl.UseProgram(programs_[0].id());
 }
 
@@ -940,7 +941,7 @@ void Worker::occlude(const std::array<FaceSpec, 5>& faces, double near, Res res,
     const GLfloat zero_depth = 0.0f;
     gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
     gl.ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-    draw_lists(faces, near, 1);
+    draw_lists(faces, near, 1, false);  // depth only: the test on
     gl.ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     const HemicubeLayout& lay = layout_of(res);
     gl.ReadPixels(0, 0, lay.atlas_width(), lay.atlas_height(), GL_DEPTH_COMPONENT, GL_FLOAT, depth_.data());

@@ -102,7 +102,7 @@ private:
     void build_lists(bool occluders_only, HemicubeStats* st);
     void add_to_lists(const Drawn& d, std::size_t list0, HemicubeStats* st);
     void upload_lists(HemicubeStats& st);
-    void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes);
+    void draw_lists(const std::array<FaceSpec, 5>& faces, double near, int passes, bool depth_free);
 
     const gl::Api& gl_;
     const Scene& scene_;

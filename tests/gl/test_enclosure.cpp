@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <numeric>
 #include <cmath>
 #include <cstdio>
 
@@ -36,6 +37,30 @@ Scene box_plate_block(double lift, bool block = true) {
     polys.push_back({"block", {c, d, d + h, c + h}});
     polys.push_back({"block", {d, a, a + h, d + h}});
     return test::make_scene(polys, 0.125);
+}
+
+// The closed unit box with every wall cut into 2 × k² triangles, each one patch (as an STL export
+// writes it: 12k² pieces, enough for occlusion culling), and a two-sided plate of two triangles a
+// side: the walls are a closed enclosure, the plate one plane of twins.
+Scene triangulated_box_plate(int k) {
+    std::vector<NamedPolygon> polys;
+    const auto wall = [&](Vec3 o, Vec3 u, Vec3 v, int n, const std::string& name) {
+        const auto p = [&](int i, int j) { return o + u * (static_cast<double>(i) / n) + v * (static_cast<double>(j) / n); };
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; j < n; ++j) {
+                polys.push_back({name, {p(i, j), p(i + 1, j), p(i + 1, j + 1)}});
+                polys.push_back({name, {p(i, j), p(i + 1, j + 1), p(i, j + 1)}});
+            }
+    };
+    wall(Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), k, "floor");
+    wall(Vec3(0, 0, 1), Vec3(0, 1, 0), Vec3(1, 0, 0), k, "ceiling");
+    wall(Vec3(0, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1), k, "x0");
+    wall(Vec3(1, 0, 0), Vec3(0, 0, 1), Vec3(0, 1, 0), k, "x1");
+    wall(Vec3(0, 0, 0), Vec3(0, 0, 1), Vec3(1, 0, 0), k, "y0");
+    wall(Vec3(0, 1, 0), Vec3(1, 0, 0), Vec3(0, 0, 1), k, "y1");
+    wall(Vec3(.3, .3, .55), Vec3(.4, 0, 0), Vec3(0, .4, 0), 1, "plate");
+    wall(Vec3(.3, .3, .55), Vec3(0, .4, 0), Vec3(.4, 0, 0), 1, "plate");
+    return test::make_scene(polys, 10.0);
 }
 
 // Blocks of heights 1–3 two units apart on street tiles (as test_occlusion's city).
@@ -92,6 +117,36 @@ TEST(Enclosure, ClosedBoxRowsAreBitwiseTheSameAsDepthTestingEverything) {
             EXPECT_EQ(free.stats.depth_free_hemicubes, block ? 0u : free.stats.hemicubes);
         }
     }
+}
+
+// An STL-like closed box of 864 triangles around a two-sided plate: no hemicube needs the depth
+// test or a clear, while occlusion culling (128 pieces or more in view) draws its occluders' depth
+// first. The same bits as depth-testing everything.
+TEST(Enclosure, TriangulatedBoxWithOcclusionCullingIsBitwiseTheSame) {
+    const Scene s = triangulated_box_plate(6);
+    ASSERT_EQ(s.grids.size(), 6u * 72 + 4);
+    const Enclosure en = find_enclosure(s.grids, find_twins(s.grids));
+    ASSERT_EQ(en.planes.size(), 6u);
+    ASSERT_TRUE(en.closed);
+    ASSERT_TRUE(en.inner_flat);
+    // One worker: each hemicube's occluders (what the last one showed) are the same either way.
+    HemicubeOptions off = options(false), on = options(true);
+    off.threads = on.threads = 1;
+    const test::AllRows depth = test::all_rows(s, off, RowProvider::RowPlan::centre);
+    const test::AllRows free = test::all_rows(s, on, RowProvider::RowPlan::centre);
+    for (std::uint32_t i = 0; i < s.size(); ++i) {
+        ASSERT_EQ(depth.rows[i].col, free.rows[i].col) << "row " << i;
+        ASSERT_EQ(depth.rows[i].val, free.rows[i].val) << "row " << i;
+    }
+    EXPECT_EQ(free.stats.depth_free_hemicubes, free.stats.hemicubes);
+    EXPECT_GT(free.stats.occlusion_hemicubes, 0u);
+    // The occluders' pass keeps its depth test: the plate hides exactly the wall triangles it hid
+    // with the depth test everywhere (a pass drawn without it would leave no depth: 4 of 729).
+    const auto occluded = [](const HemicubeStats& st) {
+        return std::accumulate(st.pieces_occluded.begin(), st.pieces_occluded.end(), std::uint64_t{0});
+    };
+    EXPECT_GT(occluded(depth.stats), 100u);
+    EXPECT_EQ(occluded(free.stats), occluded(depth.stats));
 }
 
 // Every hemicube's item buffer with and without: a pixel may differ only where the depth test
