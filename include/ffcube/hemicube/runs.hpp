@@ -46,7 +46,9 @@ inline void mark_run_starts_sse2(std::span<const std::uint32_t> ids, std::uint64
 }
 
 #if defined(__x86_64__)
-// The same on AVX2, eight pixels at a time (the same bits: a compare per pixel either way).
+// The same on AVX2, eight pixels at a time (the same bits: a compare per pixel either way). Its
+// own copy of the word loop: a template shared with the SSE2 one would need this body inlined
+// into it across the target attribute, which GCC does not do.
 __attribute__((target("avx2"))) inline void mark_run_starts_avx2(std::span<const std::uint32_t> ids, std::uint64_t* bits) {
     const std::size_t n = ids.size();
     const std::uint32_t* d = ids.data();
