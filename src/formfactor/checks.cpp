@@ -145,6 +145,13 @@ void PatchReciprocity::add(std::uint32_t i, RowView row, RowView column) {
     }
 }
 
+namespace {
+
+// Where column j's entries F_kj, k < j, start in the dense lower triangle (j (j − 1) / 2).
+std::size_t column_start(std::uint32_t j) { return j == 0 ? 0 : static_cast<std::size_t>(j) * (j - 1) / 2; }
+
+}  // namespace
+
 StreamedPatchReciprocity::StreamedPatchReciprocity(std::span<const double> areas, std::uint64_t max_entries)
     : areas_(areas), max_entries_(max_entries), check_(areas) {
     const std::uint64_t n = areas.size();
@@ -183,7 +190,7 @@ void StreamedPatchReciprocity::add(std::uint32_t i, RowView row) {
     if (!dense_.empty()) {
         // Column i's nonzero entries (F_ki > 0 is what the lists hold), then row i's right part
         // into the triangle.
-        const float* const column = dense_.data() + static_cast<std::size_t>(i) * (i == 0 ? 0 : i - 1) / 2;
+        const float* const column = dense_.data() + column_start(i);
         dense_col_.clear();
         col_vals_.clear();
         for (std::uint32_t k = 0; k < i; ++k)
@@ -196,7 +203,7 @@ void StreamedPatchReciprocity::add(std::uint32_t i, RowView row) {
         for (std::size_t x = left; x < row.col.size(); ++x) {
             const std::uint32_t j = row.col[x];
             if (j == i) continue;
-            dense_[static_cast<std::size_t>(j) * (j - 1) / 2 + i] = row.val[x];
+            dense_[column_start(j) + i] = row.val[x];
             held_ += row.val[x] != 0.0f;
         }
         peak_ = std::max(peak_, held_);
