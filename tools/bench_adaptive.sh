@@ -8,7 +8,7 @@
 #      the coarser's edge) when given; with three or more uniform runs it also prints the order
 #      each object's last two steps show (log2 of the ratio of successive differences);
 #   3. adaptive solves at each --target-error in TARGETS (budget MAX_ELEMENTS), with rows carried
-#      between levels and, when REUSE="on off", also with --no-reuse-rows;
+#      between levels;
 # and prints one markdown row per run: patches or elements, the command's wall time (report's
 # time.total), and the largest and per-object relative error of the luminance of B against the
 # reference; OUT_DIR/error_vs_time.svg plots the largest error against time.total, uniform and
@@ -16,7 +16,7 @@
 #   tools/bench_adaptive.sh BUILD_DIR OUT_DIR [SCENE]
 # Environment: UNIFORM="60 30 15", TARGETS="1e-2 1e-3", MAX_ELEMENTS=4000, REFERENCE_FINE, REFERENCE_COARSE,
 # CONTACT_CUTS=auto|on|off (--contact-cuts of every run; auto, the default: cut wherever an object
-# stands on another), ORDER=1, REUSE=on (on, off or "on off"), STARTS=coarse (adaptive starting meshes:
+# stands on another), ORDER=1, STARTS=coarse (adaptive starting meshes:
 # coarse, the start of about 500 patches, or N: --patches N; e.g. STARTS="coarse 2000" for both; runs
 # from N are named adaptive_T_startN).
 set -euo pipefail
@@ -28,7 +28,6 @@ targets=${TARGETS:-"1e-2 1e-3"}
 max_elements=${MAX_ELEMENTS:-4000}
 cuts=${CONTACT_CUTS:-auto}
 order=${ORDER:-1}
-reuse=${REUSE:-on}
 starts=${STARTS:-coarse}
 mkdir -p "$out"
 ffcube="$build/ffcube"
@@ -48,14 +47,11 @@ for L in $uniform; do
     runs+=("uniform_$L")
 done
 for t in $targets; do
-    for r in $reuse; do
-        for s in $starts; do
-            name="adaptive_$t"; flag=""
-            if [ "$r" = off ]; then name="adaptive_${t}_no_reuse"; flag="--no-reuse-rows"; fi
-            if [ "$s" != coarse ]; then name="${name}_start$s"; flag="$flag --patches $s"; fi
-            solve "$name" --target-error "$t" --max-elements "$max_elements" $flag
-            runs+=("$name")
-        done
+    for s in $starts; do
+        name="adaptive_$t"; flag=""
+        if [ "$s" != coarse ]; then name="${name}_start$s"; flag="$flag --patches $s"; fi
+        solve "$name" --target-error "$t" --max-elements "$max_elements" $flag
+        runs+=("$name")
     done
 done
 set -- $uniform

@@ -5,6 +5,7 @@
 #include <limits>
 #include <numbers>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/scene/mesher.hpp"

@@ -9,6 +9,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/expert.hpp"
 #include "cli/mpi_glue.hpp"
 #include "cli/row_store.hpp"
 #include "cli/surface_options.hpp"
@@ -37,7 +38,6 @@ struct Options {
     std::string output, groups, report;
     CheckpointOptions checkpoint;
     std::uint64_t stats_memory_mib = 512;
-    std::uint32_t ffm_version = kFfmVersion;
     SurfaceOutputOptions outputs;  // --sky, --view3d, --elmer, --patch-table
 };
 
@@ -197,7 +197,7 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     return f;
 }
 
-// The matrix in memory: --ffm-version 1, or no output.
+// The matrix in memory: no output (or the test hook FFCUBE_TEST_IN_MEMORY).
 // `computed` holds every row (from this process, or gathered from the MPI ranks), computed in
 // `seconds`; `ranks`: under mpirun, the figures of every rank's rows.
 Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatrix computed, double seconds,
@@ -216,8 +216,8 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
     }
     watch.restart();
     if (o.output.ends_with(".ffm")) {
-        Progress bar(fmt::format("writing {}", o.output), ffm_progress_total(F, o.ffm_version), progress);
-        write_ffm(o.output, F, scene, written, &bar, o.ffm_version);
+        Progress bar(fmt::format("writing {}", o.output), ffm_progress_total(F, kFfmVersion), progress);
+        write_ffm(o.output, F, scene, written, &bar, kFfmVersion);
     } else if (o.output.ends_with(".mtx")) {
         Progress bar(fmt::format("writing {} (rows)", o.output), F.size(), progress);
         write_mtx(o.output, F, &bar);
@@ -265,7 +265,7 @@ int run(const Options& o) {
     // FFCUBE_TEST_IN_MEMORY (set, non-empty): a test hook that takes the in-memory path, so that
     // tests compare it with the streamed one byte for byte.
     const char* test_in_memory = std::getenv("FFCUBE_TEST_IN_MEMORY");
-    const bool stream = ((ffm && o.ffm_version == 2) || mtx) && !(test_in_memory && *test_in_memory);
+    const bool stream = (ffm || mtx) && !(test_in_memory && *test_in_memory);
     report.set("streamed", stream);
     Figures f;
     if (stream) {
@@ -326,12 +326,10 @@ void add_formfactors_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--report", opts->report, "write a JSON report (timings, row sums, reciprocity, culling)");
     add_checkpoint_options(*sub, opts->checkpoint);
     add_surface_output_options(*sub, opts->outputs);
-    sub->add_option("--stats-memory", opts->stats_memory_mib,
+    expert(sub->get_option("--materials"));  // Kd and Ke: nothing a form factor depends on
+    expert(sub->add_option("--stats-memory", opts->stats_memory_mib,
                     "MiB for the reciprocity check and --enforce of a streamed .ffm (a band of the transpose, and G: less makes more scratch files)")
-        ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30));
-    sub->add_option("--ffm-version", opts->ffm_version,
-                    "write .ffm version 2 (compact, streamed: the default) or 1 (plain arrays, the matrix held in memory)")
-        ->check(CLI::IsMember({1u, 2u}));
+        ->check(CLI::Range(std::uint64_t{1}, std::uint64_t{1} << 30)));
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);

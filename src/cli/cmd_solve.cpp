@@ -10,6 +10,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/expert.hpp"
 #include "cli/mpi_glue.hpp"
 #include "cli/row_store.hpp"
 #include "cli/surface_options.hpp"
@@ -292,10 +293,10 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
         ->check(CLI::IsMember({"shoot", "jacobi", "gauss-seidel", "direct"}))
         ->default_val("shoot");
     sub->add_option("--tolerance", opts->tolerance, "stop when unshot power <= tolerance x emitted power")->default_val(1e-4);
-    sub->add_option("--max-iterations", opts->max_iterations, "most shots (shoot) or sweeps (default: the method's own)");
+    expert(sub->add_option("--max-iterations", opts->max_iterations, "most shots (shoot) or sweeps (default: the method's own)"));
     opts->overshoot_option =
-        sub->add_option("--overshoot", "over-relax shooting by the factor in [1,2) (alone: 1.2)")->expected(0, 1);
-    sub->add_option("--row-cache-mb", opts->row_cache_mb, "bound of the cache of shooters' rows, MiB (0: none)")->default_val(512);
+        expert(sub->add_option("--overshoot", "over-relax shooting by the factor in [1,2) (alone: 1.2)")->expected(0, 1));
+    expert(sub->add_option("--row-cache-mb", opts->row_cache_mb, "bound of the cache of shooters' rows, MiB (0: none)")->default_val(512));
     sub->add_option("--matrix", opts->matrix, "take the rows from F.ffm (from `ffcube formfactors`) instead of hemicubes");
     sub->add_option("--objects", opts->objects, "write area-weighted mean radiosity per object (object,area,B_r,B_g,B_b)");
     sub->add_option("--radiosity", opts->radiosity, "write radiosity per patch (patch,object,area,B_r,B_g,B_b)");
@@ -310,8 +311,8 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
     add_adaptive_options(*sub, opts->adaptive);
     add_sky_options(*sub, opts->sky);
-    sub->add_flag("--allow-unconverged", opts->allow_unconverged,
-                  "write the results of a solve that stopped before its tolerance (else exit 5, report only)");
+    expert(sub->add_flag("--allow-unconverged", opts->allow_unconverged,
+                         "write the results of a solve that stopped before its tolerance (else exit 5, report only)"));
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);

@@ -8,6 +8,7 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
+#include "cli/expert.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/pipeline/adaptive.hpp"
@@ -124,16 +125,16 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     auto& s = opts->solver;
     sub->add_option("--tolerance", s.tolerance, "stop shooting when unshot power <= tolerance x emitted power")
         ->default_val(s.tolerance);
-    sub->add_option("--max-shots", s.max_iterations, "stop after this many shots (0: 1000 per patch, at least 100000)");
-    sub->add_option("--overshoot", s.overshoot, "over-relaxation factor w in [1, 2) (1: classic shooting)")
-        ->default_val(s.overshoot);
-    sub->add_option("--row-cache-mb", s.row_cache_mb, "bound of the cache of shooters' rows, MiB")->default_val(s.row_cache_mb);
-    sub->add_option("--batch", opts->batch, "shooters whose rows are computed together (default: 16, as solve)");
+    expert(sub->add_option("--max-shots", s.max_iterations, "stop after this many shots (0: 1000 per patch, at least 100000)"));
+    expert(sub->add_option("--overshoot", s.overshoot, "over-relaxation factor w in [1, 2) (1: classic shooting)")
+        ->default_val(s.overshoot));
+    expert(sub->add_option("--row-cache-mb", s.row_cache_mb, "bound of the cache of shooters' rows, MiB")->default_val(s.row_cache_mb));
+    expert(sub->add_option("--batch", opts->batch, "shooters whose rows are computed together (default: 16, as solve)"));
     auto& v = opts->viewer;
     sub->add_option("--size", opts->size, "window size WxH")->default_val(opts->size);
-    sub->add_option("--budget-ms", v.budget_ms, "solver time per frame, milliseconds (adjustable in the window)")
-        ->default_val(v.budget_ms);
-    sub->add_option("--shots-per-frame", v.shots_per_frame, "at most this many shots per frame (0: as the budget allows)");
+    expert(sub->add_option("--budget-ms", v.budget_ms, "solver time per frame, milliseconds (adjustable in the window)")
+        ->default_val(v.budget_ms));
+    expert(sub->add_option("--shots-per-frame", v.shots_per_frame, "at most this many shots per frame (0: as the budget allows)"));
     sub->add_option("--exposure", opts->exposure, "exposure in stops (default: from the scene's emitted power)");
     sub->add_option("--tone-map", v.tone_map, "clamp, reinhard or aces")
         ->check(CLI::IsMember({"clamp", "reinhard", "aces"}))
@@ -141,14 +142,14 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     sub->add_flag("--no-ambient", opts->no_ambient, "do not add the ambient term to the display");
     sub->add_flag("--flat", v.flat, "flat patch shading (default: smooth, vertex-interpolated)");
     sub->add_flag("--wireframe", v.wireframe, "draw patch outlines");
-    sub->add_flag("--hide-ui", v.hide_ui, "start with the panel hidden (H toggles it)");
-    sub->add_flag("--paused", v.paused, "start with the solver paused (Space resumes)");
-    sub->add_option("--frames", v.frames, "run this many frames, then save --screenshot/--exr and exit");
-    sub->add_option("--pick", opts->pick, "after the frames, inspect the patch at window pixel X,Y (from the top left)");
-    sub->add_option("--screenshot", v.screenshot, "after the frames, save the window as PNG");
-    sub->add_option("--exr", v.exr, "after the frames, save the linear radiosity of the view as OpenEXR");
-    sub->add_flag("--until-done", v.until_done,
-                  "run frames until the (last adaptive level's) solve stops, then act as after --frames");
+    expert(sub->add_flag("--hide-ui", v.hide_ui, "start with the panel hidden (H toggles it)"));
+    expert(sub->add_flag("--paused", v.paused, "start with the solver paused (Space resumes)"));
+    expert(sub->add_option("--frames", v.frames, "run this many frames, then save --screenshot/--exr and exit"));
+    expert(sub->add_option("--pick", opts->pick, "after the frames, inspect the patch at window pixel X,Y (from the top left)"));
+    expert(sub->add_option("--screenshot", v.screenshot, "after the frames, save the window as PNG"));
+    expert(sub->add_option("--exr", v.exr, "after the frames, save the linear radiosity of the view as OpenEXR"));
+    expert(sub->add_flag("--until-done", v.until_done,
+                  "run frames until the (last adaptive level's) solve stops, then act as after --frames"));
     sub->add_option("--objects", opts->objects, "at the end, write the radiosity per object as solve --objects does");
     sub->callback([opts, &action] {
         action = [opts] {

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <vector>
 
+#include "cli/expert.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/io/csv.hpp"
 #include "ffcube/solver/solver.hpp"
@@ -37,9 +38,9 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
     auto* patches = app.add_option("--patches", o.scene.patches, "mesh to about N patches (default: 2000)")
                         ->check(CLI::PositiveNumber)
                         ->excludes(edge);
-    add_word_option(app, "--format", o.scene.format, parse_scene_format,
+    expert(add_word_option(app, "--format", o.scene.format, parse_scene_format,
                     {"auto", "obj", "stl", "vs3", "ply", "gltf", "glb", "assimp"},
-                    "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp)", "auto");
+                    "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp)", "auto"));
     app.add_option("--materials", o.scene.materials,
                    "CSV of Kd and Ke per object (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b) for formats without materials; "
                    "a triple left empty keeps the file's (docs/scene-format.md)")
@@ -49,15 +50,15 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
            "every input face is one patch (triangles and convex planar quads only)")
         ->excludes(edge)
         ->excludes(patches);
-    add_word_option(app, "--contact-cuts", o.scene.contact_cuts, parse_contact_cuts, {"auto", "on", "off"},
+    expert(add_word_option(app, "--contact-cuts", o.scene.contact_cuts, parse_contact_cuts, {"auto", "on", "off"},
                     "cut faces along the polygons where other objects stand on them, before meshing (auto: on "
                     "unless --no-subdivide; docs/adaptive.md)",
-                    "auto");
-    app.add_flag_function(
-        "--no-contact-cuts", [&o](std::int64_t) { o.scene.contact_cuts = ContactCuts::Off; }, "the same as --contact-cuts off");
-    add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
+                    "auto"));
+    expert(app.add_flag_function(
+        "--no-contact-cuts", [&o](std::int64_t) { o.scene.contact_cuts = ContactCuts::Off; }, "the same as --contact-cuts off"));
+    expert(add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
                     {"auto", "o", "g", "material"},
-                    "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto");
+                    "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto"));
     app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
 }
 
@@ -67,10 +68,6 @@ void add_adaptive_options(CLI::App& app, AdaptiveFlags& o) {
                          ->default_val(o.options.target_error);
     o.max_elements = app.add_option("--max-elements", o.options.max_elements, "adaptive meshing: most elements (patches after refinement)")
                          ->default_val(o.options.max_elements);
-    app.add_flag("!--no-reuse-rows", o.options.reuse_rows,
-                 "adaptive meshing: measure every row at every level (default: rows of patches not split are carried over)");
-    app.add_flag("!--restart-workers", o.options.keep_workers,
-                 "adaptive meshing: start new hemicube workers at every level (default: the first level's are kept)");
 }
 
 void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {
@@ -89,39 +86,39 @@ void add_row_options(CLI::App& app, RowOptions& o) {
            "hemicube (OpenGL) or raycast (Monte Carlo through Embree, no GL)")
         ->check(CLI::IsMember({"auto", "hemicube", "raycast"}))
         ->default_str("auto");
-    app.add_option_function<std::uint64_t>(
+    expert(app.add_option_function<std::uint64_t>(
            "--rays", [&o](std::uint64_t r) { o.rays = r, o.rays_given = true; },
            "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays); default 4096 with --method raycast, "
            "max(N^2/2, min(2 N^2, 32768)) where --method auto casts rays)")
-        ->default_str("4096");
+        ->default_str("4096"));
     app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
         ->default_val(256);
-    add_word_option(app, "--backend", o.backend, parse_backend, {"auto", "egl", "osmesa"},
-                    "OpenGL context: auto (EGL, then OSMesa), egl or osmesa", "auto");
+    expert(add_word_option(app, "--backend", o.backend, parse_backend, {"auto", "egl", "osmesa"},
+                    "OpenGL context: auto (EGL, then OSMesa), egl or osmesa", "auto"));
     app.add_option("--threads", o.threads, "worker threads, one GL context each (default: every core)");
-    app.add_flag_function(
+    expert(app.add_flag_function(
         "--no-rotate", [&o](std::int64_t) { o.rotate = false; },
-        "do not rotate hemicubes about the normal by a seeded random angle");
-    app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed);
-    add_word_option(app, "--correct", o.correct, parse_correction, {"none", "near"},
+        "do not rotate hemicubes about the normal by a seeded random angle"));
+    expert(app.add_option("--seed", o.seed, "seed of the hemicube rotation angles")->default_val(0x5eed));
+    expert(add_word_option(app, "--correct", o.correct, parse_correction, {"none", "near"},
                     "near (default): exact form factors for near unoccluded pairs, sender quadrature (hemicube) for "
                     "entries within 64 patch sizes, closed rows kept closed; switched on per row where a row needs "
                     "it. none: the plain rows",
-                    "near");
-    app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
+                    "near"));
+    expert(app.add_option("--near-k", o.near_k, "--correct near: pairs closer than K x patch size are near")
         ->check(CLI::PositiveNumber)
-        ->default_val(3.0);
-    app.add_option("--near-min-ff", o.near_min_ff,
+        ->default_val(3.0));
+    expert(app.add_option("--near-min-ff", o.near_min_ff,
                    "--correct near, raycast: a near pair whose form factor is provably below F (A_j / (pi gap^2)) "
                    "keeps its ray estimate, without a shaft test or an exact value (docs/accuracy.md); 0: every near pair")
         ->check(CLI::Range(0.0, 1.0))
-        ->default_val(0.03);
-    app.add_option("--sub-hemicube-k", o.sub_hemicube_k,
+        ->default_val(0.03));
+    expert(app.add_option("--sub-hemicube-k", o.sub_hemicube_k,
                    "--correct near: a possibly occluded near pair makes its row use sub-hemicubes when it lies within "
                    "K x the sender's size (docs/accuracy.md); 0: every such pair")
         ->check(CLI::NonNegativeNumber)
-        ->default_val(10.0);
-    app.add_option_function<std::string>(
+        ->default_val(10.0));
+    expert(app.add_option_function<std::string>(
            "--exact-visibility",
            [&o](const std::string& word) {
                try {
@@ -134,61 +131,22 @@ void add_row_options(CLI::App& app, RowOptions& o) {
            "the exact factor past them instead of sub-hemicubes (docs/accuracy.md). auto (default, hemicube): K = 8 "
            "where it spares a row its sub-hemicubes, within a per-row cost bound; K (at most 64): every such pair, "
            "no bound; 0 or off: never")
-        ->default_str("auto");
-    app.add_flag_function(
-        "--adaptive-sampling", [&o](std::int64_t) { o.adaptive_sampling = true; },
-        "--correct near: rows planned at 4 x 4 sub-hemicubes are measured at 2 x 2 and the centre first, and "
-        "refined to 4 x 4 only where the 2 x 2 rule's estimated error exceeds 5e-4 (docs/accuracy.md)");
-    add_word_option(app, "--sub-hemicube-range", o.sub_hemicube_range, parse_sub_hemicube_range, {"auto", "off"},
-                    "--correct near: rows of sub-hemicubes on scenes of 1000 pieces or more draw at their points "
-                    "only the pieces within K x the sender's size, plus one hemicube at the centroid of the rest "
-                    "(docs/accuracy.md). auto: on such scenes, for rows whose range holds at most a quarter of the "
-                    "pieces; off (default): sub-hemicubes draw the whole scene",
-                    "off");
-    add_word_option(app, "--fine-sub-hemicubes", o.fine_sub_hemicubes, parse_fine_sub_hemicubes,
-                    {"half", "three-eighths", "quarter"},
-                    "--correct near: the resolution of the 16 sub-hemicubes of a row planned at 4 x 4 (an occluder "
-                    "touches the sender; docs/accuracy.md). half (default): N/2; three-eighths: 3N/8; quarter: N/4 "
-                    "(cheaper, noisier rows: docs/benchmarks.md)",
-                    "half");
-    add_word_option(app, "--fine-rows", o.fine_rows, parse_fine_rows, {"auto", "hemicubes", "rays"},
+        ->default_str("auto"));
+    expert(add_word_option(app, "--fine-rows", o.fine_rows, parse_fine_rows, {"auto", "hemicubes", "rays"},
                     "--correct near, hemicube: how rows planned at 4 x 4 sub-hemicubes (an occluder touches the "
                     "sender) are measured. auto (default): ray-cast on scenes of 1000 pieces or more (no "
                     "obstruction-only surfaces), where 16 sub-hemicubes cost more than the rays on llvmpipe; "
                     "hemicubes; rays (docs/accuracy.md, \"Rows an occluder touches, by rays\")",
-                    "auto");
-    app.add_option("--fine-row-rays", o.fine_row_rays,
+                    "auto"));
+    expert(app.add_option("--fine-row-rays", o.fine_row_rays,
                    "--fine-rows: rays per ray-cast row (default 0: max(N^2/2, min(2 N^2, 32768)): 32768 at N = 128 and 256)")
-        ->check(CLI::NonNegativeNumber);
-    add_word_option(app, "--vertex-upload", o.vertex_upload, parse_vertex_upload, {"once", "per-hemicube"},
-                    "hemicube: once (default): the scene's world positions go to the GL once, as doubles, and the "
-                    "vertex shader makes each hemicube's eye-relative positions; per-hemicube: the CPU uploads them "
-                    "every hemicube. The same rows either way (docs/architecture.md, \"Vertex data\")",
-                    "once");
-    app.add_option_function<std::string>(
-           "--occlusion-culling", [&o](const std::string& w) { o.occlusion_culling = w == "on"; },
-           "hemicube: on (default): a hemicube with 128 pieces or more in front draws likely occluders' depth "
-           "first and leaves out the pieces (and whole hierarchy nodes) hidden behind them; off: every piece in "
-           "the frustum is drawn. The same rows either way (docs/architecture.md, \"Culling\")")
-        ->check(CLI::IsMember({"on", "off"}))
-        ->default_str("on");
-    app.add_option_function<std::string>(
-           "--enclosure", [&o](const std::string& w) { o.enclosure_without_depth = w == "on"; },
-           "hemicube: on (default): the pieces whose plane has the whole scene in front (a convex room's walls, "
-           "a flat ground) are drawn without the depth test from eyes inside them, the rest over them; off: every "
-           "piece depth-tested. The same rows but on contact lines, where the piece standing in front now wins "
-           "the depth test's ties (docs/architecture.md, \"Culling\")")
-        ->check(CLI::IsMember({"on", "off"}))
-        ->default_str("on");
-    app.add_option("--sub-hemicube-range-k", o.sub_hemicube_range_k,
-                   "--sub-hemicube-range auto: the range K, in sender sizes (>= 1)")
-        ->default_val(24.0);
-    add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
+        ->check(CLI::NonNegativeNumber));
+    expert(add_word_option(app, "--far-field", o.far_field, parse_far_field, {"auto", "on", "off"},
                     "--correct near: analytic values for every pair beyond the near range that a plane test proves "
                     "unoccluded. auto (default): where its estimated cost per row is at most 30% of a hemicube "
                     "row's; on: wherever the scene has at most 256 planes; off",
-                    "auto");
-    app.add_option_function<std::string>(
+                    "auto"));
+    expert(app.add_option_function<std::string>(
            "--cost-model",
            [&o](const std::string& path) {
                try {
@@ -200,17 +158,17 @@ void add_row_options(CLI::App& app, RowOptions& o) {
            "--correct near, hemicube: the costs --far-field auto and --exact-visibility auto weigh, from a file "
            "`ffcube calibrate` wrote on this machine (docs/accuracy.md, \"Cost model\"); default: llvmpipe's, measured "
            "on the development machines")
-        ->type_name("FILE");
+        ->type_name("FILE"));
 }
 
 void add_far_field_emitters_option(CLI::App& app, RowOptions& o) {
     o.far_field_emitters = true;
-    app.add_option_function<std::string>(
+    expert(app.add_option_function<std::string>(
            "--far-field-emitters", [&o](const std::string& w) { o.far_field_emitters = w == "on"; },
            "--correct near, --far-field auto: where the far field is over budget for every row, keep it for the "
            "emitting patches' rows (they carry the direct term; docs/adaptive.md). on (default) or off")
         ->check(CLI::IsMember({"on", "off"}))
-        ->default_str("on");
+        ->default_str("on"));
 }
 
 void add_enforce_option(CLI::App& app, RowOptions& o) {

@@ -3,10 +3,14 @@
 //   5 a solve that did not reach its tolerance (docs/solvers.md), 70 internal error (a bug in ffcube).
 #include <CLI/CLI.hpp>
 
+#include <algorithm>
 #include <cstdio>
+#include <string>
+#include <vector>
 #include <functional>
 
 #include "cli/commands.hpp"
+#include "cli/expert.hpp"
 #include "cli/mpi_glue.hpp"
 #include "ffcube/core/error.hpp"
 
@@ -14,6 +18,7 @@ namespace {
 
 int run(int argc, char** argv) {
     CLI::App app{"ffcube: radiosity form factors (view factors) by hemicubes, and radiosity solvers"};
+    app.name("ffcube");  // not argv[0]: the help (and docs/cli.md) reads the same wherever it runs
     app.require_subcommand(1);
     app.set_version_flag("--version", "ffcube 0.1.0");
     std::function<int()> action;
@@ -22,8 +27,12 @@ int run(int argc, char** argv) {
     ffcube::cli::add_solve_command(app, action);
     ffcube::cli::add_bench_command(app, action);
     ffcube::cli::add_calibrate_command(app, action);
+    for (CLI::App* sub : app.get_subcommands({})) ffcube::cli::add_door_options(*sub);
     try {
-        app.parse(argc, argv);
+        // The expert door (cli/expert.hpp): --set NAME=VALUE and --help-all, rewritten for CLI11.
+        std::vector<std::string> args = ffcube::cli::open_door(app, argc, argv);
+        std::reverse(args.begin(), args.end());  // CLI11 takes a vector last argument first
+        app.parse(args);
     } catch (const CLI::ParseError& e) {
         return app.exit(e) == 0 ? 0 : 2;
     }

@@ -1,6 +1,7 @@
 #include "cli/surface_options.hpp"
 
 #include "cli/common.hpp"
+#include "cli/expert.hpp"
 
 namespace ffcube::cli {
 
@@ -16,17 +17,17 @@ void add_sky_options(CLI::App& app, SurfaceOutputOptions& o) {
 void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
     add_sky_options(app, o);
     app.add_option("--view3d", o.view3d, "write View3D's view-factor file (one surface per object, cmb groups combined)");
-    app.add_option_function<std::string>(
+    expert(app.add_option_function<std::string>(
            "--view3d-format", [&o](const std::string& w) { o.view3d_format = parse_file_format(w); },
            "auto (the .vs3's out key, else text), text or binary")
         ->check(CLI::IsMember({"auto", "text", "binary"}))
-        ->default_str("auto");
-    app.add_option("--elmer", o.elmer, "write Elmer's ViewFactors.dat (one row per patch)");
-    app.add_option_function<std::string>(
+        ->default_str("auto"));
+    expert(app.add_option("--elmer", o.elmer, "write Elmer's ViewFactors.dat (one row per patch)"));
+    expert(app.add_option_function<std::string>(
            "--elmer-format", [&o](const std::string& w) { o.elmer_format = parse_file_format(w); },
            "auto (= text), text or binary (Elmer's 'Viewfactor Binary Output')")
         ->check(CLI::IsMember({"auto", "text", "binary"}))
-        ->default_str("auto");
+        ->default_str("auto"));
     app.add_option("--patch-table", o.patch_table, "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz)");
 }
 

@@ -40,11 +40,7 @@ void add_stats(HemicubeStats& a, const HemicubeStats& b) {
     a.accumulate_seconds += b.accumulate_seconds;
     a.sampled_rows += b.sampled_rows;
     a.skipped_rows += b.skipped_rows;
-    a.fine_rows_refined += b.fine_rows_refined;
-    a.fine_rows_stopped += b.fine_rows_stopped;
     a.partly_enclosed_rows += b.partly_enclosed_rows;
-    a.range_limited_rows += b.range_limited_rows;
-    a.pieces_out_of_range += b.pieces_out_of_range;
     a.upload_vertex_bytes += b.upload_vertex_bytes;
     a.upload_index_bytes += b.upload_index_bytes;
     a.pieces_considered += b.pieces_considered;
@@ -214,9 +210,6 @@ struct HemicubeRowProvider::Impl {
 
 HemicubeRowProvider::HemicubeRowProvider(const Scene& scene, const HemicubeOptions& options) {
     check_row_resolution(options.resolution);
-    if (!(options.sub_hemicube_range_k >= 1) || !std::isfinite(options.sub_hemicube_range_k))
-        throw InputError(fmt::format("--sub-hemicube-range-k {}: must be a finite number >= 1 (sender sizes)",
-                                     options.sub_hemicube_range_k));
     if (scene.patches.size() >= kBackFace - 1) throw InputError("the scene has too many patches for 32-bit item IDs");
     unsigned n = options.threads ? options.threads : std::max(1u, std::thread::hardware_concurrency());
     n = static_cast<unsigned>(std::min<std::size_t>(n, std::max<std::size_t>(1, scene.patches.size())));
@@ -323,9 +316,6 @@ std::size_t HemicubeRowProvider::enclosure_pieces() const {
     return impl_->opt.enclosure_without_depth ? static_cast<std::size_t>(std::count(e.begin(), e.end(), 1)) : 0;
 }
 std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
-bool HemicubeRowProvider::range_limited_sub_hemicubes() const {
-    return range_limits_sub_hemicubes(impl_->opt, impl_->scene->grids.size(), impl_->opt.resolution);
-}
 
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
 bool HemicubeRowProvider::fine_rows_by_rays() const { return impl_->fine_by_rays; }

@@ -22,18 +22,14 @@ namespace ffcube {
 
 // Pixel value of a back face in the item buffer (0 is nothing, 1 + patch a front face).
 inline constexpr std::uint32_t kBackFace = 0xFFFFFFFFu;
+// Hemicubes that list fewer pieces than this draw them all at once: occlusion culling's extra
+// pass and depth readback would cost more than the pieces it can leave out.
+inline constexpr std::size_t kOcclusionMinPieces = 128;
+// Occluders chosen by angular size (Worker::occlude), besides those the last hemicube showed.
+inline constexpr std::size_t kOccluderCount = 32;
 
 // Resolution of sub-hemicubes: half the row's, when that is still a valid resolution (even, ≥ 8).
 int half_resolution(int n);
-// Resolution of the sub-hemicubes of a 4 × 4 row (HemicubeOptions::fine_sub_resolution): half_resolution(n),
-// 3n/8 (three_eighths, N = 128: 48) or n/4 (quarter, N = 128: 32), where that is a valid
-// resolution (even, ≥ 8); half_resolution(n) where it is not.
-int fine_resolution(int n, HemicubeOptions::FineSubResolution mode);
-
-// Whether rows of sub-hemicubes may be range-limited on a scene of `pieces` pieces at the row
-// resolution n (HemicubeOptions::sub_hemicube_range automatic, enough pieces, a half resolution
-// of exactly n/2): the worker's rule and the provider's report line share it.
-bool range_limits_sub_hemicubes(const HemicubeOptions& opt, std::size_t pieces, int n);
 
 class Worker {
 public:
@@ -47,8 +43,8 @@ public:
     // Renders the hemicube of patch p from the point 'at' on it (its centroid, or a quadrature
     // point for sub-hemicubes), raised by kEyeOffset of the patch size, into the full atlas or
     // (half) the half-resolution one of sub-hemicubes.
-    // Which atlas a hemicube is drawn into: the row's resolution, half_resolution or quarter_resolution.
-    enum class Res { full, half, quarter };
+    // Which atlas a hemicube is drawn into: the row's resolution or half_resolution.
+    enum class Res { full, half };
     void render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st);
     // Row p: one hemicube at the centroid (sub_points 0), or the average of sub-hemicubes at the
     // patch's sub_points × sub_points quadrature points (2 or 4), each with its own visibility.
@@ -66,9 +62,6 @@ private:
     void accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& st);
     // The sub-hemicubes at sub_points × sub_points points into acc_/touched_ (this epoch_).
     void sample(std::uint32_t p, int sub_points, HemicubeStats& st);
-    // Adaptive sampling of a 4 × 4 row: the 2 × 2 samples and the centre, each its own row, then judge_samples;
-    // true (out made) when they agree.
-    bool sample_adaptive(std::uint32_t p, SparseRow& out, HemicubeStats& st);
     // The sub-hemicubes of a sender cut by a facet and partly enclosed, at points on its exposed
     // part (gl/exposed_points.hpp); false (nothing done) for any other sender.
     bool sample_exposed(std::uint32_t p, HemicubeStats& st);
@@ -78,14 +71,6 @@ private:
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
     void accumulate_points(std::uint32_t p, Res res, HemicubeStats& st);
-    // Range-limited sub-hemicubes (HemicubeOptions::sub_hemicube_range): whether row p uses them,
-    // the row into acc_/touched_, and its two accumulations (near entries and the far visibility
-    // from a sub-hemicube; far entries from the centroid's hemicube).
-    bool range_applies(std::uint32_t p);
-    void sample_range_limited(std::uint32_t p, int sub_points, HemicubeStats& st);
-    void accumulate_range_near(std::uint32_t p, double weight, HemicubeStats& st);
-    void accumulate_range_far(std::uint32_t p, HemicubeStats& st);
-    bool piece_near(std::uint32_t g) const;  // wholly within range_near_ of range_centre_
     std::uint32_t column_of(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // id − 1, checked
     [[noreturn]] void bad_id(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // column_of's failure
     void touch(std::uint32_t j);        // column j enters the row being made (epoch_) at 0
@@ -97,7 +82,7 @@ private:
     void occlude(const std::array<FaceSpec, 5>& faces, double near, Res res, const Vec3& eye, const HemicubeFrame& fr,
                  HemicubeStats& st);
     const HemicubeLayout& layout_of(Res res) const {
-        return res == Res::full ? layout_ : res == Res::half ? half_layout_ : quarter_layout_;
+        return res == Res::full ? layout_ : half_layout_;
     }
     void build_lists(bool occluders_only, HemicubeStats* st);
     void add_to_lists(const Drawn& d, std::size_t list0, HemicubeStats* st);
@@ -109,23 +94,21 @@ private:
     const ScenePieces& pieces_;
     const HemicubeLayout& layout_;
     const HemicubeLayout half_layout_;  // sub-hemicubes (half_resolution)
-    const HemicubeLayout quarter_layout_;  // 4 × 4 rows' sub-hemicubes under FineSubResolution::quarter
     const HemicubeOptions& opt_;
     // Test hook (docs/robustness.md): FFCUBE_TEST_WORKER_FAIL=input|io|internal|gl makes every
     // row throw that class of error, from inside the worker (thread or process). 0: unset.
     int test_fail_ = 0;
-    std::array<FaceSpec, 5> face_m_, half_face_m_, quarter_face_m_;
+    std::array<FaceSpec, 5> face_m_, half_face_m_;
     // Front pass: one program per group of pieces (groups_ of them: one for a scene of one patch
     // per piece, else one per kind of piece present), group_of_kind_[kind] (3, 4 or 5) its group.
     std::array<gl::Program, 3> programs_;
     std::uint32_t groups_ = 0;
     std::array<std::uint32_t, 6> group_of_kind_{};
     gl::Program back_program_;
-    gl::ItemTarget target_, half_target_, quarter_target_;
+    gl::ItemTarget target_, half_target_;
     gl::VertexArray vao_;
     gl::Buffer vbo_, static_vbo_, grid_vbo_, info_vbo_, ebo_;  // grid_vbo_: general quads' corners
-    gl::Buffer eye_ubo_;  // VertexUpload::once: the eye and frame (item.vert's HemicubeEye)
-    bool world_positions_ = false;  // VertexUpload::once
+    gl::Buffer eye_ubo_;  // the eye and frame (item.vert's HemicubeEye)
     std::array<GLint, 3> u_face_{-1, -1, -1};
     GLint u_back_face_ = -1;
     std::vector<float> local_;
@@ -156,29 +139,14 @@ private:
         double radius = 0;
     };
     std::vector<Sphere> sphere_;  // per piece: its corners' mean and their largest distance from it
-    std::vector<std::uint32_t> ids_, half_ids_, quarter_ids_;
+    std::vector<std::uint32_t> ids_, half_ids_;
     std::vector<double> acc_;
     std::vector<std::uint64_t> run_bits_;  // accumulate(): where runs of one id start in a line
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;
     std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row
     std::vector<double> weights_;
-    std::vector<SparseRow> sample_rows_;  // sample_adaptive's per-sample rows
-    SparseRow centre_row_;                // and its half-resolution hemicube at the centroid
     std::unique_ptr<ExposedPoints> exposed_;  // made at the first row of sub-hemicubes
-    // Range-limited rows: per piece its bounding box, the scene's box, whether rows may use the
-    // rule (enough pieces, half resolution exactly half); during such a row, what render() draws
-    // (within_eye: pieces whose box comes within range_r_ of the eye; not_near: pieces not wholly
-    // within range_near_ of range_centre_), and per half-resolution pixel the weight of
-    // the sub-hemicubes that see past the near pieces there.
-    std::vector<Vec3> box_lo_, box_hi_;
-    Vec3 scene_lo_{0.0}, scene_hi_{0.0};
-    bool range_on_ = false;
-    enum class RangeDraw { all, within_eye, not_near };
-    RangeDraw range_mode_ = RangeDraw::all;
-    double range_r_ = 0, range_near_ = 0;
-    Vec3 range_centre_{0.0};
-    std::vector<double> vis_;
 };
 
 // A worker in this process: the context is made current on the worker thread (start).

@@ -47,30 +47,11 @@ void parse_exact_visibility(std::string_view text, RowOptions& o) {
     o.exact_visibility_occluders = k;  // its range: validate(RowOptions)
 }
 
-SubHemicubeRange parse_sub_hemicube_range(std::string_view text) {
-    if (text == "auto") return SubHemicubeRange::automatic;
-    if (text == "off") return SubHemicubeRange::off;
-    throw InputError(fmt::format("--sub-hemicube-range {}: must be auto or off", text));
-}
-
 FineRows parse_fine_rows(std::string_view text) {
     if (text == "auto") return FineRows::automatic;
     if (text == "hemicubes") return FineRows::hemicubes;
     if (text == "rays") return FineRows::rays;
     throw InputError(fmt::format("--fine-rows {}: must be auto, hemicubes or rays", text));
-}
-
-FineSubResolution parse_fine_sub_hemicubes(std::string_view text) {
-    if (text == "quarter") return FineSubResolution::quarter;
-    if (text == "three-eighths") return FineSubResolution::three_eighths;
-    if (text == "half") return FineSubResolution::half;
-    throw InputError(fmt::format("--fine-sub-hemicubes {}: must be half, three-eighths or quarter", text));
-}
-
-VertexUpload parse_vertex_upload(std::string_view text) {
-    if (text == "once") return VertexUpload::once;
-    if (text == "per-hemicube") return VertexUpload::per_hemicube;
-    throw InputError(fmt::format("--vertex-upload {}: must be once or per-hemicube", text));
 }
 
 ContactCuts parse_contact_cuts(std::string_view text) {
@@ -183,9 +164,6 @@ void validate(const RowOptions& o) {
         throw InputError(fmt::format("--near-min-ff {}: must be a number from 0 to 1 (a form factor)", o.near_min_ff));
     if (!(o.sub_hemicube_k >= 0) || !std::isfinite(o.sub_hemicube_k))
         throw InputError(fmt::format("--sub-hemicube-k {}: must be a finite number >= 0", o.sub_hemicube_k));
-    if (!(o.sub_hemicube_range_k >= 1) || !std::isfinite(o.sub_hemicube_range_k))
-        throw InputError(fmt::format("--sub-hemicube-range-k {}: must be a finite number >= 1 (sender sizes)",
-                                     o.sub_hemicube_range_k));
     if (o.exact_visibility_occluders > kMaxExactVisibilityOccluders)
         throw InputError(fmt::format("--exact-visibility {}: must be within 0..{} (possible occluders in a near pair's shaft; 0: off)",
                                      o.exact_visibility_occluders, kMaxExactVisibilityOccluders));
@@ -200,13 +178,8 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.rotate = o.rotate;
     h.seed = o.seed;
     h.worker_processes = o.worker_processes;
-    h.adaptive_sampling = o.adaptive_sampling;
-    h.sub_hemicube_range = o.sub_hemicube_range;
-    h.sub_hemicube_range_k = o.sub_hemicube_range_k;
-    h.fine_sub_resolution = o.fine_sub_hemicubes;
     h.fine_rows = o.fine_rows;
     h.fine_row_rays = o.fine_row_rays;
-    h.vertex_upload = o.vertex_upload;
     h.occlusion_culling = o.occlusion_culling;
     h.enclosure_without_depth = o.enclosure_without_depth;
     return h;

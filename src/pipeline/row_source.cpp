@@ -98,10 +98,6 @@ std::vector<std::string> describe(const RowSource& rows) {
                                             ? " (--fine-rows auto: a scene of 1000 pieces or more; --fine-rows "
                                               "hemicubes draws them)"
                                             : ""));
-        if (const HemicubeRowProvider* h = rows.hemicube(); h && h->range_limited_sub_hemicubes())
-            lines.push_back(fmt::format("sub-hemicubes range-limited to {} x the sender's size (rows whose range holds "
-                                        "at most a quarter of the pieces; --sub-hemicube-range off draws everything)",
-                                        rows.options().sub_hemicube_range_k));
     }
     return lines;
 }
@@ -128,17 +124,9 @@ FfmMetadata row_metadata(const RowOptions& o) {
             meta.settings += fmt::format(" exact_visibility={}", o.exact_visibility_occluders);
         else if (!o.exact_visibility_auto && o.method == RowMethod::Hemicube)
             meta.settings += " exact_visibility=off";
-        if (o.method == RowMethod::Hemicube && o.adaptive_sampling) meta.settings += " adaptive_sampling=1";
         // The emitting rows' far field (solve's default): their rows differ where it applies.
         if (o.method == RowMethod::Hemicube && o.far_field_emitters && o.far_field == FarFieldMode::automatic)
             meta.settings += " far_field_emitters=1";
-        // Range-limited sub-hemicubes (off by default): auto changes the rows of scenes of many pieces.
-        if (o.method == RowMethod::Hemicube && o.sub_hemicube_range == SubHemicubeRange::automatic)
-            meta.settings += fmt::format(" sub_hemicube_range=auto k={}", o.sub_hemicube_range_k);
-        // 4 × 4 rows at 3N/8 or N/4 instead of N/2: other rows where a scene has such rows.
-        if (o.method == RowMethod::Hemicube && o.fine_sub_hemicubes != FineSubResolution::half)
-            meta.settings += o.fine_sub_hemicubes == FineSubResolution::quarter ? " fine_sub_hemicubes=quarter"
-                                                                                : " fine_sub_hemicubes=three-eighths";
         // Rows planned at 4 × 4 by rays or by hemicubes: auto (the default) resolves by the scene,
         // which the checkpoint's fingerprint holds; an explicit choice or ray count is written.
         if (o.method == RowMethod::Hemicube && o.fine_rows != FineRows::automatic)
@@ -266,14 +254,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
     r.set("self_hits", st.self_hits);
     r.set("sub_hemicube_rows", st.sampled_rows);
-    // Adaptive sender sampling of the rows planned at 4 × 4 (docs/accuracy.md).
-    r.set("sub_hemicube_rows_refined_4x4", st.fine_rows_refined);
-    r.set("sub_hemicube_rows_stopped_2x2", st.fine_rows_stopped);
     // Senders cut by a facet and partly inside it (a ground triangle under a building).
     r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
-    // Range-limited sub-hemicubes (--sub-hemicube-range auto, on scenes of many pieces).
-    r.set("sub_hemicube_rows_range_limited", st.range_limited_rows);
-    r.set("left_out.pieces_out_of_range", st.pieces_out_of_range);
     // Rows planned at 4 × 4 ray-cast instead (--fine-rows), their rays and CPU-seconds.
     r.set("fine_rows.by", provider.fine_rows_by_rays() ? "rays" : "hemicubes");
     r.set("fine_rows.rays_per_row", provider.fine_row_rays());

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <random>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "support/pixel_sigma.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/core/error.hpp"

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/geometry/analytic.hpp"

@@ -19,6 +19,7 @@
 #include <cmath>
 #include <vector>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 

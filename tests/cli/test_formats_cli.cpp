@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "support/view3d_text.hpp"

@@ -125,61 +125,6 @@ struct BadCase {
     std::string message;
 };
 
-// --occlusion-culling off draws every piece in the frustum; on (the default) leaves out what the
-// occluders hide. The rows must be the same bits (the .ffm bytes), and only `on` may count
-// pieces left out by occlusion. A 600-triangle city from tools/gen_city.py (one patch per facet,
-// so its hemicubes list the 128 pieces that occlusion culling needs).
-TEST(FormfactorsCli, OcclusionCullingOffGivesTheSameBytesAndLeavesNothingOut) {
-    TempDir dir;
-    const std::string city = dir / "city.stl";
-    ASSERT_EQ(test::gen_city(city, 600, 2), 0);
-    std::map<std::string, std::uint64_t> left_out;
-    for (const std::string mode : {"on", "off"}) {
-        const auto r = run_ffcube("formfactors " + city + " --no-subdivide --method hemicube --resolution 64 -q --occlusion-culling " + mode +
-                                  " -o " + (dir / (mode + ".ffm")) + " --report " + (dir / (mode + ".json")));
-        ASSERT_EQ(r.code, 0) << r.output;
-        const auto report = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
-        std::uint64_t n = 0;
-        for (const auto& [face, count] : report["left_out"]["pieces_occluded_per_face"].items()) n += count.get<std::uint64_t>();
-        left_out[mode] = n;
-    }
-    EXPECT_EQ(test::read_text(dir / "on.ffm"), test::read_text(dir / "off.ffm"));
-    EXPECT_GT(left_out["on"], 0u);
-    EXPECT_EQ(left_out["off"], 0u);
-    const auto bad = run_ffcube("formfactors " + city + " --no-subdivide --occlusion-culling maybe -o " + (dir / "x.ffm"));
-    EXPECT_NE(bad.code, 0);
-    EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
-}
-
-// --enclosure off depth-tests every piece; on (the default) draws the closed box's six walls
-// without the depth test from every eye inside it (all of them) and the two-sided plate over
-// them, also without it (its sides are one plane). Nothing touches the walls, so the rows are the same bits (the .ffm bytes); the report says
-// what was drawn so, and only `on` draws any.
-TEST(FormfactorsCli, EnclosureOffGivesTheSameBytesOnTheBoxedBlocker) {
-    TempDir dir;
-    const std::string box = std::string(FFCUBE_SOURCE_DIR) + "/examples/boxed_blocker.obj";
-    std::map<std::string, nlohmann::json> report;
-    for (const std::string mode : {"on", "off"}) {
-        const auto r = run_ffcube("formfactors " + box + " --max-patch-edge 0.125 --resolution 64 -q --enclosure " + mode +
-                                  " -o " + (dir / (mode + ".ffm")) + " --report " + (dir / (mode + ".json")));
-        ASSERT_EQ(r.code, 0) << r.output;
-        report[mode] = nlohmann::json::parse(test::read_text(dir / (mode + ".json")));
-    }
-    EXPECT_EQ(test::read_text(dir / "on.ffm"), test::read_text(dir / "off.ffm"));
-    EXPECT_EQ(report["on"]["drawn"]["enclosure_planes"], 6);
-    EXPECT_EQ(report["on"]["drawn"]["enclosure_pieces"], 6);
-    EXPECT_EQ(report["on"]["drawn"]["enclosure_hemicubes"], report["on"]["hemicubes"]);
-    EXPECT_GT(report["on"]["drawn"]["enclosure_pieces_drawn"].get<std::uint64_t>(), 0u);
-    // The plate's two sides are one plane of twins: no hemicube needs the depth test at all.
-    EXPECT_EQ(report["on"]["drawn"]["depth_free_hemicubes"], report["on"]["hemicubes"]);
-    EXPECT_EQ(report["off"]["drawn"]["depth_free_hemicubes"], 0);
-    EXPECT_EQ(report["off"]["drawn"]["enclosure_planes"], 0);
-    EXPECT_EQ(report["off"]["drawn"]["enclosure_hemicubes"], 0);
-    const auto bad = run_ffcube("formfactors " + box + " --enclosure maybe -o " + (dir / "x.ffm"));
-    EXPECT_NE(bad.code, 0);
-    EXPECT_FALSE(std::filesystem::exists(dir / "x.ffm"));
-}
-
 // --fine-rows: on a 1,200-facet city (a mesh of 1,000 pieces or more) hemicube runs ray-cast the
 // rows planned at 4 × 4 by default and say so in their log and report; --fine-rows hemicubes
 // draws them.

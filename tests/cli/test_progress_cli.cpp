@@ -61,8 +61,8 @@ TEST(ProgressCli, EveryPhaseShowsItsLine) {
     ASSERT_EQ(r.code, 0) << r.output;
     expect_bar(r.output, "reciprocity (2 passes over F2.ffm, ");
 
-    // The matrix in memory (--ffm-version 1): its enforcement, its reciprocity and its writing.
-    r = test::run_ffcube_env(env, "formfactors " + cube + " --ffm-version 1 --enforce reciprocity -o " + (dir / "G.ffm"));
+    // The matrix in memory (the test hook FFCUBE_TEST_IN_MEMORY): its enforcement, its reciprocity and its writing.
+    r = test::run_ffcube_env(env + "FFCUBE_TEST_IN_MEMORY=1 ", "formfactors " + cube + " --enforce reciprocity -o " + (dir / "G.ffm"));
     ASSERT_EQ(r.code, 0) << r.output;
     expect_bar(r.output, "rows: ");
     expect_bar(r.output, "--enforce reciprocity: rows with columns (in memory): ");

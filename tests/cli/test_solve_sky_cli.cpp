@@ -11,6 +11,7 @@
 #include <string>
 
 #include "cli/cli_util.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
 namespace ffcube {

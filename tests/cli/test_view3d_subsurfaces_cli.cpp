@@ -11,6 +11,7 @@
 
 #include "cli/cli_util.hpp"
 #include "support/view3d_text.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
 namespace ffcube {

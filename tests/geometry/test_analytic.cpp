@@ -1,6 +1,7 @@
 // Analytic form factors checked against independent methods: textbook values, direct
 // high-order quadrature of the defining area integral, Lambert's contour formula against the
 // closed forms, superposition identities that hold exactly, reciprocity, and Monte Carlo.
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"

@@ -16,6 +16,7 @@
 // large sample, and tests/fuzz/fuzz_analytic.cpp the same generator under libFuzzer.
 #include "analytic_pairs.hpp"
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/tolerance.hpp"

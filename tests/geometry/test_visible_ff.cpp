@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cli/l_room_reference.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/visible_ff.hpp"
 

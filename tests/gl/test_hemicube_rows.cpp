@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/geometry/analytic.hpp"

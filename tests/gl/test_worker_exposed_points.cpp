@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "gl/exposed_points.hpp"

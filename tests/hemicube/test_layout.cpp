@@ -1,6 +1,7 @@
 // Hemicube layout and ΔF table: the faces tile the atlas, cameras are right-handed GL cameras,
 // and the table is the exact integral (against independent quadrature and against the
 // geometry layer's closed forms), sums to 1, is symmetric and positive.
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/geometry/analytic.hpp"

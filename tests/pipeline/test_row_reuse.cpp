@@ -100,7 +100,7 @@ TEST(RowReuse, AreaSharesWhenNoElementSeesThePatchAndEverythingMeasuredWithoutPr
     const std::vector<SparseRow> rows = all_rows(p);
     ASSERT_EQ(rows[0].nnz(), 4u);
     for (int c = 0; c < 4; ++c) EXPECT_NEAR(rows[0].val[c], 0.05, 1e-15);  // 0.2 × (1/4) / 1
-    // No previous rows (level 0, or --no-reuse-rows): every row is measured.
+    // No previous rows (level 0, or AdaptiveOptions::reuse_rows off): every row is measured.
     Counting fresh(m);
     ReusedRowProvider q(s.fine.scene, fresh, s.fine.parent, s.split, LevelRows{});
     all_rows(q);

@@ -37,11 +37,6 @@ TEST(PipelineOptions, WordsRoundTripAndBadWordsNameTheOption) {
     EXPECT_NE(error_of([] { parse_correction("far"); }).find("--correct far"), std::string::npos);
     EXPECT_NE(error_of([] { parse_far_field("yes"); }).find("--far-field yes"), std::string::npos);
     EXPECT_NE(error_of([] { parse_enforce_request("all"); }).find("--enforce all"), std::string::npos);
-    EXPECT_EQ(parse_fine_sub_hemicubes("half"), FineSubResolution::half);
-    EXPECT_EQ(parse_fine_sub_hemicubes("three-eighths"), FineSubResolution::three_eighths);
-    EXPECT_EQ(parse_fine_sub_hemicubes("quarter"), FineSubResolution::quarter);
-    EXPECT_NE(error_of([] { parse_fine_sub_hemicubes("eighth"); }).find("--fine-sub-hemicubes eighth"), std::string::npos);
-    EXPECT_EQ(hemicube_options(RowOptions{}).fine_sub_resolution, FineSubResolution::half);
     EXPECT_EQ(enforce_mode(EnforceRequest::Both), EnforceMode::Closure);
     EXPECT_EQ(enforce_mode(EnforceRequest::Reciprocity), EnforceMode::Reciprocity);
 }
@@ -140,13 +135,6 @@ TEST(PipelineOptions, MetadataIsStable) {
     o.far_field = FarFieldMode::off;
     o.near_k = 2.5;
     EXPECT_EQ(row_metadata(o).settings, "rotate=0 seed=24301 correct=near k=2.5 far_field=off");
-    // 4 × 4 rows at 3N/8 or N/4 are other rows: recorded (half, the default, is not).
-    o.fine_sub_hemicubes = FineSubResolution::quarter;
-    EXPECT_EQ(row_metadata(o).settings, "rotate=0 seed=24301 correct=near k=2.5 far_field=off fine_sub_hemicubes=quarter");
-    o.fine_sub_hemicubes = FineSubResolution::three_eighths;
-    EXPECT_EQ(row_metadata(o).settings,
-              "rotate=0 seed=24301 correct=near k=2.5 far_field=off fine_sub_hemicubes=three-eighths");
-    o.fine_sub_hemicubes = FineSubResolution::half;
     o.method = RowMethod::Raycast;
     o.rays = 1000;
     o.correct = Correction::None;

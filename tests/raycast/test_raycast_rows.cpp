@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/geometry/analytic.hpp"

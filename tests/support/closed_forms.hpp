@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <utility>
 
+#include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/scene/scene.hpp"
 

@@ -42,38 +42,6 @@ struct HemicubeOptions {
     // with the depth test (docs/architecture.md, "Culling"). The item buffers are the same bits
     // either way (tested); false: every piece depth-tested.
     bool enclosure_without_depth = true;
-    // Adaptive sender sampling (docs/accuracy.md, "Adaptive sender sampling"): a row planned at
-    // 4 × 4 sub-hemicubes is measured at 2 × 2 (and the centre) first, and refined to 4 × 4 only
-    // where the 2 × 2 rule's estimated error exceeds 5e-4 (gl/sample_agreement.hpp). Off by
-    // default: on a city it stops rows whose error it underestimates (docs/benchmarks.md).
-    bool adaptive_sampling = false;
-    // Range-limited sub-hemicubes (docs/accuracy.md, "Range-limited sub-hemicubes"): on a scene
-    // of at least sub_hemicube_range_min_pieces pieces, a row of sub-hemicubes draws at its
-    // quadrature points only the pieces within R = sub_hemicube_range_k × the sender's size, plus
-    // one full-resolution hemicube at the centroid of everything else; entries within R take the
-    // sub-hemicube average, the rest the centroid's pixels times the share of sub-hemicubes that
-    // see past the near pieces in that direction. off: every sub-hemicube draws the whole scene.
-    enum class SubHemicubeRange { off, automatic };
-    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;  // off by default: measured, it does not pay yet
-    double sub_hemicube_range_k = 24.0;
-    std::size_t sub_hemicube_range_min_pieces = 1000;
-    // ... and only for rows whose range (R plus the sender's radius, around its centroid) meets
-    // at most this share of the scene's pieces: elsewhere the extra full hemicube costs more than
-    // the sub-hemicubes save (docs/benchmarks.md, "Range-limited sub-hemicubes").
-    double sub_hemicube_range_max_share = 0.25;
-    // The sub-hemicubes of a 4 × 4 row (RowPlan::sampled_fine: an occluder touches the sender)
-    // are drawn at half_resolution (N/2) or quarter_resolution (N/4) (docs/accuracy.md,
-    // "Senders an occluder touches: 4 × 4 sub-hemicubes"). 2 × 2 rows stay at N/2 either way.
-    enum class FineSubResolution { half, three_eighths, quarter };
-    FineSubResolution fine_sub_resolution = FineSubResolution::half;
-    // Where a hemicube's eye-relative vertex positions are made (docs/architecture.md, "Vertex
-    // data"): once, the scene's world positions are uploaded as doubles when a worker starts and
-    // the vertex shader subtracts the eye and turns to the hemicube's frame per hemicube (a
-    // uniform block of 128 bytes a hemicube); per_hemicube, the CPU's floats are uploaded every
-    // hemicube (all vertex slots: 12 bytes each). The CPU makes the same floats either way, for
-    // culling; the item buffers are the same bits (tested).
-    enum class VertexUpload { once, per_hemicube };
-    VertexUpload vertex_upload = VertexUpload::once;
     // Rows planned at 4 × 4 sub-hemicubes (RowPlan::sampled_fine: an occluder touches the
     // sender) ray-cast instead (docs/accuracy.md, "Rows an occluder touches, by rays"): the
     // worker's thread casts fine_row_rays rays from the whole sender through Embree
@@ -146,19 +114,10 @@ struct HemicubeStats {
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
     std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_planned)
     std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
-    // Rows planned at 4 × 4 (RowPlan::sampled_fine) under adaptive_sampling: refined to 4 × 4
-    // (the 2 × 2 samples disagreed) or stopped at 2 × 2 (they agreed).
-    std::uint64_t fine_rows_refined = 0;
-    std::uint64_t fine_rows_stopped = 0;
     // Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at
     // points on its exposed part only (gl/exposed_points.hpp).
     std::uint64_t partly_enclosed_rows = 0;
-    // Rows of sub-hemicubes made range-limited (HemicubeOptions::sub_hemicube_range), and the
-    // pieces × hemicubes their range left out (in front of the plane, but out of range).
-    std::uint64_t range_limited_rows = 0;
-    std::uint64_t pieces_out_of_range = 0;
-    // Bytes sent to the GL per hemicube, summed: vertex data (HemicubeOptions::vertex_upload: the
-    // eye and frame, or every vertex slot's floats) and the index lists.
+    // Bytes sent to the GL per hemicube, summed: vertex data (the eye and frame) and the index lists.
     std::uint64_t upload_vertex_bytes = 0;
     std::uint64_t upload_index_bytes = 0;
     // Rows planned at 4 × 4 that were ray-cast instead (HemicubeOptions::fine_rows), and the
@@ -216,9 +175,6 @@ public:
     // hemicube/pieces.hpp): its planes and pieces, 0 when off or when the scene has none.
     std::size_t enclosure_planes() const;
     std::size_t enclosure_pieces() const;
-    // Whether rows of sub-hemicubes are range-limited on this scene (HemicubeOptions::
-    // sub_hemicube_range automatic, enough pieces, a half resolution of exactly N/2).
-    bool range_limited_sub_hemicubes() const;
     // Whether rows planned at 4 × 4 are ray-cast on this scene (HemicubeOptions::fine_rows,
     // automatic resolved), and with how many rays each.
     bool fine_rows_by_rays() const;

@@ -37,11 +37,11 @@ struct AdaptiveOptions {
     // (choose_refinement), in (0, 1].
     double fraction = 0.5;
     // Carry the rows of patches not split over to the next level (docs/adaptive.md, "Rows reused
-    // between levels"); off: every level measures every row (--no-reuse-rows).
+    // between levels"); off (tests only): every level measures every row.
     bool reuse_rows = true;
     // Keep the first level's row source (its forked hemicube workers) for every level and send
     // it each level's elements (rebind_row_source); off: a new row source, and new workers, per
-    // level (--restart-workers). The rows are the same bits either way (tested).
+    // level (tests only). The rows are the same bits either way (tested).
     bool keep_workers = true;
 };
 

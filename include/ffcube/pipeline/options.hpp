@@ -40,9 +40,6 @@ struct SceneOptions {
 enum class RowMethod { Hemicube, Raycast };
 enum class Correction { None, Near };
 using FarFieldMode = NearFieldOptions::FarField;
-using SubHemicubeRange = HemicubeOptions::SubHemicubeRange;
-using FineSubResolution = HemicubeOptions::FineSubResolution;
-using VertexUpload = HemicubeOptions::VertexUpload;
 using FineRows = HemicubeOptions::FineRows;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
@@ -86,21 +83,13 @@ struct RowOptions {
     // the per-row budget exact_visibility_budget_for_hemicube; the ray caster none (its rows are
     // not sampled by sub-hemicubes, so there is no cost to spare). An explicit K: no budget.
     std::size_t exact_visibility_occluders = 0;
-    bool adaptive_sampling = false;  // HemicubeOptions::adaptive_sampling (--adaptive-sampling)
     FarFieldMode far_field = FarFieldMode::automatic;
     bool exact_visibility_auto = true;  // `--exact-visibility auto` (above); a number or `off` clears it
-    // HemicubeOptions::sub_hemicube_range, _k (--sub-hemicube-range auto|off, --sub-hemicube-range-k).
-    SubHemicubeRange sub_hemicube_range = SubHemicubeRange::off;
-    double sub_hemicube_range_k = 24.0;
-    // HemicubeOptions::fine_sub_resolution (--fine-sub-hemicubes half|three-eighths|quarter): 4 × 4 rows at N/2, 3N/8 or N/4.
-    FineSubResolution fine_sub_hemicubes = FineSubResolution::half;
     // HemicubeOptions::fine_rows, fine_row_rays (--fine-rows auto|hemicubes|rays, --fine-row-rays R;
     // 0: max(N²/2, min(2 N², 32,768))): rows planned at 4 × 4 ray-cast instead, automatically on
     // scenes of many pieces.
     FineRows fine_rows = FineRows::automatic;
     std::uint64_t fine_row_rays = 0;
-    // HemicubeOptions::vertex_upload (--vertex-upload once|per-hemicube): the same rows either way.
-    VertexUpload vertex_upload = VertexUpload::once;
     // HemicubeOptions::occlusion_culling (--occlusion-culling on|off): the same rows either way;
     // off leaves out the occluders' depth pass and the tests (docs/architecture.md, "Culling").
     bool occlusion_culling = true;
@@ -127,10 +116,7 @@ RowMethod parse_row_method(std::string_view text);        // hemicube | raycast
 void set_row_method(std::string_view text, RowOptions& o);
 Correction parse_correction(std::string_view text);       // none | near
 FarFieldMode parse_far_field(std::string_view text);      // auto | on | off
-SubHemicubeRange parse_sub_hemicube_range(std::string_view text);  // auto | off
-FineSubResolution parse_fine_sub_hemicubes(std::string_view text);  // half | three-eighths | quarter
 FineRows parse_fine_rows(std::string_view text);                    // auto | hemicubes | rays
-VertexUpload parse_vertex_upload(std::string_view text);  // once | per-hemicube
 EnforceRequest parse_enforce_request(std::string_view text);  // "" | reciprocity | closure | both
 // --exact-visibility: auto | off | K (a number; its range is checked by validate(RowOptions)).
 void parse_exact_visibility(std::string_view text, RowOptions& o);
