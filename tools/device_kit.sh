@@ -5,7 +5,7 @@
 # (stripped), every shared library they load besides glibc's and libstdc++'s (from `ldd`; GL itself is
 # dlopened: the machine's NVIDIA driver through glvnd), packed as .devkit/kit.tar.xz, and Debian's
 # glvnd packages in .devkit/gl (the device tool's notes: unpack them with dpkg -x there).
-#   bash tools/device_kit.sh                  (after tools/setup.sh or a build in build/)
+#   bash tools/device_kit.sh                  (after FFCUBE_BUILD_ALL=1 bash tools/setup.sh)
 # Then, on a task that is lent a machine, one call of the device tool:
 #   run(command="bash tools/device_check.sh", carry=[".devkit"], timeout_s=540)
 set -euo pipefail
@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 build="${FFCUBE_BUILD_DIR:-build}"
 kit=.devkit
 for f in "$build/ffcube" "$build/tools/bench_hemicube"; do
-  [ -x "$f" ] || { echo "device_kit: $f is missing: build first (tools/setup.sh)" >&2; exit 1; }
+  [ -x "$f" ] || { echo "device_kit: $f is missing: build first (FFCUBE_BUILD_ALL=1 bash tools/setup.sh)" >&2; exit 1; }
 done
 rm -rf "$kit"
 mkdir -p "$kit/stage/bin" "$kit/stage/lib" "$kit/gl"

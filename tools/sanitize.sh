@@ -6,7 +6,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build_dir="${FFCUBE_ASAN_DIR:-build-asan}"
-FFCUBE_BUILD_DIR="$build_dir" FFCUBE_CMAKE_ARGS="-DFFCUBE_SANITIZE=ON ${FFCUBE_CMAKE_ARGS:-}" bash tools/setup.sh
+FFCUBE_BUILD_ALL=1 FFCUBE_BUILD_DIR="$build_dir" FFCUBE_CMAKE_ARGS="-DFFCUBE_SANITIZE=ON ${FFCUBE_CMAKE_ARGS:-}" bash tools/setup.sh
 
 # Leak checking stays on, with no suppressions (mpi.np2 alone runs without it: OpenMPI's leaks
 # cannot be told apart, see tests/CMakeLists.txt). One trap: Mesa's EGL and OSMesa drivers (with

@@ -2,7 +2,8 @@
 # Sets up a fresh Debian 12 machine for ffcube and builds it:
 #   1. installs the Debian packages the build and the tests need (skipping what is present),
 #   2. configures with CMake (Ninja, RelWithDebInfo) into ./build (or $FFCUBE_BUILD_DIR),
-#   3. builds everything.
+#   3. builds what the main job needs: the ffcube executable and the Python module
+#      (FFCUBE_BUILD_ALL=1: everything, tests and tools included, as tools/test.sh asks).
 # Safe to run again: it installs nothing twice and rebuilds only what changed.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -35,5 +36,13 @@ fi
 
 build_dir="${FFCUBE_BUILD_DIR:-build}"
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE="${FFCUBE_BUILD_TYPE:-RelWithDebInfo}" ${FFCUBE_CMAKE_ARGS:-}
-cmake --build "$build_dir" -j "$(nproc)"
-echo "setup: built $build_dir/ffcube"
+if [ "${FFCUBE_BUILD_ALL:-0}" = 1 ]; then
+  cmake --build "$build_dir" -j "$(nproc)"
+  echo "setup: built everything in $build_dir"
+else
+  targets=(ffcube)
+  # The Python module, where CMake found pybind11 and Python's headers (src/python/CMakeLists.txt).
+  if cmake --build "$build_dir" --target help | grep -q '^[^ ]*ffcube_python'; then targets+=(ffcube_python); fi
+  cmake --build "$build_dir" -j "$(nproc)" --target "${targets[@]}"
+  echo "setup: built $build_dir/ffcube (tests: bash tools/test.sh)"
+fi
