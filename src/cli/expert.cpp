@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <memory>
+#include <utility>
 
 namespace ffcube::cli {
 
@@ -18,6 +20,19 @@ void add_door_options(CLI::App& sub) {
 }
 
 namespace {
+
+// CLI11's help, without the tuning knobs' group unless --help-all asked for it.
+class DoorFormatter final : public CLI::Formatter {
+public:
+    explicit DoorFormatter(bool hide_knobs) : hide_knobs_(hide_knobs) {}
+    std::string make_group(std::string group, bool is_positional, std::vector<const CLI::Option*> opts) const override {
+        if (hide_knobs_ && group == kExpertGroup) return {};
+        return CLI::Formatter::make_group(std::move(group), is_positional, std::move(opts));
+    }
+
+private:
+    bool hide_knobs_;
+};
 
 CLI::App* chosen_subcommand(CLI::App& app, const std::vector<std::string>& args) {
     for (const std::string& a : args) {
@@ -71,10 +86,10 @@ std::vector<std::string> open_door(CLI::App& app, int argc, char** argv) {
                                                    setting, name.empty() ? "''" : name, sub->get_name(), knob_list(*sub)));
         out.push_back(eq == std::string::npos ? "--" + name : "--" + setting);
     }
-    if (!help_all)
-        for (CLI::App* s : app.get_subcommands({}))
-            for (CLI::Option* o : s->get_options())
-                if (o->get_group() == kExpertGroup) o->group("");
+    // The knobs' group is left out of the help text by the formatter, not by CLI11's empty group:
+    // a hidden option would lose its name in CLI11's error messages ("--near-k: ..." -> ": ...").
+    const auto formatter = std::make_shared<DoorFormatter>(!help_all);
+    for (CLI::App* s : app.get_subcommands({})) s->formatter(formatter);
     return out;
 }
 

@@ -24,7 +24,7 @@ void add_door_options(CLI::App& sub);
 // The command line with the door opened: every `--set NAME=VALUE` (or `--set=NAME=VALUE`)
 // becomes `--NAME=VALUE`, after checking that NAME is a tuning knob of the chosen subcommand
 // (CLI::ValidationError naming it otherwise); `--help-all` becomes `--help`. Unless --help-all
-// was asked for, the tuning knobs of every subcommand are hidden from the help.
+// was asked for, the tuning knobs of every subcommand are left out of the help.
 std::vector<std::string> open_door(CLI::App& app, int argc, char** argv);
 
 }  // namespace ffcube::cli
