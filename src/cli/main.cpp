@@ -22,6 +22,7 @@ int run(int argc, char** argv) {
     ffcube::cli::add_solve_command(app, action);
     ffcube::cli::add_bench_command(app, action);
     ffcube::cli::add_calibrate_command(app, action);
+    ffcube::cli::add_view3d_command(app, action);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
