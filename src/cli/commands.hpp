@@ -12,5 +12,7 @@ void add_view_command(CLI::App& app, std::function<int()>& action);
 void add_solve_command(CLI::App& app, std::function<int()>& action);
 void add_bench_command(CLI::App& app, std::function<int()>& action);
 void add_calibrate_command(CLI::App& app, std::function<int()>& action);
+// `ffcube view3d IN OUT` (cmd_view3d.cpp; `ffcube-view3d IN OUT` runs it: src/cli/ffcube_view3d/).
+void add_view3d_command(CLI::App& app, std::function<int()>& action);
 
 }  // namespace ffcube::cli

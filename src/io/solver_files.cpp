@@ -80,6 +80,64 @@ void put(fmt::memory_buffer& buf, T value) {
     buf.append(bytes, bytes + sizeof(T));
 }
 
+struct View3dSparseWriter::Impl {
+    AtomicFile file;
+    std::uint32_t rows = 0;
+    std::uint64_t entries = 0;
+    bool finished = false;
+    fmt::memory_buffer buf;
+    explicit Impl(const std::filesystem::path& path) : file(path) {}
+};
+
+View3dSparseWriter::View3dSparseWriter(const std::filesystem::path& path) : impl_(std::make_unique<Impl>(path)) {}
+
+View3dSparseWriter::~View3dSparseWriter() = default;
+
+void View3dSparseWriter::append_row(std::span<const std::uint32_t> col, std::span<const double> val) {
+    Impl& m = *impl_;
+    FFCUBE_CHECK(!m.finished && col.size() == val.size());
+    const std::uint32_t n = ++m.rows;
+    for (std::size_t k = 0; k < col.size(); ++k) {
+        FFCUBE_CHECK_MSG(k == 0 || col[k] > col[k - 1], "View3dSparseWriter: columns must increase");
+        if (!(val[k] >= kView3dSparseThreshold)) continue;
+        fmt::format_to(std::back_inserter(m.buf), "{} {} {:.6f}\n", n, col[k] + 1, val[k]);
+        ++m.entries;
+    }
+    flush_if_full(m.file.stream(), m.buf);
+}
+
+void View3dSparseWriter::finish() {
+    Impl& m = *impl_;
+    FFCUBE_CHECK(!m.finished);
+    m.finished = true;
+    flush_if_full(m.file.stream(), m.buf, true);
+    m.file.commit();
+}
+
+std::uint64_t View3dSparseWriter::entries() const { return impl_->entries; }
+
+void write_view3d(const std::filesystem::path& path, const View3dTable& t, int out) {
+    FFCUBE_CHECK_MSG(out >= 0 && out <= 2, fmt::format("View3D output format {}", out));
+    if (out != 2) return write_view3d(path, t, out == 1);
+    const std::size_t n = t.area.size();
+    FFCUBE_CHECK(t.F.size() == n);
+    View3dSparseWriter writer(path);
+    std::vector<std::uint32_t> col;
+    std::vector<double> val;
+    for (const auto& row : t.F) {
+        FFCUBE_CHECK(row.size() == n);
+        col.clear();
+        val.clear();
+        for (std::size_t m = 0; m < n; ++m)
+            if (row[m] != 0.0) {
+                col.push_back(static_cast<std::uint32_t>(m));
+                val.push_back(row[m]);
+            }
+        writer.append_row(col, val);
+    }
+    writer.finish();
+}
+
 struct ElmerViewFactorsWriter::Impl {
     AtomicFile file;
     std::uint32_t n = 0, rows = 0;

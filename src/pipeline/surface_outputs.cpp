@@ -2,6 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cctype>
+
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/formfactor/checks.hpp"
@@ -23,14 +28,46 @@ FileFormat parse_file_format(std::string_view text) {
     throw InputError(fmt::format("{}: expected auto, text or binary", text));
 }
 
-void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report) {
+void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report, bool drop_in) {
     const View3dControls& v = scene.view3d;
     if (!v.present) return;
     report.set("view3d.title", v.title);
     report.set("view3d.encl", v.encl);
     report.set("view3d.emit", v.emit);
     report.set("view3d.out", v.out);
-    report.set_array("view3d.ignored_controls", v.ignored);
+    std::vector<std::string> ignored;
+    for (const std::string& x : v.ignored) {
+        std::string key = x.substr(0, x.find('='));
+        std::transform(key.begin(), key.end(), key.begin(), [](unsigned char c) { return std::tolower(c); });
+        const bool max_d = key == "maxd";
+        if (!(drop_in && max_d)) ignored.push_back(x);  // `ffcube view3d` applies maxD
+    }
+    report.set_array("view3d.ignored_controls", ignored);
+    if (drop_in) {
+        // View3D's row=n computes row n alone and writes its N factors one a line (%.5f), with
+        // col=m F(n→m) only to its log: a debugging run, not the matrix a pipeline reads.
+        if (v.row != 0)
+            throw InputError(fmt::format("{}:{}: control row={}: View3D's one-row debugging run is not supported by "
+                                         "ffcube view3d (it computes every row): remove the key or set row=0, and read "
+                                         "row {} of the output",
+                                         scene.source, v.row_line, v.row, v.row));
+        if (v.max_distance > 0.0)
+            info("{}:{}: maxD={}: pairs of surfaces whose centroids lie farther apart get no factor", scene.source,
+                 v.max_distance_line, v.max_distance);
+    } else {
+        if (v.row != 0)
+            log_warning(fmt::format("{}:{}: control row={} is ignored: ffcube computes every row (read one row from the "
+                                    "output)",
+                                    scene.source, v.row_line, v.row));
+        if (v.col != 0)
+            log_warning(fmt::format("{}:{}: control col={} is ignored: ffcube computes every column (read one column from "
+                                    "the output)",
+                                    scene.source, v.col_line, v.col));
+        if (v.max_distance > 0.0)
+            log_warning(fmt::format("{}:{}: control maxD={} is ignored: only `ffcube view3d` applies the cut-off distance; "
+                                    "every pair is computed",
+                                    scene.source, v.max_distance_line, v.max_distance));
+    }
     if (v.encl != 1) return;
     if (rows.enforce == EnforceRequest::None) {
         rows.enforce = EnforceRequest::Closure;
@@ -114,16 +151,88 @@ void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf,
     if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene);
 }
 
+const char* view3d_format_name(int out) { return out == 2 ? "sparse" : out == 1 ? "binary" : "text"; }
+
 // View3D's file from the object form factors (its surfaces are the objects).
 void write_view3d_file(const SurfaceOutputOptions& o, std::vector<std::vector<double>> object_factors,
                        const Scene& scene, Report& report) {
-    const bool binary = o.view3d_format == FileFormat::Binary ||
-                        (o.view3d_format == FileFormat::Auto && scene.view3d.present && scene.view3d.out == 1);
-    write_view3d(o.view3d, view3d_table(std::move(object_factors), scene), binary);
+    const int out = o.view3d_format == FileFormat::Binary ? 1
+                    : o.view3d_format == FileFormat::Text ? 0
+                    : scene.view3d.present                ? scene.view3d.out
+                                                          : 0;
+    write_view3d(o.view3d, view3d_table(std::move(object_factors), scene), out);
     report.set("view3d.written", o.view3d);
-    report.set("view3d.format", binary ? "binary" : "text");
+    report.set("view3d.format", view3d_format_name(out));
     report.set("view3d.surfaces", scene.objects.size() + scene.view3d.masks.size());
 }
+
+}  // namespace
+
+CsrMatrix apply_view3d_cutoff(const CsrMatrix& F, const Scene& scene, double max_distance) {
+    FFCUBE_CHECK(F.size() == scene.size() && F.rows_filled() == F.size());
+    CsrMatrix out(F.size());
+    std::vector<std::uint32_t> col;
+    std::vector<float> val;
+    for (std::uint32_t i = 0; i < F.size(); ++i) {
+        const RowView r = F.row(i);
+        col.clear();
+        val.clear();
+        for (std::size_t k = 0; k < r.col.size(); ++k)
+            if (!(glm::length(scene.patches[r.col[k]].centroid - scene.patches[i].centroid) > max_distance)) {
+                col.push_back(r.col[k]);
+                val.push_back(r.val[k]);
+            }
+        out.append_row(col, val);
+    }
+    return out;
+}
+
+void write_view3d_output(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, int out,
+                         Report& report) {
+    FFCUBE_CHECK(F.size() == scene.size() && F.rows_filled() == F.size());
+    const std::size_t surfaces = scene.objects.size() + scene.view3d.masks.size();
+    report.set("view3d.written", path.string());
+    report.set("view3d.format", view3d_format_name(out));
+    report.set("view3d.surfaces", surfaces);
+    if (out != 2 || !scene.view3d.masks.empty() || scene.view3d.emit == 1) {
+        write_view3d(path, view3d_table(F, scene), out);
+        return;
+    }
+    // Object a's row: Σ over its patches i (increasing) and their entries (increasing column) of
+    // A_i F_ij into the column of j's object, over Σ A_i: RowStreamChecks' sums, in its order.
+    const std::size_t objects = scene.objects.size();
+    std::vector<std::vector<std::uint32_t>> patches_of(objects);
+    for (std::uint32_t i = 0; i < scene.size(); ++i) patches_of[scene.patches[i].object].push_back(i);
+    std::vector<double> acc(objects, 0.0), val;
+    std::vector<char> seen(objects, 0);
+    std::vector<std::uint32_t> touched;
+    View3dSparseWriter writer(path);
+    for (std::size_t a = 0; a < objects; ++a) {
+        double area = 0.0;
+        touched.clear();
+        for (const std::uint32_t i : patches_of[a]) {
+            const Patch& p = scene.patches[i];
+            area += p.area;
+            const RowView r = F.row(i);
+            for (std::size_t k = 0; k < r.col.size(); ++k) {
+                const std::uint32_t b = scene.patches[r.col[k]].object;
+                if (!seen[b]) seen[b] = 1, touched.push_back(b);
+                acc[b] += p.area * static_cast<double>(r.val[k]);
+            }
+        }
+        std::sort(touched.begin(), touched.end());
+        val.clear();
+        for (const std::uint32_t b : touched) {
+            val.push_back(area > 0 ? acc[b] / area : acc[b]);
+            acc[b] = 0.0, seen[b] = 0;
+        }
+        writer.append_row(touched, val);
+    }
+    writer.finish();
+    report.set("view3d.entries", writer.entries());
+}
+
+namespace {
 
 }  // namespace
 

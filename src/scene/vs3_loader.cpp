@@ -60,6 +60,17 @@ public:
                 if (v >= model_.positions.size())
                     fail_at(source_, f.face.line,
                             fmt::format("vertex {} is not defined (the file defines {} vertices)", v + 1, model_.positions.size()));
+        if (model_.view3d.col != 0 && model_.view3d.row == 0)  // View3D's rule (getdat.c)
+            fail_at(source_, model_.view3d.col_line,
+                    fmt::format("control col={} needs row (View3D: \"Must set row before setting column\")", model_.view3d.col));
+        if (model_.view3d.max_distance > 0.0)
+            for (std::size_t n = 0; n < surfaces_.size(); ++n)
+                if (surfaces_[n].base != 0)
+                    fail_at(source_, model_.view3d.max_distance_line,
+                            fmt::format("control maxD with a subsurface, null or masking surface (surface {}, line {}) is not "
+                                        "supported: ffcube cuts the base into pieces, whose centroids are not the centroid "
+                                        "View3D measures the distance from",
+                                        n + 1, surfaces_[n].face.line));
         make_faces();
         if (model_.faces.empty()) throw InputError(fmt::format("{}: no S surfaces: the scene has no geometry", source_));
         append_obstructions();
@@ -97,12 +108,41 @@ private:
             const double value = detail::parse_number(pair.substr(eq + 1), source_, number_, "a control value");
             std::string lower = key;
             std::transform(lower.begin(), lower.end(), lower.begin(), [](unsigned char c) { return std::tolower(c); });
-            // Honoured: encl, emit, out (0 or 1 each, as View3D takes them).
-            if (lower == "encl" || lower == "emit" || lower == "out") {
+            // Honoured: encl, emit (0 or 1 each, as View3D takes them), out (0 text, 1 binary, 2 the
+            // forks' sparse text, as View3D 4's getdat.c takes it).
+            if (lower == "encl" || lower == "emit") {
                 if (value != 0.0 && value != 1.0)
                     fail_at(source_, number_, fmt::format("control {}={} must be 0 or 1", key, value));
-                (lower == "encl" ? model_.view3d.encl : lower == "emit" ? model_.view3d.emit : model_.view3d.out) =
-                    static_cast<int>(value);
+                (lower == "encl" ? model_.view3d.encl : model_.view3d.emit) = static_cast<int>(value);
+                continue;
+            }
+            if (lower == "out") {
+                if (value != 0.0 && value != 1.0 && value != 2.0)
+                    fail_at(source_, number_,
+                            fmt::format("control {}={} must be 0, 1 or 2 (0 text, 1 binary, 2 sparse text)", key, value));
+                model_.view3d.out = static_cast<int>(value);
+                continue;
+            }
+            // Acted on by `ffcube view3d` only (row and col refused there, maxD applied), so they are
+            // recorded with their line; the commands that ignore them warn (apply_view3d_controls).
+            if (lower == "row" || lower == "col") {
+                if (!(value >= 0.0 && value <= 0x7fffffff) || value != static_cast<double>(static_cast<long long>(value)))
+                    fail_at(source_, number_, fmt::format("control {}={} must be a surface number (a whole number >= 0; 0: "
+                                                          "every {})",
+                                                          key, value, lower));
+                if (value == 0.0) continue;  // View3D's default: every row, every column
+                (lower == "row" ? model_.view3d.row : model_.view3d.col) = static_cast<int>(value);
+                (lower == "row" ? model_.view3d.row_line : model_.view3d.col_line) = number_;
+            }
+            if (lower == "maxd") {
+                if (!(value > 0.0))
+                    fail_at(source_, number_, fmt::format("control {}={} must be > 0 (the distance between surface "
+                                                          "centroids beyond which a pair gets no factor)",
+                                                          key, value));
+                model_.view3d.max_distance = value;
+                model_.view3d.max_distance_line = number_;
+                model_.view3d.ignored.push_back(
+                    fmt::format("{}={}: only `ffcube view3d` applies the cut-off distance; every pair is computed", key, value));
                 continue;
             }
             static const std::map<std::string, std::string> kIgnored = {
@@ -118,14 +158,15 @@ private:
                 {"prjreverse", "ffcube does not project"},
             };
             // The defaults change nothing, so they are honoured trivially; View3D's defaults:
-            // eps 1e-4, maxU 12, maxO 8, minO 0, row 0, col 0, list 0.
-            static const std::map<std::string, double> kDefault = {{"row", 0.0}, {"col", 0.0}, {"list", 0.0}};
+            // eps 1e-4, maxU 12, maxO 8, minO 0, row 0, col 0 (above), list 0.
+            static const std::map<std::string, double> kDefault = {{"list", 0.0}};
             if (const auto d = kDefault.find(lower); d != kDefault.end() && d->second == value) continue;
             const auto it = kIgnored.find(lower);
             const std::string setting = fmt::format("{}={}", it != kIgnored.end() ? key : detail::shown(key), value);
             const std::string why = it != kIgnored.end() ? it->second : "unknown control key";
             model_.view3d.ignored.push_back(fmt::format("{}: {}", setting, why));
-            model_.warnings.push_back(fmt::format("{}:{}: control {} is ignored: {}", source_, number_, setting, why));
+            if (lower != "row" && lower != "col")  // warned about by the command (above)
+                model_.warnings.push_back(fmt::format("{}:{}: control {} is ignored: {}", source_, number_, setting, why));
         }
     }
 

@@ -82,9 +82,21 @@ TEST(View3dControls, IgnoredKeysWarnAndAreListed) {
     EXPECT_EQ(m.view3d.ignored[1].rfind("maxU=10: ", 0), 0u);
     EXPECT_EQ(m.view3d.ignored[4].rfind("row=2: ffcube computes every row", 0), 0u) << m.view3d.ignored[4];
     EXPECT_EQ(m.view3d.ignored[5], "'foo'=3: unknown control key");
+    // row, col and maxD are recorded with their line: `ffcube view3d` refuses row and col and
+    // applies maxD; the other commands warn that they ignore them (apply_view3d_controls).
+    EXPECT_EQ(m.view3d.row, 2);
+    EXPECT_EQ(m.view3d.row_line, 3u);
+    for (const auto& w : m.warnings) EXPECT_EQ(w.find("row=2"), std::string::npos) << w;
     bool warned = false;
-    for (const auto& w : m.warnings) warned |= w.find("c.vs3:3: control row=2 is ignored") != std::string::npos;
+    for (const auto& w : m.warnings) warned |= w.find("c.vs3:2: control eps=1e-06 is ignored") != std::string::npos;
     EXPECT_TRUE(warned);
+    const ObjModel d = parse_vs3(std::string("C out=2 maxD=96.0 row=0 col=0\n") + kSquare, "d.vs3");
+    EXPECT_EQ(d.view3d.out, 2);
+    EXPECT_EQ(d.view3d.max_distance, 96.0);
+    EXPECT_EQ(d.view3d.max_distance_line, 1u);
+    EXPECT_EQ(d.view3d.row, 0);
+    ASSERT_EQ(d.view3d.ignored.size(), 1u);  // for the commands other than view3d
+    EXPECT_EQ(d.view3d.ignored[0].rfind("maxD=96: ", 0), 0u) << d.view3d.ignored[0];
     // An STL file has no View3D controls.
     const ObjModel stl = parse_stl("solid s\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\n"
                                    "endloop\nendfacet\nendsolid s\n",
@@ -94,7 +106,12 @@ TEST(View3dControls, IgnoredKeysWarnAndAreListed) {
 
 TEST(View3dControls, OutOfRangeValuesAreRefusedNamingTheLine) {
     EXPECT_EQ(thrown([&] { parse_vs3(std::string("T t\nC encl=2\n") + kSquare, "c.vs3"); }), "c.vs3:2: control encl=2 must be 0 or 1");
-    EXPECT_EQ(thrown([&] { parse_vs3(std::string("C out=0.5\n") + kSquare, "c.vs3"); }), "c.vs3:1: control out=0.5 must be 0 or 1");
+    EXPECT_EQ(thrown([&] { parse_vs3(std::string("C out=0.5\n") + kSquare, "c.vs3"); }),
+              "c.vs3:1: control out=0.5 must be 0, 1 or 2 (0 text, 1 binary, 2 sparse text)");
+    EXPECT_EQ(thrown([&] { parse_vs3(std::string("T t\nC col=4\n") + kSquare, "c.vs3"); }),
+              "c.vs3:2: control col=4 needs row (View3D: \"Must set row before setting column\")");
+    EXPECT_EQ(thrown([&] { parse_vs3(std::string("C maxD=-1\n") + kSquare, "c.vs3"); }).rfind("c.vs3:1: control maxD=-1 must be > 0", 0),
+              0u);
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,32 @@ std::string view3d_header(int format, int encl, int emit, std::size_t n);
 // a line of N emissivities ("%.3f"). Binary: the 32-byte header, then float32 areas, rows, and
 // emissivities, little-endian, nothing between them.
 void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool binary);
+
+// The sparse text of View3D's forks (`out=2`; uDALES' View3D, savevf.c SaveF2): for every row n
+// and column m (1-based) whose factor is at least 5e-7, a line "n m F" with F as "%.6f" of the
+// double (not rounded to float first, as the fork prints it), rows in order and columns
+// increasing in each; no header, areas or emissivities. Written row by row (memory: a 1 MiB
+// buffer), atomically: nothing is in place until finish().
+class View3dSparseWriter {
+public:
+    explicit View3dSparseWriter(const std::filesystem::path& path);
+    ~View3dSparseWriter();
+    View3dSparseWriter(const View3dSparseWriter&) = delete;
+    View3dSparseWriter& operator=(const View3dSparseWriter&) = delete;
+    // The next row (n = rows so far + 1): its columns (0-based, increasing) and factors.
+    void append_row(std::span<const std::uint32_t> col, std::span<const double> val);
+    void finish();
+    std::uint64_t entries() const;  // lines written
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+inline constexpr double kView3dSparseThreshold = 5e-7;  // SaveF2's "FF >= 5E-7"
+
+// View3D's file in the format of a .vs3's `out` key: 0 text, 1 binary, 2 sparse text (from the
+// dense table, every row's non-zero columns).
+void write_view3d(const std::filesystem::path& path, const View3dTable& t, int out);
 
 // Elmer's ViewFactors.dat, as fem/src/ViewFactors.F90 writes it, for the patches as Elmer's
 // radiation boundary elements: text: for every row i, a line with the count k of its non-zero

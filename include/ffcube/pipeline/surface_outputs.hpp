@@ -4,6 +4,7 @@
 // come from formfactor/sky.hpp and solver/exchange.hpp, the bytes from io/solver_files.hpp.
 #pragma once
 
+#include <filesystem>
 #include <memory>
 #include <span>
 #include <string>
@@ -37,7 +38,25 @@ FileFormat parse_file_format(std::string_view text);  // auto | text | binary
 // A .vs3 scene's encl=1 asks for rows that conserve energy: --enforce closure, unless the command
 // line chose an --enforce mode (which wins; the report says so). Recorded under "view3d" in the
 // report with the title and every ignored control key.
-void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report);
+// The keys only `ffcube view3d` acts on (View3dControls::row, col, max_distance): other commands
+// (drop_in = false) warn, naming the line, that they ignore them; `ffcube view3d` (drop_in = true)
+// refuses row and col (View3D's one-row debugging run) naming the line, and applies maxD with
+// apply_view3d_cutoff.
+void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report, bool drop_in = false);
+
+// The forks' cut-off distance (a .vs3's maxD; uDALES' View3D, view3d.c: a pair of surfaces whose
+// centroids lie more than maxD apart gets no factor): F with every entry F_ij of patches whose
+// centroids lie farther apart than max_distance removed; what they carried counts as sky. With
+// --no-subdivide each patch is one View3D surface (the loader refuses maxD with subsurfaces).
+CsrMatrix apply_view3d_cutoff(const CsrMatrix& F, const Scene& scene, double max_distance);
+
+// View3D's file of the finished matrix F in format `out` (0 text, 1 binary, 2 sparse text): the
+// table of view3d_table. With out = 2, no masking surfaces and emit = 0, the object rows are
+// summed one object at a time straight from F (memory: the number of surfaces, not its square), in
+// the order and with the operations of object_form_factors: the same bytes as from the table.
+// Reports view3d.written, view3d.format, view3d.surfaces (and view3d.entries for out = 2).
+void write_view3d_output(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, int out,
+                         Report& report);
 
 // The View3D table of F: one surface per object (a .vs3's S surfaces, cmb groups as one, named
 // by the group's first surface), in object order: areas, object form factors (F to a group is the

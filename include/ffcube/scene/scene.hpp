@@ -35,10 +35,17 @@ struct View3dControls {
     bool present = false;  // the scene came from a .vs3 file
     int encl = 0;          // 1: the surfaces form an enclosure: rows are made to conserve energy (--enforce closure)
     int emit = 0;          // 1: the View3D output holds Hottel's script-F (reflections included, emissivities)
-    int out = 0;           // the View3D output: 0 text, 1 binary
+    int out = 0;           // the View3D output: 0 text, 1 binary, 2 sparse text (View3D's forks: "i j F" lines)
     std::string title;     // the last T line
-    // One entry per control key that ffcube does not honour: "KEY=VALUE: why" (also a warning).
+    // One entry per control key that ffcube does not honour: "KEY=VALUE: why" (also a warning,
+    // except for the keys below that `ffcube view3d` acts on: apply_view3d_controls warns).
     std::vector<std::string> ignored;
+    // Keys that only `ffcube view3d` acts on, with their lines (0: not given, or View3D's default):
+    // row, col (View3D's one-row debugging run: refused there) and the forks' cut-off distance
+    // maxD (a pair of surfaces whose centroids lie farther apart gets no factor: honoured there).
+    int row = 0, col = 0;
+    double max_distance = 0.0;  // maxD; 0: none (View3D's default, infinity)
+    std::uint32_t row_line = 0, col_line = 0, max_distance_line = 0;
     // Masking surfaces (M): each lies on its base facing it; the covered part of the base is cut
     // out of the base's faces and the mask is an obstruction-only object (it blocks what would
     // see that part), so the matrix has no row or column for it. The View3D file gets one
