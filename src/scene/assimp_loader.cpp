@@ -1,6 +1,11 @@
-// PLY, glTF 2.0 and the other formats of Debian's assimp. Assimp parses; ffcube's own checks (as
-// for OBJ: finite coordinates of magnitude at most 1e15 here, degenerate faces in the mesher) run
-// on what it returns.
+// PLY, glTF 2.0 and the other formats of Debian's assimp. Assimp is not written for hostile
+// input (issue 43: crashes, endless loops, gigabytes reserved on a header's word, files read
+// outside the model's folder), so it never runs unguarded: ffcube's own pre-checks
+// (import_checks.hpp) read the file's structure first, and assimp then runs in a forked child
+// with a time limit and an address-space cap (core/guarded_child.hpp), which sends the
+// collected model back as bytes (model_wire.hpp). ffcube's checks of what assimp returns (as for
+// OBJ: finite coordinates of magnitude at most 1e15 here, degenerate faces in the mesher) run in
+// the child, on what it returns. docs/robustness.md, "Third-party parsers".
 #include "ffcube/scene/assimp_loader.hpp"
 
 #include <assimp/Importer.hpp>
@@ -34,7 +39,7 @@ namespace {
 
 constexpr double kMaxCoordinate = 1e15;
 
-// What the file's first 64 KiB say that assimp does not pass on.
+// What the pre-checks learned that assimp does not pass on.
 struct FileHead {
     bool ply_materials = false;      // a PLY header with an `element material`
     bool ply_material_index = false; // ... and faces that pick one by material_index

@@ -242,6 +242,12 @@ private:
                             refuse(line_, fmt::format("element '{}' record {}: list '{}' needs a count >= 0, found '{}'", e.name,
                                                       r + 1, p.name, k < w.size() ? shown(w[k]) : std::string("end of line")));
                         ++k;
+                        // assimp stores the count in its declared type: 300 as a uchar is 44.
+                        const std::uint64_t type_max = (std::uint64_t(1) << (8 * p.count.size - (p.count.is_signed ? 1 : 0))) - 1;
+                        if (n > type_max)
+                            refuse(line_, fmt::format("element '{}' record {}: list '{}' count {} does not fit its count type "
+                                                      "(at most {})",
+                                                      e.name, r + 1, p.name, n, type_max));
                         if (n > w.size() - k)
                             refuse(line_, fmt::format("element '{}' record {}: list '{}' declares {} entries, the line holds {} "
                                                       "more values",

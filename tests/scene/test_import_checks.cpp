@@ -53,6 +53,19 @@ void expect_square(const ObjModel& m) {
     EXPECT_NEAR(build_scene(m, o).total_area(), 1.0, 1e-12);
 }
 
+TEST(ImportChecks, AnAsciiListCountMustFitItsType) {
+    // 300 entries under a uchar count: assimp would store the count as 44.
+    TempFiles t;
+    std::string faces = "300";
+    for (int i = 0; i < 300; ++i) faces += " 0";
+    const std::string m = input_error_of([&] {
+        load_model(t.write("u8.ply", test::ply_header("ascii", 4, 1) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n" + faces + "\n"));
+    });
+    EXPECT_NE(m.find("u8.ply:14: element 'face' record 1: list 'vertex_indices' count 300 does not fit its count type (at most 255)"),
+              std::string::npos)
+        << m;
+}
+
 TEST(ImportChecks, ValidPlyOfEveryEncodingLoads) {
     TempFiles t;
     expect_square(load_model(t.write("a.ply", test::ply_header("ascii", 4, 2) + test::kSquareAscii)));

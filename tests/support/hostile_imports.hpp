@@ -104,7 +104,6 @@ inline std::string square_glb(std::uint32_t json_length = 0) {
 
 inline std::vector<HostileFile> hostile_files() {
     std::vector<HostileFile> out;
-    const std::string ascii = ply_header("ascii", 4, 2);
     const std::string binary_vertices = square_binary_vertices();
     // PLY: the header's last line.
     {
@@ -120,7 +119,7 @@ inline std::vector<HostileFile> hostile_files() {
                    "comment.ply:10: '0 0 0' is not a PLY header line", {}});
     out.push_back({"no_end.ply", "ply\nformat ascii 1.0\nelement vertex 2\n", "no_end.ply: PLY header without 'end_header'", {}});
     // PLY: counts against the data.
-    out.push_back({"list_300M.ply", ascii + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n300000000 0 1 2\n3 0 2 3\n",
+    out.push_back({"list_300M.ply", ply_header("ascii", 4, 2, "uint int") + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n300000000 0 1 2\n3 0 2 3\n",
                    "list_300M.ply:14: element 'face' record 1: list 'vertex_indices' declares 300000000 entries, the line holds 3 "
                    "more values",
                    {}});
