@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -202,6 +203,9 @@ inline std::vector<HostileFile> hostile_files() {
     }
     return out;
 }
+
+// gtest names a parameter by its file (ctest's test names stay readable).
+inline void PrintTo(const HostileFile& f, std::ostream* os) { *os << f.name; }
 
 // Writes a case into `dir`; returns the scene's path.
 inline std::filesystem::path write_hostile(const std::filesystem::path& dir, const HostileFile& f) {
