@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Fuzzes the OBJ/MTL, STL and View3D loaders and the .ffm reader with libFuzzer under AddressSanitizer and
+# Fuzzes the OBJ/MTL, STL and View3D loaders, the PLY and glTF pre-checks of the assimp path, the
+# analytic kernel and the .ffm reader with libFuzzer under AddressSanitizer and
 # UndefinedBehaviorSanitizer (docs/robustness.md).
 #   1. installs clang-14, libclang-rt-14-dev (libFuzzer and the sanitizer runtimes) and llvm-14
 #      (llvm-symbolizer, for readable stacks) when missing;
@@ -7,6 +8,7 @@
 #      only the fuzz targets (tests/fuzz/fuzz_*.cpp);
 #   3. runs each target for $FFCUBE_FUZZ_SECONDS seconds (default 60) on a copy of its seed corpus
 #      (tests/fuzz/corpus/NAME; the repository's corpus is never modified).
+# FFCUBE_FUZZ_TARGETS="fuzz_ply fuzz_gltf" builds and runs only those (default: every target).
 # A crash, a sanitizer report, a leak or an input slower than 10 s fails the script; libFuzzer
 # leaves the input as crash-*/leak-*/timeout-* in the build directory's fuzz-artifacts/.
 set -euo pipefail
@@ -30,7 +32,11 @@ cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_
   -DCMAKE_CXX_COMPILER=clang++-14 -DFFCUBE_FUZZ=ON -DFFCUBE_BUILD_TESTS=OFF -DFFCUBE_BUILD_TOOLS=OFF \
   -DFFCUBE_BUILD_EXAMPLES=OFF
 targets=()
-for src in tests/fuzz/fuzz_*.cpp; do targets+=("$(basename "$src" .cpp)"); done
+if [ -n "${FFCUBE_FUZZ_TARGETS:-}" ]; then
+  read -r -a targets <<<"$FFCUBE_FUZZ_TARGETS"
+else
+  for src in tests/fuzz/fuzz_*.cpp; do targets+=("$(basename "$src" .cpp)"); done
+fi
 cmake --build "$build_dir" -j "$(nproc)" --target "${targets[@]}"
 
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"

@@ -11,6 +11,7 @@
 #include <string_view>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/input_file.hpp"
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/checksum.hpp"
 #include "io/ffm_common.hpp"
@@ -255,9 +256,8 @@ FfmFile read_ffm(const std::filesystem::path& path) {
     f.source = path.string();
     const std::string& name = f.source;
 
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw InputError(fmt::format("{}: is a directory, not a matrix file", name));
+    // Regular files only, before opening (core/input_file.hpp): a FIFO would block the open.
+    require_regular_file(path, "a matrix file", "the matrix");
     std::ifstream in(path, std::ios::binary);
     if (!in) throw InputError(fmt::format("{}: cannot open: {}", name, std::strerror(errno)));
     in.seekg(0, std::ios::end);

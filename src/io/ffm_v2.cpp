@@ -19,6 +19,7 @@
 #include <algorithm>
 #include <cerrno>
 
+#include "ffcube/core/input_file.hpp"
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/checksum.hpp"
 #include "io/ffm_common.hpp"
@@ -290,14 +291,11 @@ FfmReader::FfmReader(const std::filesystem::path& path) : impl_(std::make_unique
     Impl& m = *impl_;
     m.head.source = path.string();
     const std::string& name = m.head.source;
-    std::error_code ec;
-    if (std::filesystem::is_directory(path, ec))
-        throw InputError(fmt::format("{}: is a directory, not a matrix file", name));
-    m.fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (m.fd < 0) throw InputError(fmt::format("{}: cannot open: {}", name, std::strerror(errno)));
-    struct stat st {};
-    if (::fstat(m.fd, &st) != 0) io_fail(name, "cannot determine the file size");
-    m.size = static_cast<std::uint64_t>(st.st_size);
+    // Regular files only, checked before opening and again on the descriptor (core/input_file.hpp):
+    // `solve --matrix FIFO` would otherwise block in open().
+    InputFd fd = open_input_file(path, "a matrix file", "the matrix");
+    m.size = fd.size();
+    m.fd = fd.release();
 
     std::array<unsigned char, kHeaderSize> hb{};
     const std::size_t head = static_cast<std::size_t>(std::min<std::uint64_t>(m.size, kHeaderSize));

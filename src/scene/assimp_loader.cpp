@@ -1,6 +1,11 @@
-// PLY, glTF 2.0 and the other formats of Debian's assimp. Assimp parses; ffcube's own checks (as
-// for OBJ: finite coordinates of magnitude at most 1e15 here, degenerate faces in the mesher) run
-// on what it returns.
+// PLY, glTF 2.0 and the other formats of Debian's assimp. Assimp is not written for hostile
+// input (issue 43: crashes, endless loops, gigabytes reserved on a header's word, files read
+// outside the model's folder), so it never runs unguarded: ffcube's own pre-checks
+// (import_checks.hpp) read the file's structure first, and assimp then runs in a forked child
+// with a time limit and an address-space cap (core/guarded_child.hpp), which sends the
+// collected model back as bytes (model_wire.hpp). ffcube's checks of what assimp returns (as for
+// OBJ: finite coordinates of magnitude at most 1e15 here, degenerate faces in the mesher) run in
+// the child, on what it returns. docs/robustness.md, "Third-party parsers".
 #include "ffcube/scene/assimp_loader.hpp"
 
 #include <assimp/Importer.hpp>
@@ -10,23 +15,31 @@
 #include <assimp/scene.h>
 #include <fmt/format.h>
 
+#include <string.h>
+
 #include <algorithm>
+#include <chrono>
 #include <cmath>
-#include <fstream>
+#include <deque>
 #include <limits>
 #include <map>
 #include <string>
 #include <unordered_map>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/error_transport.hpp"
+#include "ffcube/core/guarded_child.hpp"
+#include "ffcube/core/input_file.hpp"
+#include "ffcube/scene/import_checks.hpp"
 #include "ffcube/scene/load_model.hpp"
+#include "scene/model_wire.hpp"
 
 namespace ffcube {
 namespace {
 
 constexpr double kMaxCoordinate = 1e15;
 
-// What the file's first 64 KiB say that assimp does not pass on.
+// What the pre-checks learned that assimp does not pass on.
 struct FileHead {
     bool ply_materials = false;      // a PLY header with an `element material`
     bool ply_material_index = false; // ... and faces that pick one by material_index
@@ -246,26 +259,77 @@ private:
     std::size_t skipped_ = 0;
 };
 
-// Debian's assimp 5.2.5 loops forever on a PLY file whose header has no 'end_header' (a file cut
-// short inside its header): refuse that before assimp sees it. Returns what the head says about
-// materials that assimp does not pass on.
-FileHead read_head(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::string head(1 << 16, '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(in.gcount()));
-    FileHead out;
-    out.gltf_emissive_strength = head.find("KHR_materials_emissive_strength") != std::string::npos;
-    if (head.rfind("ply", 0) != 0) return out;
-    const std::size_t end = head.find("end_header");
-    if (end == std::string::npos)
-        throw InputError(fmt::format("{}: PLY header without 'end_header' in its first {} bytes (a file cut short, or not a PLY "
-                                     "file)",
-                                     path.string(), head.size()));
-    const std::string_view header(head.data(), end);
-    out.ply_materials = header.find("\nelement material ") != std::string_view::npos;
-    out.ply_material_index = header.find(" material_index") != std::string_view::npos;
+// Every check ffcube makes before assimp sees the bytes (import_checks.hpp), on a read-only
+// mapping of the file (and of a glTF file's external buffers); returns what they learned and the
+// bytes assimp will read, from which the child's limits follow.
+struct Checked {
+    FileHead head;
+    std::uint64_t input_bytes = 0;
+};
+
+Checked check_before_import(const std::filesystem::path& path) {
+    const std::string source = path.string();
+    Checked out;
+    const MappedInput file(path, "a scene file", "the scene");
+    const std::string_view bytes = file.bytes();
+    out.input_bytes = bytes.size();
+    switch (sniff_import_format(bytes.substr(0, 4096), path.extension().string())) {
+    case ImportFormat::ply: {
+        const PlyFacts ply = check_ply(bytes, source);
+        out.head.ply_materials = ply.materials;
+        out.head.ply_material_index = ply.material_index;
+        break;
+    }
+    case ImportFormat::gltf:
+    case ImportFormat::glb: {
+        const std::filesystem::path folder = path.parent_path();
+        std::deque<MappedInput> buffers;  // mapped while the checks look at them
+        GltfFiles files;
+        files.buffer = [&](const std::string& uri, const std::string& where) {
+            const std::filesystem::path p = resolve_model_uri(folder, uri, source, where);
+            try {
+                return buffers.emplace_back(p, "a glTF buffer file", "the buffer").bytes();
+            } catch (const InputError& e) {
+                throw InputError(fmt::format("{}: {}: {}", source, where, e.what()));
+            }
+        };
+        files.image = [&](const std::string& uri, const std::string& where) { resolve_model_uri(folder, uri, source, where); };
+        const bool glb = sniff_import_format(bytes.substr(0, 4096), path.extension().string()) == ImportFormat::glb;
+        const GltfFacts gltf = check_gltf(bytes, source, files, glb);
+        out.head.gltf_emissive_strength = gltf.emissive_strength;
+        out.input_bytes += gltf.external_bytes;
+        break;
+    }
+    case ImportFormat::other: break;  // assimp's other formats: the child's limits only
+    }
     return out;
+}
+
+// The child's limits (docs/robustness.md, "Third-party parsers"), from the bytes assimp reads:
+// time 10 s + 1 s per MiB (assimp reads tens of MiB a second; the floor covers a loaded
+// machine and sanitizer builds), address space 1 GiB + 64 bytes per byte of input (assimp's
+// PLY and glTF structures, the merged vertices, the collected model and its serialised copy
+// take about 20 to 30 bytes per byte of a binary file).
+ChildLimits import_limits(std::uint64_t input_bytes) {
+    ChildLimits limits;
+    const std::uint64_t mib = (input_bytes + (1u << 20) - 1) >> 20;
+    limits.wall = std::chrono::milliseconds(10000 + 1000 * std::min<std::uint64_t>(mib, 1u << 20));
+    limits.extra_address_space = (std::uint64_t(1) << 30) + 64 * input_bytes;
+    return limits;
+}
+
+// assimp's import and the collector, in the guarded child: the model as bytes.
+std::string import_in_child(const std::filesystem::path& path, const FileHead& head) {
+    Assimp::Importer importer;
+    // Keep quads and n-gons (the mesher makes grids of quads); only merge identical vertices.
+    const aiScene* scene = importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
+    if (scene == nullptr)
+        throw InputError(fmt::format("{}: cannot be imported: {}", path.string(), importer.GetErrorString()));
+    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr)
+        throw InputError(fmt::format("{}: the import is incomplete (no geometry, or a file cut short)", path.string()));
+    Collector collector(*scene, path.string(), head);
+    const ObjModel model = collector.run();
+    return detail::encode_imported(model, collector.counts());
 }
 
 }  // namespace
@@ -277,23 +341,34 @@ bool assimp_reads_extension(std::string_view extension) {
 }
 
 ObjModel load_with_assimp(const std::filesystem::path& path, ImportedMaterials* materials) {
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        throw InputError(fmt::format("{}: cannot read the scene: no such file", path.string()));
-    if (!std::filesystem::is_regular_file(status))
-        throw InputError(fmt::format("{}: is not a regular file, not a scene file", path.string()));
-    const FileHead head = read_head(path);
-    Assimp::Importer importer;
-    // Keep quads and n-gons (the mesher makes grids of quads); only merge identical vertices.
-    const aiScene* scene = importer.ReadFile(path.string(), aiProcess_JoinIdenticalVertices | aiProcess_ValidateDataStructure);
-    if (scene == nullptr)
-        throw InputError(fmt::format("{}: cannot be imported: {}", path.string(), importer.GetErrorString()));
-    if ((scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE) != 0 || scene->mRootNode == nullptr)
-        throw InputError(fmt::format("{}: the import is incomplete (no geometry, or a file cut short)", path.string()));
-    Collector collector(*scene, path.string(), head);
-    ObjModel model = collector.run();
-    if (materials != nullptr) *materials = collector.counts();
+    const std::string source = path.string();
+    const Checked checked = check_before_import(path);
+    const ChildLimits limits = import_limits(checked.input_bytes);
+    const ChildResult r = run_guarded([&] { return import_in_child(path, checked.head); }, limits);
+    const double mib = double(checked.input_bytes) / double(1 << 20);
+    switch (r.end) {
+    case ChildResult::End::returned: break;
+    case ChildResult::End::threw:
+        // The collector's refusals (coordinates, materials, no faces) keep their class and words.
+        throw_error(r.error_kind, r.error_message);
+    case ChildResult::End::signalled:
+        throw InputError(fmt::format("{}: assimp crashed reading it (signal {}: {}); the file is malformed in a way ffcube's "
+                                     "checks do not catch",
+                                     source, r.signal, strsignal(r.signal)));
+    case ChildResult::End::timed_out:
+        throw InputError(fmt::format("{}: assimp took longer than {} s to read it (the limit for {:.1f} MiB of input: 10 s + "
+                                     "1 s per MiB), and was stopped",
+                                     source, limits.wall.count() / 1000, mib));
+    case ChildResult::End::out_of_memory:
+        throw InputError(fmt::format("{}: assimp needed more than {} MiB to read it (the limit for {:.1f} MiB of input: 1 GiB + "
+                                     "64 bytes per byte), and was stopped",
+                                     source, limits.extra_address_space >> 20, mib));
+    case ChildResult::End::exited:
+        throw InputError(fmt::format("{}: the assimp import process ended (status {}) without a result", source, r.status));
+    }
+    ImportedMaterials counts;
+    ObjModel model = detail::decode_imported(r.payload, counts);
+    if (materials != nullptr) *materials = counts;
     return model;
 }
 

@@ -5,11 +5,9 @@
 
 #include <algorithm>
 #include <cctype>
-#include <cerrno>
-#include <cstdio>
-#include <cstring>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/input_file.hpp"
 #include "ffcube/scene/assimp_loader.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 #include "ffcube/scene/stl_loader.hpp"
@@ -62,26 +60,8 @@ ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const
     throw InternalError("load_model: no format");
 }
 
-std::string read_scene_file(const std::filesystem::path& path, const char* kind) {
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        throw InputError(fmt::format("{}: cannot read the scene: no such file", path.string()));
-    if (std::filesystem::is_directory(status)) throw InputError(fmt::format("{}: is a directory, not {}", path.string(), kind));
-    if (!std::filesystem::is_regular_file(status))
-        throw InputError(fmt::format("{}: is not a regular file, not {}", path.string(), kind));
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr)
-        throw InputError(fmt::format("{}: cannot open for reading: {}", path.string(), std::strerror(errno)));
-    std::string data;
-    char buffer[1 << 16];
-    std::size_t n = 0;
-    while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) data.append(buffer, n);
-    const bool failed = std::ferror(f) != 0;
-    const int err = errno;
-    std::fclose(f);
-    if (failed) throw InputError(fmt::format("{}: cannot read: {}", path.string(), std::strerror(err)));
-    return data;
+std::string read_scene_file(const std::filesystem::path& path, const char* kind, const char* role) {
+    return read_input_file(path, kind, role);
 }
 
 }  // namespace ffcube

@@ -132,7 +132,7 @@ void apply_material_map(ObjModel& model, std::string_view csv, const std::string
 }
 
 void apply_material_map_file(ObjModel& model, const std::filesystem::path& path) {
-    apply_material_map(model, read_scene_file(path, "a materials CSV file"), path.string());
+    apply_material_map(model, read_scene_file(path, "a materials CSV file", "the materials"), path.string());
 }
 
 }  // namespace ffcube

@@ -485,17 +485,10 @@ std::optional<std::string> read_file(const std::filesystem::path& path) {
 }  // namespace
 
 ObjModel load_obj(const std::filesystem::path& path, const ObjLoadOptions& options) {
-    std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (!std::filesystem::exists(status))
-        throw InputError(fmt::format("{}: cannot read the scene: no such file", path.string()));
-    if (std::filesystem::is_directory(status))
-        throw InputError(fmt::format("{}: is a directory, not an OBJ file", path.string()));
-    const std::optional<std::string> text = read_file(path);
-    if (!text) throw InputError(fmt::format("{}: is not a regular file, not an OBJ file", path.string()));
+    const std::string text = read_scene_file(path, "an OBJ file");
     const std::filesystem::path dir = path.parent_path();
     const MtlResolver resolver = [&dir](const std::string& name) { return read_file(dir / name); };
-    return parse_obj(*text, path.string(), resolver, options);
+    return parse_obj(text, path.string(), resolver, options);
 }
 
 }  // namespace ffcube

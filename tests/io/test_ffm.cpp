@@ -1,6 +1,8 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -263,7 +265,9 @@ TEST_F(Ffm, StructureIsValidatedEvenWithAValidChecksum) {
 }
 
 TEST_F(Ffm, MissingFileOrDirectoryIsAnInputError) {
-    expect_refused(path("absent.ffm"), "cannot open: No such file or directory");
+    expect_refused(path("absent.ffm"), "absent.ffm: cannot read the matrix: no such file");
+    ASSERT_EQ(::mkfifo(path("pipe.ffm").c_str(), 0600), 0);  // would block in open() without the check
+    expect_refused(path("pipe.ffm"), "pipe.ffm: is a FIFO (named pipe), not a matrix file");
     std::filesystem::create_directory(path("dir.ffm"));
     expect_refused(path("dir.ffm"), "is a directory");
 }

@@ -32,8 +32,9 @@ SceneFormat format_for_path(const std::filesystem::path& path);
 ObjModel load_model(const std::filesystem::path& path, SceneFormat format = SceneFormat::Auto,
                     const ObjLoadOptions& obj = {}, ImportedMaterials* materials = nullptr);
 
-// Reads a scene file into memory: InputError naming the file when it is missing, a directory,
-// not a regular file, or unreadable. 'kind' names the format in messages ("an STL file").
-std::string read_scene_file(const std::filesystem::path& path, const char* kind);
+// Reads a scene file into memory (core/input_file.hpp: regular files only, checked before
+// opening): InputError naming the file when it is missing, a directory, a FIFO or device, or
+// unreadable. 'kind' names the format in messages ("an STL file"), 'role' the input.
+std::string read_scene_file(const std::filesystem::path& path, const char* kind, const char* role = "the scene");
 
 }  // namespace ffcube
