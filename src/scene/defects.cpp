@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <limits>
 #include <unordered_map>
+#include <utility>
 
 #include "ear_clip.hpp"
 #include "ffcube/core/error.hpp"
@@ -25,6 +26,13 @@ namespace {
 
 // How many defects a message or warning names one by one (the count covers the rest).
 constexpr std::size_t kNamed = 3;
+
+// SplitMix64's finaliser: a hash whose every output bit depends on every input bit.
+std::uint64_t mix(std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
 
 // The face's vertices with consecutive repeats dropped (as the mesher drops them).
 void face_polygon(const ObjModel& m, const ObjFace& f, std::vector<Vec3>& poly) {
@@ -138,41 +146,44 @@ DefectStats remove_duplicate_faces(ObjModel& model) {
     st.tolerance = coincidence_tolerance(model);
     const double tol = st.tolerance;
     if (model.faces.empty()) return st;
-    // Vertices welded within tol: a hash of cells of size tol; a vertex takes the representative
-    // of the first earlier vertex within tol found in its cell or the 26 around it, so vertices
-    // that round to either side of a cell boundary still meet.
+    // Vertices welded within tol: a hash of cells of size 4 tol; a vertex takes the representative
+    // of the first earlier vertex within tol, looked for in its own cell and, along each axis where
+    // it lies within tol (a quarter cell, 0.26 for rounding) of a cell boundary, the cell beyond:
+    // copies that round to either side of a boundary still meet, and most vertices look in one cell.
     struct CellKey {
         std::int64_t x, y, z;
         bool operator==(const CellKey&) const = default;
     };
     struct CellHash {
         std::size_t operator()(const CellKey& k) const {
-            std::uint64_t h = static_cast<std::uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
-            h ^= static_cast<std::uint64_t>(k.y) + 0x7F4A7C159E3779B9ull + (h << 6) + (h >> 2);
-            h ^= static_cast<std::uint64_t>(k.z) + 0x94D049BB133111EBull + (h << 6) + (h >> 2);
-            return static_cast<std::size_t>(h);
+            return static_cast<std::size_t>(mix(static_cast<std::uint64_t>(k.x) ^ mix(static_cast<std::uint64_t>(k.y) ^
+                                                                                     mix(static_cast<std::uint64_t>(k.z)))));
         }
     };
     const Bounds bb = bounds_of(model);
-    const auto cell_of = [&](const Vec3& p) {
-        const Vec3 r = (p - bb.lo) / tol;
-        return CellKey{static_cast<std::int64_t>(std::floor(r.x)), static_cast<std::int64_t>(std::floor(r.y)),
-                       static_cast<std::int64_t>(std::floor(r.z))};
-    };
+    const double h = 4 * tol;
     constexpr std::uint32_t kUnset = std::numeric_limits<std::uint32_t>::max();
-    std::vector<std::uint32_t> rep(model.positions.size(), kUnset);
-    std::unordered_map<CellKey, std::vector<std::uint32_t>, CellHash> cells;
-    cells.reserve(model.positions.size());
+    std::vector<std::uint32_t> rep(model.positions.size(), kUnset), next(model.positions.size(), kUnset);
+    std::unordered_map<CellKey, std::uint32_t, CellHash> head;  // cell → its first vertex; next[] chains the rest
+    head.reserve(model.positions.size());
     const auto weld = [&](std::uint32_t v) {
         if (rep[v] != kUnset) return rep[v];
         const Vec3& p = model.positions[v];
-        const CellKey c = cell_of(p);
-        for (std::int64_t dx = -1; dx <= 1 && rep[v] == kUnset; ++dx)
-            for (std::int64_t dy = -1; dy <= 1 && rep[v] == kUnset; ++dy)
-                for (std::int64_t dz = -1; dz <= 1 && rep[v] == kUnset; ++dz) {
-                    const auto it = cells.find(CellKey{c.x + dx, c.y + dy, c.z + dz});
-                    if (it == cells.end()) continue;
-                    for (const std::uint32_t u : it->second)
+        const Vec3 r = (p - bb.lo) / h;
+        const CellKey c{static_cast<std::int64_t>(std::floor(r.x)), static_cast<std::int64_t>(std::floor(r.y)),
+                        static_cast<std::int64_t>(std::floor(r.z))};
+        std::array<std::array<std::int64_t, 2>, 3> off{};  // per axis: 0, and -1 or +1 (or 0 again)
+        for (int k = 0; k < 3; ++k) {
+            const double f = r[k] - std::floor(r[k]);
+            off[k] = {0, f < 0.26 ? -1 : f > 0.74 ? 1 : 0};
+        }
+        for (int a = 0; a < 2 && rep[v] == kUnset; ++a)
+            for (int b2 = 0; b2 < 2 && rep[v] == kUnset; ++b2)
+                for (int d = 0; d < 2 && rep[v] == kUnset; ++d) {
+                    if ((a && !off[0][1]) || (b2 && !off[1][1]) || (d && !off[2][1])) continue;
+                    const auto it = head.find(CellKey{c.x + off[0][a], c.y + off[1][b2], c.z + off[2][d]});
+                    if (it == head.end()) continue;
+                    for (std::uint32_t u = it->second; u != kUnset; u = next[u])
                         if (glm::length(model.positions[u] - p) <= tol) {
                             rep[v] = rep[u];
                             break;
@@ -180,28 +191,27 @@ DefectStats remove_duplicate_faces(ObjModel& model) {
                 }
         if (rep[v] == kUnset) {
             rep[v] = v;
-            cells[c].push_back(v);
+            const auto [it, inserted] = head.try_emplace(c, v);
+            if (!inserted) next[v] = std::exchange(it->second, v);
         }
         return rep[v];
     };
     // A face's key: its welded vertex cycle, consecutive repeats dropped, rotated to start at its
-    // least vertex; the reverse cycle is the other side of the same sheet.
-    struct KeyHash {
-        std::size_t operator()(const std::vector<std::uint32_t>& k) const {
-            std::uint64_t h = 1469598103934665603ull;
-            for (const std::uint32_t v : k) h = (h ^ v) * 1099511628211ull;
-            return static_cast<std::size_t>(h);
-        }
-    };
-    const auto canonical = [](std::vector<std::uint32_t>& k) {
-        const auto least = std::min_element(k.begin(), k.end());
-        std::rotate(k.begin(), least, k.end());
-    };
-    std::unordered_map<std::vector<std::uint32_t>, std::uint32_t, KeyHash> seen;
-    seen.reserve(model.faces.size());
-    std::vector<std::uint8_t> drop(model.faces.size(), 0);
-    std::vector<std::pair<std::size_t, std::size_t>> examples;  // (duplicate, original)
+    // least vertex (the reverse cycle, so rotated, is the other side of the same sheet). Keys are
+    // kept flat; faces are sorted by the key's hash and compared within equal hashes: O(n log n),
+    // no allocation per face, and the same answer on every run.
+    std::vector<std::uint32_t> flat;
+    std::vector<std::size_t> start(model.faces.size() + 1, 0);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> forward, reverse;  // (hash, face)
     std::vector<std::uint32_t> key;
+    const auto canonical = [](std::vector<std::uint32_t>& k) {
+        std::rotate(k.begin(), std::min_element(k.begin(), k.end()), k.end());
+    };
+    const auto hash_of = [](const std::vector<std::uint32_t>& k) {
+        std::uint64_t x = k.size();
+        for (const std::uint32_t v : k) x = mix(x ^ v);
+        return x;
+    };
     for (std::size_t fi = 0; fi < model.faces.size(); ++fi) {
         key.clear();
         for (const std::uint32_t v : model.faces[fi].v) {
@@ -209,17 +219,52 @@ DefectStats remove_duplicate_faces(ObjModel& model) {
             if (key.empty() || key.back() != r) key.push_back(r);
         }
         while (key.size() > 1 && key.back() == key.front()) key.pop_back();
-        if (key.size() < 3) continue;  // degenerate: the mesher drops it
-        canonical(key);
-        const auto [it, inserted] = seen.try_emplace(key, static_cast<std::uint32_t>(fi));
-        if (!inserted) {
-            drop[fi] = 1;
-            if (examples.size() < kNamed) examples.emplace_back(fi, it->second);
-            continue;
+        if (key.size() >= 3) {  // fewer: degenerate, the mesher drops it
+            canonical(key);
+            flat.insert(flat.end(), key.begin(), key.end());
+            forward.emplace_back(hash_of(key), static_cast<std::uint32_t>(fi));
+            std::reverse(key.begin(), key.end());
+            canonical(key);
+            reverse.emplace_back(hash_of(key), static_cast<std::uint32_t>(fi));
         }
-        std::reverse(key.begin(), key.end());
-        canonical(key);
-        st.two_sided_pairs += seen.count(key) > 0;
+        start[fi + 1] = flat.size();
+    }
+    const auto same = [&](std::uint32_t f, std::uint32_t g, bool reversed) {
+        const std::size_t n = start[f + 1] - start[f];
+        if (start[g + 1] - start[g] != n) return false;
+        const std::uint32_t* a = flat.data() + start[f];
+        const std::uint32_t* b = flat.data() + start[g];
+        if (!reversed) return std::equal(a, a + n, b);
+        // g's cycle reversed and rotated to its least vertex (b[0], which is also a's least).
+        if (a[0] != b[0]) return false;
+        for (std::size_t k = 1; k < n; ++k)
+            if (a[k] != b[n - k]) return false;
+        return true;
+    };
+    std::sort(forward.begin(), forward.end());
+    std::vector<std::uint8_t> drop(model.faces.size(), 0);
+    std::vector<std::pair<std::size_t, std::size_t>> examples;  // (duplicate, original), by duplicate
+    for (std::size_t lo = 0, hi = 0; lo < forward.size(); lo = hi) {
+        for (hi = lo + 1; hi < forward.size() && forward[hi].first == forward[lo].first;) ++hi;
+        for (std::size_t x = lo + 1; x < hi; ++x)  // faces in increasing order: the first copy stays
+            for (std::size_t y = lo; y < x; ++y)
+                if (!drop[forward[y].second] && same(forward[x].second, forward[y].second, false)) {
+                    drop[forward[x].second] = 1;
+                    examples.emplace_back(forward[x].second, forward[y].second);
+                    break;
+                }
+    }
+    std::sort(examples.begin(), examples.end());
+    if (examples.size() > kNamed) examples.resize(kNamed);
+    // Two-sided sheets: a kept face whose reverse cycle is an earlier kept face's cycle.
+    for (const auto& [hash, f] : reverse) {
+        if (drop[f]) continue;
+        auto it = std::lower_bound(forward.begin(), forward.end(), std::make_pair(hash, std::uint32_t{0}));
+        for (; it != forward.end() && it->first == hash && it->second < f; ++it)
+            if (!drop[it->second] && same(it->second, f, true)) {
+                ++st.two_sided_pairs;
+                break;
+            }
     }
     for (const std::uint8_t d : drop) st.duplicates_removed += d;
     if (st.duplicates_removed == 0) return st;

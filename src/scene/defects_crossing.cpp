@@ -142,8 +142,6 @@ std::size_t refuse_crossing_faces(const ObjModel& model) {
                                         dims[k] - 1);
     };
     const auto id = [&](std::int64_t x, std::int64_t y, std::int64_t z) { return static_cast<std::size_t>((z * dims[1] + y) * dims[0] + x); };
-    const std::size_t cells = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
-    std::vector<std::size_t> start(cells + 1, 0);
     const auto each_cell = [&](const Tri& t, auto&& f) {
         const std::int64_t x0 = cell(t.lo, 0), x1 = cell(t.hi, 0), y0 = cell(t.lo, 1), y1 = cell(t.hi, 1), z0 = cell(t.lo, 2),
                            z1 = cell(t.hi, 2);
@@ -151,6 +149,29 @@ std::size_t refuse_crossing_faces(const ObjModel& model) {
             for (std::int64_t y = y0; y <= y1; ++y)
                 for (std::int64_t x = x0; x <= x1; ++x) f(id(x, y, z));
     };
+    // Memory stays proportional to the triangles: at most 8 n + 4096 cells, and at most 32 n + 2^20
+    // (triangle, cell) entries, the grid made coarser (its largest side halved) until both hold
+    // (large triangles over a fine grid would otherwise enter many cells each).
+    const auto largest = [&] { return static_cast<int>(std::max_element(dims.begin(), dims.end()) - dims.begin()); };
+    std::size_t cells = 0;
+    std::vector<std::size_t> start;
+    for (;;) {
+        cells = static_cast<std::size_t>(dims[0] * dims[1] * dims[2]);
+        if (cells > 8 * n + 4096) {
+            dims[largest()] = std::max<std::int64_t>(1, dims[largest()] / 2);
+            continue;
+        }
+        std::size_t entries = 0;
+        for (const Tri& t : tris)
+            entries += static_cast<std::size_t>((cell(t.hi, 0) - cell(t.lo, 0) + 1) * (cell(t.hi, 1) - cell(t.lo, 1) + 1) *
+                                                (cell(t.hi, 2) - cell(t.lo, 2) + 1));
+        if (entries > 32 * n + (std::size_t{1} << 20) && cells > 1) {
+            dims[largest()] = std::max<std::int64_t>(1, dims[largest()] / 2);
+            continue;
+        }
+        break;
+    }
+    start.assign(cells + 1, 0);
     for (const Tri& t : tris) each_cell(t, [&](std::size_t c) { ++start[c + 1]; });
     for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
     std::vector<std::uint32_t> items(start[cells]);
@@ -166,7 +187,10 @@ std::size_t refuse_crossing_faces(const ObjModel& model) {
     };
     std::vector<Named> named;
     std::set<std::pair<std::uint32_t, std::uint32_t>> crossing;  // every face pair found
-    for (std::size_t c = 0; c < cells; ++c)
+    // Enough to refuse: counting stops at kMaxCounted pairs (a soup of large random triangles has
+    // nearly every pair crossing), so the message says "at least".
+    constexpr std::size_t kMaxCounted = 1000;
+    for (std::size_t c = 0; c < cells && crossing.size() < kMaxCounted; ++c)
         for (std::size_t a = start[c]; a < start[c + 1]; ++a)
             for (std::size_t b = a + 1; b < start[c + 1]; ++b) {
                 const Tri& s = tris[items[a]];
@@ -198,10 +222,11 @@ std::size_t refuse_crossing_faces(const ObjModel& model) {
                             name(nm.faces.second), nm.length);
     }
     throw InputError(fmt::format(
-        "{}: {} pair{} of faces pass through each other: {}{}; part of each lies inside what the "
+        "{}: {}{} pair{} of faces pass through each other: {}{}; part of each lies inside what the "
         "other bounds, where no light can be, so no form factor of the whole face is right: cut the faces along their "
         "intersection and remove the buried parts, or move them apart",
-        model.source, pairs, pairs == 1 ? "" : "s", list, pairs > named.size() ? ", ..." : ""));
+        model.source, pairs >= kMaxCounted ? "at least " : "", pairs, pairs == 1 ? "" : "s", list,
+        pairs > named.size() ? ", ..." : ""));
 }
 
 DefectStats check_defects(ObjModel& model) {
