@@ -8,10 +8,14 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <string>
 
+#include "accuracy/rebalance.hpp"
+#include "accuracy/row_range.hpp"
 #include "accuracy/scratch.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
 
 namespace ffcube {
@@ -23,7 +27,7 @@ namespace {
 // the seconds, which are timings).
 // Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
 // its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 33 * 8, "add the new NearFieldStats field to add_row_stats");
+static_assert(sizeof(NearFieldStats) == 34 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
@@ -36,6 +40,7 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows_untouched += b.rows_untouched;
     a.rows_closed += b.rows_closed;
     a.rows_capped += b.rows_capped;
+    a.rows_recomputed_out_of_range += b.rows_recomputed_out_of_range;
     a.rows_sampled += b.rows_sampled;
     a.refused_sampled += b.refused_sampled;
     a.rows_sampled_occluder += b.rows_sampled_occluder;
@@ -99,6 +104,12 @@ struct CorrectedRowProvider::Pools {
         }
         return std::make_unique<NearFieldScratch>();
     }
+    // Rows handed on as measured by the range check (for the warning after the call).
+    std::vector<std::uint32_t> out_of_range;
+    void note_out_of_range(std::uint32_t i) {
+        const std::lock_guard lock(mutex);
+        out_of_range.push_back(i);
+    }
     void add(NearFieldStats& total, const NearFieldStats& row) {
         const std::lock_guard lock(mutex);
         add_row_stats(total, row);
@@ -120,6 +131,7 @@ struct CorrectedRowProvider::Pools {
 
 CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inner, const NearFieldOptions& options)
     : inner_(inner),
+      scene_(scene),
       corrector_(scene, options),
       options_(options),
       pools_(std::make_unique<Pools>()) {
@@ -186,7 +198,31 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         const bool sampled = sample && a.done && a.sampled;
         // Rows planned at 4 × 4 (occluder 2) that the inner provider ray-cast (fine_rows).
         const double cast_rays = sampled && a.occluder == 2 ? static_cast<double>(cast_fine_rays) : 0.0;
+        SparseRow& inner = scratch->buffers().inner;
+        inner = row;  // the row as measured (the buffer's capacity is reused)
         corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled, cast_rays);
+        // The last check before the row leaves the layer: a corrected row out of range (an entry
+        // below 0 or above 1, not finite, or a sum above 1 beyond its tolerance) is replaced by
+        // the row as measured, which a hemicube or the rays make valid (ΔF sums of one or more
+        // hemicubes with positive weights of sum at most 1). Its estimate grows by the change:
+        // |measured − exact| ≤ |measured − corrected| + |corrected − exact|. A row made without
+        // measuring (analytic) has none to fall back on: refused by name.
+        const double tol = accuracy::row_range_tolerance(options_.keep_closed_rows, estimate);
+        if (!accuracy::row_in_range(row.val, tol)) {
+            if (a.skipped || !accuracy::row_in_range(inner.val, accuracy::kClosedRowTolerance))
+                throw InputError(out_of_range_message(i, row, a.skipped));
+            double moved = 0;
+            std::size_t p = 0, q = 0;
+            while (p < row.nnz() || q < inner.nnz()) {
+                if (q == inner.nnz() || (p < row.nnz() && row.col[p] < inner.col[q])) moved += std::abs(row.val[p++]);
+                else if (p == row.nnz() || inner.col[q] < row.col[p]) moved += std::abs(inner.val[q++]);
+                else moved += std::abs(row.val[p++] - inner.val[q++]);
+            }
+            estimate = std::isfinite(moved) ? estimate + moved : moved;
+            std::swap(row, inner);
+            ++local.rows_recomputed_out_of_range;
+            pools_->note_out_of_range(i);
+        }
         pools_->give_back(std::move(scratch));
         // One writer per row (i is listed once); both are sized before the stages start.
         row_error_[i] = static_cast<float>(estimate);
@@ -205,7 +241,39 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         local.seconds = watch.seconds();
         pools_->add(stats_, local);
     };
+    pools_->out_of_range.clear();
     inner_.compute_rows_staged(rows, stages, sink);
+    warn_out_of_range();
+}
+
+std::string CorrectedRowProvider::patch_name(std::uint32_t i) const {
+    const Patch& p = scene_.patches[i];
+    return fmt::format("patch {} (object '{}')", i, p.object < scene_.objects.size() ? scene_.objects[p.object] : "?");
+}
+
+std::string CorrectedRowProvider::out_of_range_message(std::uint32_t i, const SparseRow& row, bool made_analytically) const {
+    double sum = 0, least = INFINITY, most = -INFINITY;
+    for (const double v : row.val) sum += v, least = std::min(least, v), most = std::max(most, v);
+    return fmt::format(
+        "{}: the near-field correction made its row out of range (sum {:.6g}, entries from {:.3g} to {:.3g}) and {}: the "
+        "geometry around it is not one ffcube can measure (faces that pass through or lie inside others?); --correct "
+        "none or --method raycast measure it without the correction",
+        patch_name(i), sum, least, most,
+        made_analytically ? "the row was made without measuring, so there is no measured row to fall back on"
+                 : "the row as measured is out of range too");
+}
+
+// One warning per call, naming the first rows in row order (the same whatever the threads).
+void CorrectedRowProvider::warn_out_of_range() {
+    std::vector<std::uint32_t>& rows = pools_->out_of_range;
+    if (rows.empty()) return;
+    std::sort(rows.begin(), rows.end());
+    std::string list;
+    for (std::size_t k = 0; k < rows.size() && k < 3; ++k) list += (k ? ", " : "") + patch_name(rows[k]);
+    log_warning(fmt::format("{} row{} out of range after the near-field correction (an entry below 0 or above 1, or a sum "
+                            "above 1 beyond the row's tolerance) handed on as measured, uncorrected: {}{}",
+                            rows.size(), rows.size() == 1 ? "" : "s", list, rows.size() > 3 ? ", ..." : ""));
+    rows.clear();
 }
 
 }  // namespace ffcube

@@ -34,6 +34,7 @@ struct NearFieldScratch::Buffers {
     std::vector<Vec3> quadrature_points;
     std::vector<double> quadrature_weights;
     accuracy::MergedRow merged;
+    SparseRow inner;  // CorrectedRowProvider: the row as measured, kept for the range check's fallback
 };
 
 }  // namespace ffcube

@@ -269,7 +269,13 @@ bool ExposedPoints::rule(std::uint32_t i, std::vector<Vec3>& points, std::vector
     for (double& x : w) x /= area;
     std::vector<P2> at;
     for (std::size_t c : chosen) at.push_back(cells[c].c);
-    fit_weights(at, target, w);  // when the points cannot fit a quadratic, the strata's areas
+    // When the points cannot fit a quadratic, the strata's areas. A fit with a negative weight
+    // is not used either: the row is the weighted sum of the points' hemicube rows, and only
+    // weights ≥ 0 (of sum ≤ 1: the exposed share of i) keep every entry in [0, 1] and the row
+    // sum at most 1 (docs/robustness.md, "No row out of range"; a patch cut by faces that pass
+    // through it gave entries of −0.058 and row sums of 1.46).
+    std::vector<double> strata = w;
+    if (fit_weights(at, target, w) && std::any_of(w.begin(), w.end(), [](double x) { return !(x >= 0); })) w = strata;
     points.clear();
     for (const P2& u : at) points.push_back(f.world(u));
     weights = std::move(w);

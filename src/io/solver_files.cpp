@@ -203,8 +203,9 @@ void write_patch_table(const std::filesystem::path& path, const Scene& scene) {
         buf.append(std::string_view("patch,object,area,cx,cy,cz,nx,ny,nz\n"));
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
+            const Vec3 c = p.centroid + scene.origin;  // the user's coordinates (Scene::origin)
             fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", i,
-                           csv_field(scene.objects[p.object]), p.area, p.centroid.x, p.centroid.y, p.centroid.z,
+                           csv_field(scene.objects[p.object]), p.area, c.x, c.y, c.z,
                            p.normal.x, p.normal.y, p.normal.z);
             flush_if_full(out, buf);
         }

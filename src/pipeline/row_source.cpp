@@ -159,6 +159,7 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.rows_untouched", c.rows_untouched);
     r.set("corrections.rows_closed_rebalanced", c.rows_closed);
     r.set("corrections.rows_capped_at_one", c.rows_capped);
+    r.set("corrections.rows_recomputed_out_of_range", c.rows_recomputed_out_of_range);
     r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
     r.set("corrections.pairs_refused_sub_hemicubes", c.refused_sampled);
     r.set("corrections.pairs_exact_visibility", c.exact_visibility);

@@ -8,6 +8,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/scene/builtin.hpp"
 #include "ffcube/scene/contact.hpp"
+#include "ffcube/scene/defects.hpp"
 #include "ffcube/scene/load_model.hpp"
 #include "ffcube/scene/material_map.hpp"
 #include "ffcube/scene/mesher.hpp"
@@ -22,6 +23,14 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by}, &imported);
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
+    // Far from its origin the scene is meshed around its own centre (outputs add scene.origin
+    // back), then checked for defects before they become rows (docs/robustness.md).
+    const Vec3 origin = recentre(model);
+    if (origin != Vec3(0.0))
+        info("{}: the scene lies far from its origin; meshed around ({:.17g}, {:.17g}, {:.17g}), which outputs add back",
+             model.source, origin.x, origin.y, origin.z);
+    const DefectStats defects = check_defects(model);
+    for (const auto& w : defects.warnings) log_warning(w);
     std::optional<ContactCutStats> cuts;
     if (cuts_contacts(o)) {
         cuts = cut_contacts(model);
@@ -40,6 +49,14 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     mo.max_patches = patch_limit_for_physical_memory(mo.max_patches);
     mo.subdivide = o.subdivide;
     Scene scene = build_scene(model, mo);
+    if (origin != Vec3(0.0)) {
+        scene.origin = origin;
+        if (scene.drawn) {
+            auto drawn = std::make_shared<Scene>(*scene.drawn);
+            drawn->origin = origin;
+            scene.drawn = std::move(drawn);
+        }
+    }
     const double mesh_s = watch.seconds();
     for (const auto& w : scene.stats.warnings) log_warning(w);
     info("scene {}: {} faces, {} objects -> {} patches ({})", scene.source, scene.stats.input_faces, scene.objects.size(),
@@ -70,6 +87,9 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     report.set("loading.format", to_string(format));
     report.set("loading.dropped_degenerate", model.dropped_degenerate);
     report.set("loading.merged_vertices", model.merged_vertices);
+    report.set("loading.duplicates_removed", defects.duplicates_removed);
+    report.set("loading.two_sided_pairs", defects.two_sided_pairs);
+    report.set("loading.recentred", origin != Vec3(0.0));
     if (const ImportedMaterials& m = imported; m.present) {
         // The assimp reader's material mapping (docs/scene-format.md, "Materials through assimp").
         info("materials: {} in the file; faces: {} from a material, {} from vertex colours, {} default (Kd 0.5, Ke 0); {} "

@@ -241,7 +241,7 @@ PYBIND11_MODULE(ffcube, m) {
         .def_property_readonly("objects", [](const PyScene& s) { return s.scene->objects; }, "object names")
         .def_property_readonly("centroids",
                                [](const PyScene& s) {
-                                   return vec3_array(s.scene->size(), [&](std::size_t i) { return s.scene->patches[i].centroid; });
+                                   return vec3_array(s.scene->size(), [&](std::size_t i) { return s.scene->patches[i].centroid + s.scene->origin; });
                                },
                                "patch centroids (float64, n x 3)")
         .def_property_readonly("normals",

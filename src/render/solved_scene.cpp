@@ -28,6 +28,7 @@ PlyMesh solved_ply_mesh(const Scene& scene, std::span<const Vec3> radiosity, Sha
     const ShadedMesh shaded = shade_patches(scene, radiosity, shading);
     PlyMesh ply;
     ply.positions = shaded.positions;
+    for (Vec3& x : ply.positions) x += scene.origin;  // the user's coordinates (Scene::origin)
     ply.values = shaded.values;
     ply.colors.reserve(shaded.values.size());
     for (const Vec3& b : shaded.values) {

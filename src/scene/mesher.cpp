@@ -24,9 +24,59 @@
 #include <string>
 
 #include "ffcube/core/error.hpp"
+#include "ear_clip.hpp"
 
 namespace ffcube {
+namespace detail {
+
+// Ear clipping in the plane of unit_normal. Ears are convex corners with no other vertex inside;
+// when rounding leaves none (a self-touching or non-simple polygon), the most convex corner is
+// cut so that the loop always ends. Triangles keep the polygon's orientation.
+void ear_clip(std::span<const Vec3> poly, const Vec3& unit_normal, std::vector<std::array<Vec3, 3>>& out) {
+    const Vec3 axis = std::abs(unit_normal.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const Vec3 u = glm::normalize(glm::cross(unit_normal, axis));
+    const Vec3 w = glm::cross(unit_normal, u);  // u × w = normal: counter-clockwise stays positive
+    std::vector<glm::dvec2> q(poly.size());
+    for (std::size_t i = 0; i < poly.size(); ++i) {
+        const Vec3 d = poly[i] - poly[0];
+        q[i] = {glm::dot(d, u), glm::dot(d, w)};
+    }
+    const auto cross2 = [](glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; };
+    const auto inside = [&](glm::dvec2 p, glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
+        return cross2(b - a, p - a) >= 0.0 && cross2(c - b, p - b) >= 0.0 && cross2(a - c, p - c) >= 0.0;
+    };
+    std::vector<std::size_t> ring(poly.size());
+    for (std::size_t i = 0; i < ring.size(); ++i) ring[i] = i;
+    while (ring.size() > 3) {
+        const std::size_t m = ring.size();
+        std::size_t ear = m, best = 0;
+        double best_turn = -std::numeric_limits<double>::infinity();
+        for (std::size_t k = 0; k < m && ear == m; ++k) {
+            const std::size_t a = ring[(k + m - 1) % m], b = ring[k], c = ring[(k + 1) % m];
+            const double t = cross2(q[b] - q[a], q[c] - q[b]);
+            if (t > best_turn) best_turn = t, best = k;
+            if (!(t > 0.0)) continue;
+            bool empty = true;
+            for (std::size_t r = 0; r < m && empty; ++r) {
+                const std::size_t x = ring[r];
+                if (x == a || x == b || x == c || q[x] == q[a] || q[x] == q[b] || q[x] == q[c]) continue;
+                empty = !inside(q[x], q[a], q[b], q[c]);
+            }
+            if (empty) ear = k;
+        }
+        if (ear == m) ear = best;
+        out.push_back({poly[ring[(ear + m - 1) % m]], poly[ring[ear]], poly[ring[(ear + 1) % m]]});
+        ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(ear));
+    }
+    out.push_back({poly[ring[0]], poly[ring[1]], poly[ring[2]]});
+}
+
+}  // namespace detail
+
 namespace {
+
+using detail::ear_clip;
+
 
 // A face is degenerate when its area is at most kDegenerate × (longest edge)². The Newell sum of
 // a face of size s carries rounding errors of a few 2.2e-16 × s², so 1e-12 × s² lies thousands of
@@ -94,48 +144,6 @@ bool is_convex(std::span<const Vec3> poly, const Vec3& unit_normal, double toler
     for (std::size_t i = 1; i + 1 < n; ++i)
         if (turn(poly[0], poly[i], poly[i + 1], unit_normal) < -tolerance) return false;
     return true;
-}
-
-// Ear clipping in the plane of unit_normal. Ears are convex corners with no other vertex inside;
-// when rounding leaves none (a self-touching or non-simple polygon), the most convex corner is
-// cut so that the loop always ends. Triangles keep the polygon's orientation.
-void ear_clip(std::span<const Vec3> poly, const Vec3& unit_normal, std::vector<std::array<Vec3, 3>>& out) {
-    const Vec3 axis = std::abs(unit_normal.x) < 0.6 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
-    const Vec3 u = glm::normalize(glm::cross(unit_normal, axis));
-    const Vec3 w = glm::cross(unit_normal, u);  // u × w = normal: counter-clockwise stays positive
-    std::vector<glm::dvec2> q(poly.size());
-    for (std::size_t i = 0; i < poly.size(); ++i) {
-        const Vec3 d = poly[i] - poly[0];
-        q[i] = {glm::dot(d, u), glm::dot(d, w)};
-    }
-    const auto cross2 = [](glm::dvec2 a, glm::dvec2 b) { return a.x * b.y - a.y * b.x; };
-    const auto inside = [&](glm::dvec2 p, glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
-        return cross2(b - a, p - a) >= 0.0 && cross2(c - b, p - b) >= 0.0 && cross2(a - c, p - c) >= 0.0;
-    };
-    std::vector<std::size_t> ring(poly.size());
-    for (std::size_t i = 0; i < ring.size(); ++i) ring[i] = i;
-    while (ring.size() > 3) {
-        const std::size_t m = ring.size();
-        std::size_t ear = m, best = 0;
-        double best_turn = -std::numeric_limits<double>::infinity();
-        for (std::size_t k = 0; k < m && ear == m; ++k) {
-            const std::size_t a = ring[(k + m - 1) % m], b = ring[k], c = ring[(k + 1) % m];
-            const double t = cross2(q[b] - q[a], q[c] - q[b]);
-            if (t > best_turn) best_turn = t, best = k;
-            if (!(t > 0.0)) continue;
-            bool empty = true;
-            for (std::size_t r = 0; r < m && empty; ++r) {
-                const std::size_t x = ring[r];
-                if (x == a || x == b || x == c || q[x] == q[a] || q[x] == q[b] || q[x] == q[c]) continue;
-                empty = !inside(q[x], q[a], q[b], q[c]);
-            }
-            if (empty) ear = k;
-        }
-        if (ear == m) ear = best;
-        out.push_back({poly[ring[(ear + m - 1) % m]], poly[ring[ear]], poly[ring[(ear + 1) % m]]});
-        ring.erase(ring.begin() + static_cast<std::ptrdiff_t>(ear));
-    }
-    out.push_back({poly[ring[0]], poly[ring[1]], poly[ring[2]]});
 }
 
 void add_triangle(Decomposition& d, const Vec3& a, const Vec3& b, const Vec3& c, std::uint32_t face) {

@@ -73,6 +73,7 @@ RefinedScene refine_patches(const Scene& scene, std::span<const std::uint32_t> s
     out.stats = scene.stats;
     out.positions = scene.positions;  // kept grids keep their vertex indices
     out.bbox_min = scene.bbox_min;
+    out.origin = scene.origin;
     out.bbox_max = scene.bbox_max;
     for (const PatchGrid& g : scene.grids) {
         const std::uint32_t cells = grid_cells(g);

@@ -151,7 +151,9 @@ ObjModel parse_binary(std::string_view bytes, const std::string& source, const s
                                        Vec3(values[9], values[10], values[11])};
         builder.facet(p, normal, object, number);
     }
-    return builder.finish("facet");
+    ObjModel model = builder.finish("facet");
+    model.faces_numbered = true;
+    return model;
 }
 
 bool iequals(std::string_view a, std::string_view b) {

@@ -170,6 +170,9 @@ struct NearFieldStats {
     std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
     std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
     std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
+    // Corrected rows out of range (an entry < 0, > 1 or not finite, or a sum above 1 beyond the
+    // row's tolerance: src/accuracy/row_range.hpp) handed on as measured instead (docs/robustness.md).
+    std::uint64_t rows_recomputed_out_of_range = 0;
     std::uint64_t refused_sampled = 0;  // refused pairs that ask for sub-hemicubes (sub_hemicube_k)
     std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (either reason below)
     std::uint64_t rows_sampled_occluder = 0;  // of which for an occluder beside the sender only
@@ -341,7 +344,13 @@ public:
     }
 
 private:
+    // The range check's messages (src/accuracy/row_range.hpp): "patch I (object 'NAME')".
+    std::string patch_name(std::uint32_t i) const;
+    std::string out_of_range_message(std::uint32_t i, const SparseRow& row, bool analytic) const;
+    void warn_out_of_range();
+
     RowProvider& inner_;
+    const Scene& scene_;
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
     std::vector<float> row_error_;

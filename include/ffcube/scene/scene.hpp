@@ -73,6 +73,8 @@ struct ObjModel {
     // meshing, and vertex references merged into an exactly coinciding earlier vertex.
     std::size_t dropped_degenerate = 0;
     std::size_t merged_vertices = 0;
+    // ObjFace::line is a facet's 1-based number (binary STL), not a line (messages say "facet N").
+    bool faces_numbered = false;
     View3dControls view3d;              // a .vs3 file's control keys and title
     // The last `obstruction_objects` objects (and their faces, which come after every other
     // face) are obstruction-only (View3D's O surfaces): they block views but get no row and no
@@ -129,6 +131,11 @@ struct Scene {
     MeshStats stats;
     View3dControls view3d;  // as loaded (ObjModel::view3d)
     Vec3 bbox_min{0.0}, bbox_max{0.0};
+    // What was subtracted from the file's coordinates at loading (recentre() in defects.hpp: a
+    // scene far from its origin is meshed around its own centre); positions + origin are the
+    // user's coordinates, which outputs that print coordinates (the patch table) show. (0,0,0)
+    // for every scene near its origin.
+    Vec3 origin{0.0};
     // Hash of the meshed geometry (vertex positions, patch vertices and objects). Two runs that
     // mesh the same file with the same options get the same value; materials do not enter it,
     // so a form-factor matrix stays valid when only Kd/Ke change.
