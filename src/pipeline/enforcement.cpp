@@ -84,6 +84,20 @@ ClosureIterationFn closure_progress(bool progress, const std::string& what) {
 
 }  // namespace
 
+// A refusal of enforcement that a .vs3's encl=1 asked for (RowOptions::enforce_origin) names the
+// file and its C line: the user may never have written --enforce.
+template <class F>
+auto naming_origin(const RowOptions& o, F&& f) {
+    if (o.enforce_origin.empty()) return f();
+    try {
+        return f();
+    } catch (const InputError& e) {
+        throw InputError(fmt::format("{} (View3D's enclosure key: rows made to sum to 1, as --enforce closure, "
+                                     "which the command line did not give): {}",
+                                     o.enforce_origin, e.what()));
+    }
+}
+
 void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene) {
     if (request == EnforceRequest::None || enforce_mode(request) != EnforceMode::Closure || !scene.drawn) return;
     throw InputError(fmt::format("--enforce {} (or a .vs3's encl=1): {} has obstruction-only surfaces (O), which "
@@ -97,15 +111,16 @@ CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& sce
     if (request == EnforceRequest::None) return F;
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) {
+    if (mode == EnforceMode::Closure) naming_origin(rows.options(), [&] {
         refuse_enforcement_with_obstructions(request, scene);
         require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), F);
-    }
+    });
     const std::vector<double> areas = patch_areas(scene);
     EnforceStats st;
     Stopwatch watch;
     Progress rows_bar(fmt::format("--enforce {}: rows with columns (in memory)", what), F.size(), progress);
-    const EnforcedMatrix E = enforce(F, areas, mode, st, closure_progress(progress, what), &rows_bar);
+    const EnforcedMatrix E =
+        naming_origin(rows.options(), [&] { return enforce(F, areas, mode, st, closure_progress(progress, what), &rows_bar); });
     report_enforcement(report, what, st, watch.seconds());
     return E.to_csr();
 }
@@ -120,10 +135,10 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
     FFCUBE_CHECK(request != EnforceRequest::None);
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) {
+    if (mode == EnforceMode::Closure) naming_origin(rows.options(), [&] {
         refuse_enforcement_with_obstructions(request, scene);
         require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), raw_row_sums);
-    }
+    });
     const std::vector<double> areas = patch_areas(scene);
     const auto n = static_cast<std::uint32_t>(scene.size());
     Stopwatch watch;
@@ -182,7 +197,7 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
         sink(i, RowView{col, fval});
     };
     EnforceStats st;
-    enforce_passes(n, areas, mode, passes, out, st);
+    naming_origin(rows.options(), [&] { enforce_passes(n, areas, mode, passes, out, st); });
     s.g_on_disk = g.on_disk();
     s.scratch_bytes += g.bytes();
     report_enforcement(report, what, st, watch.seconds());

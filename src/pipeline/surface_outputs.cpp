@@ -71,6 +71,8 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report,
     if (v.encl != 1) return;
     if (rows.enforce == EnforceRequest::None) {
         rows.enforce = EnforceRequest::Closure;
+        rows.enforce_origin = v.encl_line ? fmt::format("{}:{}: encl=1", scene.source, v.encl_line)
+                                          : fmt::format("{}: encl=1", scene.source);
         info("{}: encl=1: rows are made to conserve energy (--enforce closure)", scene.source);
         report.set("view3d.encl_applied", "closure");
     } else {

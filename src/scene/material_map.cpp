@@ -35,8 +35,12 @@ std::optional<Vec3> read_triple(const std::vector<std::string_view>& field, bool
     for (int c = 0; c < 3; ++c) {
         v[c] = detail::parse_number(field[first + c], source, line,
                                     kd ? "Kd: diffuse reflectance within [0,1]" : "Ke: emitted radiosity >= 0");
-        if (kd && !(v[c] >= 0.0 && v[c] <= 1.0))
-            detail::fail_at(source, line, fmt::format("Kd {} must be within [0,1] (diffuse reflectance per channel)", v[c]));
+        // Below 1, not at most 1: a surface that reflects all it receives has no steady state, and
+        // every solve refuses it (solver.cpp) — here the message can name this line.
+        if (kd && !(v[c] >= 0.0 && v[c] < 1.0))
+            detail::fail_at(source, line, fmt::format("Kd {} must be within [0,1) (diffuse reflectance per channel; a "
+                                                      "surface that reflects everything it receives has no steady state)",
+                                                      v[c]));
         if (!kd && !(v[c] >= 0.0))
             detail::fail_at(source, line, fmt::format("Ke {} must be >= 0 (emitted radiosity per channel)", v[c]));
     }

@@ -114,6 +114,7 @@ private:
                 if (value != 0.0 && value != 1.0)
                     fail_at(source_, number_, fmt::format("control {}={} must be 0 or 1", key, value));
                 (lower == "encl" ? model_.view3d.encl : model_.view3d.emit) = static_cast<int>(value);
+                if (lower == "encl") model_.view3d.encl_line = number_;
                 continue;
             }
             if (lower == "out") {

@@ -425,7 +425,7 @@ TEST(MaterialMap, SetsKdAndKePerObject) {
     EXPECT_EQ(upper.ke, Vec3(10.0));
     EXPECT_NEAR(m.materials[m.faces[0].material].kd.x, 0.1, 1e-15);  // not named: unchanged
     EXPECT_CONTAINS(m.warnings.back(), "m.csv:4: the scene has no object 'ghost'");
-    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,1.5,0,0,0,0,0\n", "m.csv"); }), "m.csv:1: Kd 1.5 must be within [0,1]");
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,1.5,0,0,0,0,0\n", "m.csv"); }), "m.csv:1: Kd 1.5 must be within [0,1)");
     EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0,0,-1,0,0\n", "m.csv"); }), "m.csv:1: Ke -1 must be >= 0");
     EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0\n", "m.csv"); }), "m.csv:1: expected 7 fields");
 }
@@ -465,7 +465,7 @@ TEST(MaterialMap, RefusalsNameTheFileLineAndRule) {
     EXPECT_CONTAINS(refused("upper,,,,x,1,1\n"), "Ke: emitted radiosity >= 0");
     EXPECT_CONTAINS(refused("upper,0.5,0.5,abc,,,\n"), "Kd: diffuse reflectance within [0,1]");
     EXPECT_CONTAINS(refused("upper,,,,1,-2,1\n"), "m.csv:1: Ke -2 must be >= 0");
-    EXPECT_CONTAINS(refused("upper,0.5,1.25,0.5,,,\n"), "m.csv:1: Kd 1.25 must be within [0,1]");
+    EXPECT_CONTAINS(refused("upper,0.5,1.25,0.5,,,\n"), "m.csv:1: Kd 1.25 must be within [0,1)");
     EXPECT_CONTAINS(refused("upper,,,,1,1,1\nupper,0.5,0.5,0.5,,,\n"), "m.csv:2: object 'upper' is given twice (first on line 1)");
     EXPECT_CONTAINS(refused(",,,,1,1,1\n"), "m.csv:1: the object name is empty");
     // Nothing half-applied: a refusal on line 2 leaves line 1's object as it was.

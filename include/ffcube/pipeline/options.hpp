@@ -99,6 +99,9 @@ struct RowOptions {
     bool enclosure_without_depth = true;
     // On the finished matrix (formfactors only).
     EnforceRequest enforce = EnforceRequest::None;
+    // Who asked for it when the command line did not: "room.vs3:3: encl=1" (apply_view3d_controls);
+    // enforcement's refusals then name it (pipeline/enforcement.cpp).
+    std::string enforce_origin;
     // What `--far-field auto` and `--exact-visibility auto` weigh (--cost-model FILE; built-in:
     // llvmpipe on the development machines).
     CostModel cost_model;

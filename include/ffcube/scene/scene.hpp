@@ -34,6 +34,7 @@ struct ObjFace {
 struct View3dControls {
     bool present = false;  // the scene came from a .vs3 file
     int encl = 0;          // 1: the surfaces form an enclosure: rows are made to conserve energy (--enforce closure)
+    std::uint32_t encl_line = 0;  // the C line that set encl (0: not given), for messages
     int emit = 0;          // 1: the View3D output holds Hottel's script-F (reflections included, emissivities)
     int out = 0;           // the View3D output: 0 text, 1 binary, 2 sparse text (View3D's forks: "i j F" lines)
     std::string title;     // the last T line
