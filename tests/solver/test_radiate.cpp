@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <vector>
 
 #include "ffcube/core/error.hpp"
@@ -69,6 +70,8 @@ TEST(Radiate, TwoSurfaceEnclosureMatchesClosedForm) {
         const double p = two_surface_power(c.e1, c.e2, t1, t2);
         EXPECT_NEAR(r.heat_flux[0] * kA1, p, c.tol * p);
         EXPECT_NEAR(r.heat_flux[1] * kA2, -p, c.tol * p);
+        std::cout << "[measured] two-surface eps " << c.e1 << "," << c.e2 << ": rel error "
+                  << std::abs(r.heat_flux[0] * kA1 - p) / p << ", " << std::abs(r.heat_flux[1] * kA2 + p) / p << "\n";
         EXPECT_NEAR(r.power, 0.0, c.tol * p);  // closed, reciprocal: everything 1 emits, 2 absorbs
         EXPECT_LE(r.balance_error, c.tol);
         EXPECT_NEAR(r.sky, 0.0, 1e-12 * p);
@@ -110,6 +113,8 @@ TEST(Radiate, ReradiatingWallMatchesTextbookFormula) {
                          ((1.0 - c.e1) / (c.e1 * a1) + space + (1.0 - c.e2) / (c.e2 * a2));
         EXPECT_NEAR(r.heat_flux[0] * a1, p, c.tol * p);
         EXPECT_NEAR(r.heat_flux[1] * a2, -p, c.tol * p);
+        std::cout << "[measured] reradiating eps " << c.e1 << "," << c.e2 << ": rel error "
+                  << std::abs(r.heat_flux[0] * a1 - p) / p << ", " << std::abs(r.heat_flux[1] * a2 + p) / p << "\n";
         EXPECT_EQ(r.heat_flux[2], 0.0);
         // The wall's radiosity sits between J1 and J2 by the two space resistances (eq. 13.31):
         // (J1 − JR) A1 F1R = (JR − J2) A2 F2R, and an adiabatic wall has σT_R⁴ = J_R = G_R.
@@ -171,6 +176,8 @@ TEST(Radiate, ConductancesTwoSurface) {
         const ConductanceResult g = radiative_conductances(F, area, std::vector{c.e1, c.e2}, object, 2, tight());
         const double gr = kA1 / (1.0 / c.e1 + (kA1 / kA2) * (1.0 / c.e2 - 1.0));
         EXPECT_NEAR(g.gr[0][1], gr, c.tol * gr);
+        std::cout << "[measured] GR eps " << c.e1 << "," << c.e2 << ": rel error " << std::abs(g.gr[0][1] - gr) / gr << ", "
+                  << std::abs(g.gr[1][0] - gr) / gr << "\n";
         EXPECT_NEAR(g.gr[1][0], gr, c.tol * gr);
         EXPECT_LE(g.reciprocity_error, c.tol);
         EXPECT_LE(g.sum_rule_error, c.tol);
