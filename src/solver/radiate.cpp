@@ -1,0 +1,420 @@
+// Gray-body radiative exchange by the net radiation method on the rows of F (solver/radiate.hpp,
+// docs/radiate.md).
+#include "ffcube/solver/radiate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <map>
+
+#include "ffcube/core/error.hpp"
+#include "ffcube/solver/linear.hpp"
+
+namespace ffcube {
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string_view trim(std::string_view s) {
+    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
+    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
+    return s;
+}
+
+// Splits a CSV line at commas outside double quotes; a quoted field loses its quotes ("" → ").
+// InputError (via `where`) for an unterminated quote.
+std::vector<std::string> split_csv(std::string_view line, const std::string& where) {
+    std::vector<std::string> fields(1);
+    bool quoted = false;
+    for (std::size_t k = 0; k < line.size(); ++k) {
+        const char ch = line[k];
+        if (quoted) {
+            if (ch == '"' && k + 1 < line.size() && line[k + 1] == '"') {
+                fields.back() += '"';
+                ++k;
+            } else if (ch == '"') {
+                quoted = false;
+            } else {
+                fields.back() += ch;
+            }
+        } else if (ch == '"' && trim(fields.back()).empty()) {
+            fields.back().clear();
+            quoted = true;
+        } else if (ch == ',') {
+            fields.emplace_back();
+        } else {
+            fields.back() += ch;
+        }
+    }
+    if (quoted) throw InputError(fmt::format("{}: a double quote is not closed", where));
+    for (std::string& f : fields) f = std::string(trim(f));
+    return fields;
+}
+
+// The whole field as a finite number; nullopt when empty. InputError naming the column otherwise.
+std::optional<double> parse_number(const std::string& field, std::string_view column, const std::string& where) {
+    if (field.empty()) return std::nullopt;
+    double v = 0.0;
+    const char* end = field.data() + field.size();
+    const auto [ptr, ec] = std::from_chars(field.data(), end, v);
+    if (ec != std::errc() || ptr != end || !std::isfinite(v))
+        throw InputError(fmt::format("{}: {} '{}' is not a finite number", where, column, field));
+    return v;
+}
+
+void check_emissivity(double e, const std::string& where) {
+    if (!(e > 0.0 && e <= 1.0))
+        throw InputError(fmt::format("{}: emissivity {} must be in (0, 1] (a perfect reflector, 0, neither emits nor "
+                                     "absorbs: leave it out of the scene or give it a small emissivity)",
+                                     where, e));
+}
+void check_temperature(double t, const std::string& where) {
+    if (!(t >= 0.0 && std::isfinite(t))) throw InputError(fmt::format("{}: temperature {} K must be finite and >= 0", where, t));
+}
+
+double emissive_power(double t) {  // σ T⁴
+    const double t2 = t * t;
+    return kStefanBoltzmann * t2 * t2;
+}
+
+// y = x − c ∘ (F x), the operator of both problems (c = 1 − ε for a patch that reflects what it
+// receives on top of a given emission, 1 for a patch whose net flux is given).
+struct ReflectionOperator {
+    const CsrMatrix& F;
+    std::span<const double> c;
+    void gather(std::span<const double> x, std::span<double> g) const {  // g = F x
+        const auto& ptr = F.row_ptr();
+        const auto& col = F.col();
+        const auto& val = F.val();
+        for (std::uint32_t i = 0; i < F.size(); ++i) {
+            double s = 0.0;
+            for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
+            g[i] = s;
+        }
+    }
+    void operator()(std::span<const double> x, std::span<double> y) const {
+        gather(x, y);
+        for (std::size_t i = 0; i < y.size(); ++i) y[i] = x[i] - c[i] * y[i];
+    }
+};
+
+double norm2(std::span<const double> v) {
+    double s = 0.0;
+    for (const double x : v) s += x * x;
+    return std::sqrt(s);
+}
+
+struct SolveOutcome {
+    std::uint64_t iterations = 0;
+    double residual = 0.0;  // relative
+};
+
+// Solves (I − diag(c) F) x = b from x's start value; NotConvergedError naming `what` unless the
+// relative residual reaches options.tolerance.
+SolveOutcome solve_reflections(const ReflectionOperator& op, std::span<const double> b, std::span<double> x,
+                               const RadiateOptions& options, const std::string& what) {
+    const double bnorm = norm2(b);
+    if (bnorm == 0.0) {  // nothing emits and nothing is given: J = 0 exactly
+        std::fill(x.begin(), x.end(), 0.0);
+        return {};
+    }
+    GmresControl control;
+    control.restart = options.restart;
+    control.max_iterations = options.max_iterations;
+    control.tolerance = options.tolerance * bnorm;
+    control.inner_tolerance = 0.5 * control.tolerance;  // so that the true residual passes after the cycle
+    const GmresOutcome out = gmres(op, b, x, control, [](std::span<const double> r) { return norm2(r); });
+    const SolveOutcome result{out.iterations, out.measure / bnorm};
+    if (!out.converged)
+        throw NotConvergedError(fmt::format(
+            "{}: GMRES({}) stopped {} after {} products with the rows at a relative residual of {:.3g} > tolerance {:.3g}; "
+            "nothing was written",
+            what, options.restart, out.stagnated ? "without progress" : "at the iteration limit", out.iterations,
+            result.residual, options.tolerance));
+    return result;
+}
+
+std::vector<double> sky_view_factors(const CsrMatrix& F) {
+    std::vector<double> sky(F.size());
+    for (std::uint32_t i = 0; i < F.size(); ++i) sky[i] = 1.0 - F.row(i).sum();
+    return sky;
+}
+
+void check_sizes(const CsrMatrix& F, std::size_t area, std::size_t other, const char* what) {
+    if (F.rows_filled() != F.size() || area != F.size() || other != F.size())
+        throw InputError(fmt::format("radiation: F has {} rows ({} filled), {} areas and {} {}: one each per patch",
+                                     F.size(), F.rows_filled(), area, other, what));
+}
+
+}  // namespace
+
+std::vector<NamedSurface> parse_surfaces_csv(std::string_view text, const std::string& source) {
+    std::vector<NamedSurface> out;
+    std::map<std::string, std::size_t> seen;  // object → line
+    bool header = false;
+    std::size_t line_no = 0;
+    while (!text.empty()) {
+        const std::size_t nl = text.find('\n');
+        const std::string_view raw = text.substr(0, nl);
+        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
+        ++line_no;
+        const std::string_view line = trim(raw);
+        if (line.empty() || line.front() == '#') continue;
+        const std::string where = fmt::format("{}:{}", source, line_no);
+        const std::vector<std::string> f = split_csv(line, where);
+        if (!header) {
+            if (f != std::vector<std::string>{"object", "emissivity", "temperature", "heat_flux"})
+                throw InputError(fmt::format("{}: the first line must be the header 'object,emissivity,temperature,heat_flux'",
+                                             where));
+            header = true;
+            continue;
+        }
+        if (f.size() != 4)
+            throw InputError(fmt::format("{}: {} fields; each line is object,emissivity,temperature,heat_flux (4 fields)",
+                                         where, f.size()));
+        if (f[0].empty()) throw InputError(fmt::format("{}: the object name is empty", where));
+        if (const auto it = seen.find(f[0]); it != seen.end())
+            throw InputError(fmt::format("{}: object '{}' is listed again (first on line {})", where, f[0], it->second));
+        const std::optional<double> eps = parse_number(f[1], "emissivity", where);
+        if (!eps) throw InputError(fmt::format("{}: the emissivity of '{}' is missing", where, f[0]));
+        check_emissivity(*eps, where);
+        const std::optional<double> t = parse_number(f[2], "temperature", where);
+        const std::optional<double> q = parse_number(f[3], "heat_flux", where);
+        if (t.has_value() == q.has_value())
+            throw InputError(fmt::format("{}: '{}' gives {}; give exactly one of temperature (K) and heat_flux (W/m^2, "
+                                         "adiabatic = 0) and leave the other empty",
+                                         where, f[0], t ? "both a temperature and a heat flux" : "neither a temperature nor a heat flux"));
+        if (t) check_temperature(*t, where);
+        NamedSurface s;
+        s.object = f[0];
+        s.spec.emissivity = *eps;
+        s.spec.condition = t ? SurfaceCondition::Temperature : SurfaceCondition::HeatFlux;
+        s.spec.value = t ? *t : *q;
+        s.line = line_no;
+        seen.emplace(s.object, line_no);
+        out.push_back(std::move(s));
+    }
+    if (!header) throw InputError(fmt::format("{}: empty; expected the header 'object,emissivity,temperature,heat_flux'", source));
+    return out;
+}
+
+SurfaceSpec parse_default_surface(std::string_view text) {
+    const std::string where = fmt::format("--default-surface {}", text);
+    const std::vector<std::string> f = split_csv(text, where);
+    if (f.size() != 2) throw InputError(fmt::format("{}: expected EMISSIVITY,TEMPERATURE (two numbers)", where));
+    const std::optional<double> eps = parse_number(f[0], "emissivity", where);
+    const std::optional<double> t = parse_number(f[1], "temperature", where);
+    if (!eps || !t) throw InputError(fmt::format("{}: expected EMISSIVITY,TEMPERATURE (two numbers)", where));
+    check_emissivity(*eps, where);
+    check_temperature(*t, where);
+    return {*eps, SurfaceCondition::Temperature, *t};
+}
+
+std::vector<SurfaceSpec> surfaces_for_objects(std::span<const std::string> objects,
+                                              std::span<const NamedSurface> lines, const std::string& source,
+                                              const std::optional<SurfaceSpec>& fallback) {
+    std::map<std::string_view, std::size_t> index;
+    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    std::vector<std::optional<SurfaceSpec>> given(objects.size());
+    for (const NamedSurface& s : lines) {
+        const auto it = index.find(s.object);
+        if (it == index.end()) {
+            std::string names;
+            for (std::size_t k = 0; k < objects.size() && k < 12; ++k) names += (k ? ", " : "") + objects[k];
+            if (objects.size() > 12) names += ", ...";
+            throw InputError(fmt::format("{}:{}: the scene has no object '{}' (its objects: {})", source, s.line, s.object, names));
+        }
+        given[it->second] = s.spec;
+    }
+    std::vector<SurfaceSpec> out(objects.size());
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+        if (given[k]) {
+            out[k] = *given[k];
+        } else if (fallback) {
+            out[k] = *fallback;
+        } else {
+            throw InputError(fmt::format("{}: object '{}' of the scene is not listed; add a line for it, or give "
+                                         "--default-surface EMISSIVITY,TEMPERATURE",
+                                         source, objects[k]));
+        }
+    }
+    return out;
+}
+
+void validate(const RadiateOptions& o) {
+    if (o.sky_temperature) check_temperature(*o.sky_temperature, "--sky-temperature");
+    if (!(o.tolerance > 0.0 && o.tolerance < 1.0))
+        throw InputError(fmt::format("radiation tolerance {}: must be in (0, 1)", o.tolerance));
+    if (o.max_iterations < 1) throw InputError("radiation max iterations: must be >= 1");
+    if (o.restart < 1 || o.restart > 1000) throw InputError(fmt::format("GMRES restart {}: must be 1..1000", o.restart));
+    if (!(o.open_threshold >= 0.0 && o.open_threshold < 1.0))
+        throw InputError(fmt::format("open threshold {}: must be in [0, 1)", o.open_threshold));
+}
+
+RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                              const RadiateOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
+    validate(options);
+    check_sizes(F, area.size(), spec.size(), "surface specs");
+    const std::uint32_t n = F.size();
+    const auto name = [&](std::uint32_t i) {
+        return options.patch_name ? options.patch_name(i) : fmt::format("patch {}", i);
+    };
+    RadiateResult r;
+    bool any_temperature = false;
+    double total_area = 0.0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (!(area[i] > 0.0 && std::isfinite(area[i])))
+            throw InputError(fmt::format("{}: area {} must be finite and > 0", name(i), area[i]));
+        check_emissivity(spec[i].emissivity, name(i));
+        if (spec[i].condition == SurfaceCondition::Temperature) {
+            check_temperature(spec[i].value, name(i));
+            any_temperature = true;
+        } else if (!std::isfinite(spec[i].value)) {
+            throw InputError(fmt::format("{}: heat flux {} must be finite", name(i), spec[i].value));
+        }
+        r.min_emissivity = std::min(r.min_emissivity, spec[i].emissivity);
+        total_area += area[i];
+    }
+    r.sky_view = sky_view_factors(F);
+    double mean_sky = 0.0, max_sky = 0.0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        mean_sky += area[i] * r.sky_view[i];
+        max_sky = std::max(max_sky, r.sky_view[i]);
+    }
+    mean_sky = n ? mean_sky / total_area : 0.0;
+    if (!options.sky_temperature && max_sky > options.open_threshold)
+        throw InputError(fmt::format(
+            "the scene is open: {:.4g}% of the hemisphere escapes on the area-weighted mean, up to {:.4g}% at {} "
+            "(sky view factor above {:.3g}); give --sky-temperature T (K) for what the openings see",
+            100.0 * mean_sky, 100.0 * max_sky,
+            name(static_cast<std::uint32_t>(std::max_element(r.sky_view.begin(), r.sky_view.end()) - r.sky_view.begin())),
+            options.open_threshold));
+    if (!any_temperature && !options.sky_temperature)
+        throw InputError("every surface has a given heat flux and there is no sky temperature: the temperatures are "
+                         "then undetermined; give at least one surface a temperature");
+    const double sky_power = options.sky_temperature ? emissive_power(*options.sky_temperature) : 0.0;
+
+    // The system A J = b, A = I − diag(c) F (module docs).
+    std::vector<double> c(n), b(n), j(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const SurfaceSpec& s = spec[i];
+        const double sky_in = r.sky_view[i] * sky_power;  // σ T_sky⁴ F_sky,i: what the sky sends to i
+        if (s.condition == SurfaceCondition::Temperature) {
+            c[i] = 1.0 - s.emissivity;
+            b[i] = s.emissivity * emissive_power(s.value) + c[i] * sky_in;
+        } else {
+            c[i] = 1.0;
+            b[i] = s.value + sky_in;
+        }
+        j[i] = s.condition == SurfaceCondition::Temperature ? emissive_power(s.value) : b[i];
+    }
+    const ReflectionOperator op{F, c};
+    const SolveOutcome solved = solve_reflections(op, b, j, options, "radiation");
+    r.iterations = solved.iterations;
+    r.residual = solved.residual;
+
+    r.radiosity = j;
+    r.irradiation.resize(n);
+    op.gather(j, r.irradiation);
+    r.heat_flux.resize(n);
+    r.temperature.resize(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const SurfaceSpec& s = spec[i];
+        double& g = r.irradiation[i];
+        g += r.sky_view[i] * sky_power;
+        if (s.condition == SurfaceCondition::Temperature) {
+            // q = J − G with J = εσT⁴ + (1 − ε)G, i.e. q = ε (σT⁴ − G): the brief's ε/(1 − ε)(σT⁴ − J)
+            // at convergence, without its 1/(1 − ε) amplification of J's error near ε = 1.
+            r.temperature[i] = s.value;
+            r.heat_flux[i] = s.emissivity * (emissive_power(s.value) - g);
+        } else {
+            // q = J − G and J = εσT⁴ + (1 − ε)G give σT⁴ = (J − (1 − ε)G)/ε = G + q/ε.
+            r.heat_flux[i] = s.value;
+            double e = g + s.value / s.emissivity;
+            // Rounding of a solution converged to `tolerance` can make a true 0 slightly negative.
+            const double slack = 10.0 * options.tolerance * (std::abs(g) + std::abs(s.value / s.emissivity));
+            if (e < -slack)
+                throw InputError(fmt::format(
+                    "{}: the given heat flux {:.6g} W/m^2 leaving would need a temperature below 0 K (it receives "
+                    "{:.6g} W/m^2 and can absorb at most emissivity x that, {:.6g} W/m^2)",
+                    name(i), s.value, g, s.emissivity * g));
+            e = std::max(e, 0.0);
+            r.temperature[i] = std::pow(e / kStefanBoltzmann, 0.25);
+        }
+    }
+    double abs_power = 0.0;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        r.power += area[i] * r.heat_flux[i];
+        abs_power += area[i] * std::abs(r.heat_flux[i]);
+        r.sky += area[i] * r.sky_view[i] * (r.radiosity[i] - sky_power);
+    }
+    r.absolute_power = abs_power;
+    const double scale = abs_power + std::abs(r.sky);
+    r.balance_error = scale > 0.0 ? std::abs(r.power - r.sky) / scale : 0.0;
+    r.seconds = seconds_since(t0);
+    return r;
+}
+
+ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+                                         std::span<const double> emissivity, std::span<const std::uint32_t> object,
+                                         std::uint32_t objects, const RadiateOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
+    validate(options);
+    check_sizes(F, area.size(), emissivity.size(), "emissivities");
+    check_sizes(F, area.size(), object.size(), "object indices");
+    const std::uint32_t n = F.size();
+    ConductanceResult r;
+    r.gr.assign(objects, std::vector<double>(objects, 0.0));
+    r.gr_sky.assign(objects, 0.0);
+    r.emittance.assign(objects, 0.0);
+    std::vector<double> c(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (object[i] >= objects) throw InputError(fmt::format("patch {}: object {} out of range", i, object[i]));
+        check_emissivity(emissivity[i], fmt::format("patch {}", i));
+        c[i] = 1.0 - emissivity[i];
+        r.emittance[object[i]] += emissivity[i] * area[i];
+    }
+    const std::vector<double> sky = sky_view_factors(F);
+    const ReflectionOperator op{F, c};
+    std::vector<double> b(n), j(n), g(n);
+    for (std::uint32_t k = 0; k < objects; ++k) {
+        if (!(r.emittance[k] > 0.0)) continue;
+        // Unit blackbody exitance on k: E_i = ε_i σT⁴ with σT⁴ = 1 on k's patches; every patch
+        // reflects (1 − ε) of what it receives: J = E + diag(1 − ε) F J.
+        for (std::uint32_t i = 0; i < n; ++i) j[i] = b[i] = object[i] == k ? emissivity[i] : 0.0;
+        const SolveOutcome solved = solve_reflections(op, b, j, options, fmt::format("conductances of object {}", k));
+        r.iterations += solved.iterations;
+        r.max_residual = std::max(r.max_residual, solved.residual);
+        ++r.solves;
+        op.gather(j, g);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            r.gr[k][object[i]] += emissivity[i] * area[i] * g[i];  // absorbed by patch i
+            r.gr_sky[k] += area[i] * sky[i] * j[i];                // leaving i to the sky
+        }
+    }
+    double largest = 0.0;
+    for (std::uint32_t k = 0; k < objects; ++k) {
+        if (!(r.emittance[k] > 0.0)) continue;
+        double sum = r.gr_sky[k];
+        for (std::uint32_t l = 0; l < objects; ++l) {
+            sum += r.gr[k][l];
+            largest = std::max(largest, r.gr[k][l]);
+        }
+        r.sum_rule_error = std::max(r.sum_rule_error, std::abs(sum / r.emittance[k] - 1.0));
+    }
+    for (std::uint32_t k = 0; k < objects; ++k)
+        for (std::uint32_t l = k + 1; l < objects; ++l) {
+            const double a = r.gr[k][l], bb = r.gr[l][k], m = std::max(a, bb);
+            if (m > 1e-9 * largest) r.reciprocity_error = std::max(r.reciprocity_error, std::abs(a - bb) / m);
+        }
+    r.seconds = seconds_since(t0);
+    return r;
+}
+
+}  // namespace ffcube
