@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/input_file.hpp"
 #include "ffcube/io/atomic_file.hpp"
 
 namespace ffcube {
@@ -21,6 +22,12 @@ void check_cost_model(const CostModel& m, const std::string& where) {
 }
 
 CostModel read_cost_model(const std::string& path) {
+    // Regular files only (a FIFO would block the read for ever): docs/robustness.md, "Input paths".
+    try {
+        require_regular_file(path, "a cost model file", "the cost model");
+    } catch (const InputError& e) {
+        throw InputError(fmt::format("--cost-model {}", e.what()));
+    }
     std::ifstream in(path);
     if (!in) throw InputError(fmt::format("--cost-model {}: cannot open the file", path));
     nlohmann::json j;

@@ -482,12 +482,36 @@ std::optional<std::string> read_file(const std::filesystem::path& path) {
     return read_scene_file(path, "a scene file");
 }
 
+// A material library must lie inside the OBJ's folder (docs/robustness.md, "Input paths": no file
+// outside the model is read): an absolute path, or one that leaves the folder ('..', or a symlink
+// pointing out; compared after weakly_canonical), is refused naming the OBJ and the library.
+std::filesystem::path inside_model_folder(const std::filesystem::path& dir, const std::string& name,
+                                          const std::string& source) {
+    namespace fs = std::filesystem;
+    const fs::path rel(name);
+    if (rel.is_absolute())
+        throw InputError(fmt::format("{}: mtllib '{}': an absolute path; only material libraries inside the model's "
+                                     "folder are read",
+                                     source, name));
+    std::error_code ec;
+    const fs::path base = fs::weakly_canonical(dir.empty() ? fs::path(".") : dir, ec);
+    const fs::path full = ec ? fs::path() : fs::weakly_canonical(base / rel, ec);
+    const auto [b, f] = std::mismatch(base.begin(), base.end(), full.begin(), full.end());
+    if (ec || b != base.end() || f == full.end())
+        throw InputError(fmt::format("{}: mtllib '{}' resolves to {}, outside the model's folder {} (only files "
+                                     "inside it are read)",
+                                     source, name, full.string(), base.string()));
+    return dir / rel;
+}
+
 }  // namespace
 
 ObjModel load_obj(const std::filesystem::path& path, const ObjLoadOptions& options) {
     const std::string text = read_scene_file(path, "an OBJ file");
     const std::filesystem::path dir = path.parent_path();
-    const MtlResolver resolver = [&dir](const std::string& name) { return read_file(dir / name); };
+    const MtlResolver resolver = [&dir, &path](const std::string& name) {
+        return read_file(inside_model_folder(dir, name, path.string()));
+    };
     return parse_obj(text, path.string(), resolver, options);
 }
 
