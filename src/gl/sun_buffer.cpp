@@ -7,7 +7,7 @@
 // keeps what is nearest the sun. A pixel showing patch i is a parcel of the beam that reaches i
 // first, so i's sunlit projected area is (its pixels) × h², h the pixel's side, and
 //     sunlit_fraction_i = pixels_i h² / (A_i cos θ_i),   cos θ_i = n_i·s > 0
-// (0 where n_i·s ≤ 0: a patch facing away receives no direct beam). A pixel count can exceed
+// (0 where n_i·s ≤ 1e-9: a patch facing away, or edge-on, receives no direct beam). A pixel count can exceed
 // the patch's projected area by its edge pixels; the fraction is clamped to [0, 1] and the clamps
 // are counted (the overshoot guard the scanline codes of urban-climate models add afterwards).
 //
@@ -79,6 +79,10 @@ Vec3 sun_direction_from_angles(double azimuth_deg, double elevation_deg) {
 
 namespace {
 
+// n·s at most this: edge-on (a wall under a sun in its own plane, n·s ~ 1e-17 from rounding) or
+// facing away; fraction 0. Such a patch would receive at most 1e-9 of its area's beam.
+constexpr double kEdgeOn = 1e-9;
+
 struct Frame {
     Vec3 s, e1, e2;
 };
@@ -143,7 +147,7 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
     for (std::size_t i = 0; i < n; ++i) {
         const Patch& p = scene.patches[i];
         r.cosine[i] = glm::dot(p.normal, r.sun);
-        if (!(r.cosine[i] > 0.0)) continue;
+        if (!(r.cosine[i] > kEdgeOn)) continue;
         ++r.lit_patches;
         projected_area[i] = p.area * r.cosine[i];
         for (std::uint32_t k = 0; k < p.count; ++k) {
@@ -286,7 +290,7 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
     const double pixel_area = h * h;
     for (std::size_t i = 0; i < n; ++i) {
         r.pixels[i] = counts[i + 1];
-        if (!(r.cosine[i] > 0.0)) continue;
+        if (!(r.cosine[i] > kEdgeOn)) continue;
         double share = projected_area[i] > 0.0 ? static_cast<double>(r.pixels[i]) * pixel_area / projected_area[i] : 0.0;
         if (share > 1.0) {
             ++r.clamped;

@@ -29,13 +29,13 @@ struct SunOptions {
 struct SunResult {
     Vec3 sun{0.0};                           // the unit direction towards the sun
     std::vector<double> fraction;            // per patch of the scene (not its obstructions): in [0, 1]
-    std::vector<double> cosine;              // n·s (≤ 0: facing away, fraction 0)
+    std::vector<double> cosine;              // n·s (≤ 1e-9: facing away or edge-on, fraction 0)
     std::vector<std::uint64_t> pixels;       // pixels showing the patch
     double pixel_size = 0.0;                 // scene units (square pixels)
     double wanted_pixel_size = 0.0;          // what the tolerance asked for (before the pixel budget)
     std::uint64_t pixels_u = 0, pixels_v = 0;  // the grid over the projected bounding box
     int tile_size = 0, tiles_u = 0, tiles_v = 0;
-    std::size_t lit_patches = 0;             // n·s > 0
+    std::size_t lit_patches = 0;             // n·s > 1e-9
     std::size_t clamped = 0;                 // lit patches whose measured share exceeded 1 (set to 1)
     double max_overshoot = 0.0;              // the largest share − 1 before clamping
     double error_bound = 0.0;                // max over lit patches of perimeter × pixel / projected area
