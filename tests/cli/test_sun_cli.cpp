@@ -113,6 +113,35 @@ TEST(SunCli, DirectionPerPatchAndReport) {
     EXPECT_NEAR(j["sun_direction"][1].get<double>(), -2.0 / 3, 1e-15);
 }
 
+// A View3D obstruction-only surface (O) shades but has no line of its own: the ground [−2,2]² under
+// a unit awning at z = 1, drawn facing down (its back faces the sun: back faces block). Its
+// shadow is the unit square moved by −(s_x, s_y)/s_z, wholly on the ground for this sun: the
+// ground's fraction is 1 − 1/16 exactly (tolerance as above).
+TEST(SunCli, ObstructionOnlySurfacesShadeButAreNotListed) {
+    TempDir dir;
+    write_file(dir / "awning.vs3", R"(T ground under an obstruction-only awning
+C encl=0 emit=0
+F 3
+V 1 -2 -2 0
+V 2 2 -2 0
+V 3 2 2 0
+V 4 -2 2 0
+V 5 0 0 1
+V 6 0 1 1
+V 7 1 1 1
+V 8 1 0 1
+S 1 1 2 3 4 0 0 0.9 ground
+O 2 5 6 7 8 0 0 0.9 awning
+End of data
+)");
+    const RunResult r =
+        run_ffcube("sun " + (dir / "awning.vs3") + " --no-subdivide -q --sun 200,45 --by object -o " + (dir / "o.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto got = last_column_by_first(read_text(dir / "o.csv"));
+    ASSERT_EQ(got.size(), 1u) << read_text(dir / "o.csv");
+    EXPECT_NEAR(got.at("ground"), 1.0 - 1.0 / 16.0, 1e-3);
+}
+
 // The beam through the city's axis-aligned bounding box (extents a, b, c) has the cross-section
 // |s_x| b c + |s_y| a c + |s_z| a b: no set of facets inside the box can intercept more of it.
 TEST(SunCli, CityFractionsStayInRangeAndCreateNoEnergy) {
