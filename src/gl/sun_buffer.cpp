@@ -7,22 +7,24 @@
 // keeps what is nearest the sun. A pixel showing patch i is a parcel of the beam that reaches i
 // first, so i's sunlit projected area is (its pixels) × h², h the pixel's side, and
 //     sunlit_fraction_i = pixels_i h² / (A_i cos θ_i),   cos θ_i = n_i·s > 0
-// (0 where n_i·s ≤ 1e-9: a patch facing away, or edge-on, receives no direct beam). A pixel count can exceed
-// the patch's projected area by its edge pixels; the fraction is clamped to [0, 1] and the clamps
-// are counted (the overshoot guard the scanline codes of urban-climate models add afterwards).
+// (0 where n_i·s ≤ 1e-9: a patch facing away, or edge-on, receives no direct beam). A pixel
+// count can exceed the patch's projected area by its edge pixels; the fraction is clamped to
+// [0, 1] and the clamps are counted (the overshoot guard the scanline codes of urban-climate
+// models add afterwards).
 //
-// The pixel size. A pixel is counted when its centre lies in the projected patch; the count
-// differs from the area only in the pixels an edge crosses. An edge of length L crosses at most
-// about L/h + 1 pixels, and per crossed pixel the error is at most the pixel's area h², of which
-// on average half is counted wrongly one way or the other: for a projected polygon of perimeter
+// The pixel size. A pixel is counted when its centre lies in the projected patch, so the count
+// is the area of the patch with each edge moved to the nearest line between pixel centres. In
+// the worst case (an edge parallel to the pixel rows, halfway between two of them) that moves an
+// edge of length L by h/2 and changes the area by L h / 2; for a projected polygon of perimeter
 // P and area A_p,
-//     |pixels h² − A_p| ≲ P h / 2 · (worst case, an edge parallel to the grid),
-// so the relative error is at most about P h / A_p (keeping the factor 2 as margin). Asking for
-// the relative error τ on every lit patch gives h_i = τ A_p,i / P_i, i.e. K_i = A_p,i / h_i² =
-// P_i² / (τ² A_p,i) pixels in patch i (16/τ² for a square, more for slivers); the
-// pixel is the smallest h_i over the lit patches. That h is then capped by the pixel budget
-// (SunOptions::max_pixels over the projected bounding box) and the result reports the bound it
-// reached, max_i P_i h / A_p,i, and how many patches exceed τ.
+//     |pixels h² − A_p| ≲ P h / 2,
+// and the relative error is at most about P h / A_p (a factor 2 of margin for the corners and
+// the rasterizer's snapping of vertices to 1/256 pixel). Asking for the relative error τ on
+// every lit patch gives h_i = τ A_p,i / P_i, i.e. K_i = A_p,i / h_i² = P_i² / (τ² A_p,i) pixels
+// in patch i (16/τ² for a square, more for slivers); the pixel is the smallest h_i over the lit
+// patches. That h is then capped by the pixel budget (SunOptions::max_pixels over the projected
+// bounding box) and the result reports the bound it reached, max_i P_i h / A_p,i, and how many
+// lit patches exceed τ.
 //
 // The worst case is far from the typical case: the grid is turned in the plane ⟂ s by φ with
 // tan φ = (√5 − 1)/2 (the golden ratio's inverse, the worst-approximable slope), so that the
