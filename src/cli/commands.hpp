@@ -16,5 +16,7 @@ void add_calibrate_command(CLI::App& app, std::function<int()>& action);
 void add_view3d_command(CLI::App& app, std::function<int()>& action);
 // `ffcube radiate`: gray-body heat flux, temperatures and conductances (cmd_radiate.cpp; docs/radiate.md).
 void add_radiate_command(CLI::App& app, std::function<int()>& action);
+// `ffcube sun`: sunlit fractions for one sun direction (cmd_sun.cpp; docs/urban.md, "Sun and shade").
+void add_sun_command(CLI::App& app, std::function<int()>& action);
 
 }  // namespace ffcube::cli

@@ -29,6 +29,7 @@ int run(int argc, char** argv) {
     ffcube::cli::add_calibrate_command(app, action);
     ffcube::cli::add_view3d_command(app, action);
     ffcube::cli::add_radiate_command(app, action);
+    ffcube::cli::add_sun_command(app, action);
     for (CLI::App* sub : app.get_subcommands({})) ffcube::cli::add_door_options(*sub);
     try {
         // The expert door (cli/expert.hpp): --set NAME=VALUE and --help-all, rewritten for CLI11.

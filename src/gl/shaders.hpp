@@ -14,4 +14,6 @@ extern const std::string_view view_scene_vert;  // viewer/: the scene, IDs for p
 extern const std::string_view view_scene_frag;
 extern const std::string_view view_id_frag;
 extern const std::string_view view_line_frag;
+extern const std::string_view sun_vert;         // gl/sun_buffer.cpp: orthographic item buffer along the sun
+extern const std::string_view sun_frag;
 }  // namespace ffcube::shaders
