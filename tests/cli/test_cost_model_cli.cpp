@@ -92,7 +92,7 @@ TEST(CostModelCli, BadFilesAreRefusedByName) {
         const char* text;  // null: no file
         const char* says;
     };
-    for (const Case& k : {Case{"missing.json", nullptr, "cannot open"}, Case{"text.json", "pixel_ns = 5", "not JSON"},
+    for (const Case& k : {Case{"missing.json", nullptr, "cannot read the cost model: no such file"}, Case{"text.json", "pixel_ns = 5", "not JSON"},
                           Case{"array.json", "[5, 1]", "not a JSON object"},
                           Case{"nokey.json", R"({"pixel_ns": 5})", "\"cpu_scale\" is missing"},
                           Case{"word.json", R"({"pixel_ns": "fast", "cpu_scale": 1})", "\"pixel_ns\" is not a number"},
