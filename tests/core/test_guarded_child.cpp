@@ -81,7 +81,10 @@ TEST(GuardedChild, ALoopIsKilledAtTheDeadline) {
     const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     EXPECT_EQ(r.end, End::timed_out);
     EXPECT_GE(s, 0.3);
-    EXPECT_LT(s, 5.0);  // killed at the limit, not at the CPU-time backstop
+    // Killed at the wall-clock limit by the parent, not by the CPU-time backstop (RLIMIT_CPU, 2 s
+    // here), which would be reported as timed_out too but with signal SIGXCPU: told apart without
+    // a wall-clock bound in the test.
+    EXPECT_NE(r.signal, SIGXCPU);
     expect_no_children();
 }
 
