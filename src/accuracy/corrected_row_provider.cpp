@@ -182,6 +182,19 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
             return plan;
         };
     }
+    // A provider that refines rows to a tolerance (the ray caster) asks which entries the
+    // correction makes exact before it measures (their noise does not count), then says what its
+    // measuring error came to: the row's estimate is that plus the correction's own terms.
+    stages.exact_entries = [&](std::size_t k, std::uint32_t i) {
+        NearAnalysis& a = analyses_[k];
+        if (!a.done) {
+            std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
+            corrector_.analyse(i, a, *scratch);
+            pools_->give_back(std::move(scratch));
+        }
+        return std::span<const std::pair<std::uint32_t, double>>(a.exact);
+    };
+    stages.measured = [&](std::size_t k, std::uint32_t, double error) { analyses_[k].measured_error = error; };
     stages.finish = [&](std::size_t k, std::uint32_t i, SparseRow& row) {
         Stopwatch watch;
         NearAnalysis& a = analyses_[k];
@@ -201,6 +214,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         SparseRow& inner = scratch->buffers().inner;
         inner = row;  // the row as measured (the buffer's capacity is reused)
         corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled, cast_rays);
+        if (a.measured_error >= 0) estimate += a.measured_error;
         // The last check before the row leaves the layer: a corrected row out of range (an entry
         // below 0 or above 1, not finite, or a sum above 1 beyond its tolerance) is replaced by
         // the row as measured, which a hemicube or the rays make valid (ΔF sums of one or more

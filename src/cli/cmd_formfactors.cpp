@@ -67,6 +67,11 @@ std::span<const double> obstructed_shares(const Scene& scene, const RowSource& r
     return rows.obstructed();
 }
 
+// Each row's estimated error, for the patch table (none without the correction).
+std::span<const float> row_errors(const RowSource& rows) {
+    return rows.corrected() ? std::span<const float>(rows.corrected()->row_error_estimates()) : std::span<const float>{};
+}
+
 // Rows straight to the outputs as they come (.ffm, .mtx, Elmer's file: MatrixSink), statistics
 // from the stream and from passes over a written .ffm: memory independent of the number of entries
 // (docs/robustness.md). The computed rows go to an .ffm: the output itself, or a scratch file when
@@ -193,7 +198,8 @@ Figures streamed(const Options& o, const Scene& scene, RowSource& rows, const Ro
     f.reciprocity.object_max_rel = final_checks->object_max_rel();
     if (!o.groups.empty()) f.groups = final_checks->object_factors();
     report.set("time.statistics", watch.seconds());
-    write_surface_outputs(o.outputs, sums, *final_checks, scene, report, obstructed_shares(scene, rows, cp, ranks));
+    write_surface_outputs(o.outputs, sums, *final_checks, scene, report, obstructed_shares(scene, rows, cp, ranks),
+                          row_errors(rows));
     return f;
 }
 
@@ -223,7 +229,8 @@ Figures in_memory(const Options& o, const Scene& scene, RowSource& rows, CsrMatr
         write_mtx(o.output, F, &bar);
     }
     if (!o.groups.empty()) f.groups = object_form_factors(F, scene);
-    write_surface_outputs(o.outputs, F, scene, report, progress, obstructed_shares(scene, rows, cp, ranks));
+    write_surface_outputs(o.outputs, F, scene, report, progress, obstructed_shares(scene, rows, cp, ranks),
+                          row_errors(rows));
     report.set("time.writing", watch.seconds());
     return f;
 }

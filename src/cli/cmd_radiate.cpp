@@ -265,7 +265,7 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     CLI::App* sub = app.add_subcommand(
         "radiate", "gray-body radiative exchange: temperatures and emissivities in; heat flux, temperatures, conductances out");
     add_scene_options(*sub, opts->scene);
-    add_row_options(*sub, opts->rows);
+    add_row_options(*sub, opts->rows, RowTolerance::expert);
     sub->add_option("--surfaces", opts->surfaces, "CSV object,emissivity,temperature,heat_flux (one of the last two per line)")
         ->required();
     opts->sky_option = sub->add_option("--sky-temperature", opts->sky_temperature,

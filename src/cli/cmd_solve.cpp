@@ -287,7 +287,7 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand("solve", "solve the radiosity of a scene; write CSV, report, picture, mesh");
     add_scene_options(*sub, opts->scene);
-    add_row_options(*sub, opts->rows);
+    add_row_options(*sub, opts->rows, RowTolerance::expert);
     add_far_field_emitters_option(*sub, opts->rows);
     sub->add_option("--solver", opts->solver, "shoot (progressive refinement), jacobi, gauss-seidel or direct")
         ->check(CLI::IsMember({"shoot", "jacobi", "gauss-seidel", "direct"}))

@@ -119,7 +119,7 @@ void add_view_command(CLI::App& app, std::function<int()>& action) {
     auto opts = std::make_shared<Options>();
     CLI::App* sub = app.add_subcommand("view", "watch progressive radiosity converge in a window (docs/viewer.md)");
     add_scene_options(*sub, opts->scene);
-    add_row_options(*sub, opts->rows);
+    add_row_options(*sub, opts->rows, RowTolerance::expert);
     add_far_field_emitters_option(*sub, opts->rows);  // the same rows as solve's
     add_adaptive_options(*sub, opts->adaptive);
     auto& s = opts->solver;

@@ -43,6 +43,7 @@ int run(const Options& o) {
     // The rows of `ffcube formfactors IN --no-subdivide` (the command line's defaults: --method auto).
     RowOptions defaults;
     defaults.method_auto = true;
+    defaults.tolerance = kDefaultTolerance;  // the file's eps sets it (apply_view3d_controls)
     validate(defaults);
     RowOptions row_options = resolve_row_method(defaults, scene.drawn_scene());
     apply_view3d_controls(scene, row_options, report, /*drop_in=*/true);  // encl=1: closure; row/col refused

@@ -77,8 +77,17 @@ void prepare_adaptive(const AdaptiveFlags& o, SceneOptions& scene) {
         scene.patches = kAdaptiveStartPatches;  // the coarse start (docs/adaptive.md)
 }
 
-void add_row_options(CLI::App& app, RowOptions& o) {
+void add_row_options(CLI::App& app, RowOptions& o, RowTolerance tolerance) {
     o.method_auto = true;  // --method's default
+    o.tolerance = kDefaultTolerance;
+    CLI::Option* target = app.add_option_function<double>(
+           tolerance == RowTolerance::main ? "--tolerance" : "--row-tolerance",
+           [&o](double e) { o.tolerance = e, o.tolerance_given = true; },
+           "accuracy target E: the largest error a row may keep in any F entry and in its sum (the sky view factor); "
+           "ray-cast rows are refined until their estimate meets it, rows that do not are counted and named "
+           "(default 1e-3; a .vs3's eps sets it)")
+        ->default_str("1e-3");
+    if (tolerance == RowTolerance::expert) expert(target);
     app.add_option_function<std::string>(
            "--method", [&o](const std::string& word) { set_row_method(word, o); },
            "auto (rays on a mesh of 1000 pieces or more, or of 100 or more with at most 4 patches a piece, without "
@@ -91,8 +100,8 @@ void add_row_options(CLI::App& app, RowOptions& o) {
            "raycast: rays per patch (standard error of F about sqrt(F(1-F)/rays); default 4096 with --method raycast, "
            "max(N^2/2, min(2 N^2, 32768)) where --method auto casts rays)")
         ->default_str("4096"));
-    app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
-        ->default_val(256);
+    expert(app.add_option("--resolution", o.resolution, "hemicube top-face resolution in pixels (even, 8..8192)")
+        ->default_val(256));
     expert(add_word_option(app, "--backend", o.backend, parse_backend, {"auto", "egl", "osmesa"},
                     "OpenGL context: auto (EGL, then OSMesa), egl or osmesa", "auto"));
     app.add_option("--threads", o.threads, "worker threads, one GL context each (default: every core)");

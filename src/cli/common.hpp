@@ -37,7 +37,10 @@ struct SceneFlags {
 void add_scene_options(CLI::App& app, SceneFlags& o);
 // --method, --resolution, --backend, --threads, --no-rotate, --seed, --rays, --correct,
 // --near-k, --far-field.
-void add_row_options(CLI::App& app, RowOptions& o);
+// The rows' accuracy target: `--tolerance` (formfactors, view3d), or behind the expert door as
+// `--row-tolerance` where --tolerance is the solver's (solve, view, radiate).
+enum class RowTolerance { main, expert };
+void add_row_options(CLI::App& app, RowOptions& o, RowTolerance tolerance = RowTolerance::main);
 // --far-field-emitters on|off (solve and view; on by default): RowOptions::far_field_emitters.
 void add_far_field_emitters_option(CLI::App& app, RowOptions& o);
 // --enforce (formfactors only: it acts on the finished matrix).

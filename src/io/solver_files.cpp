@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <bit>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 
@@ -197,16 +198,23 @@ void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix
     writer.finish();
 }
 
-void write_patch_table(const std::filesystem::path& path, const Scene& scene) {
+void write_patch_table(const std::filesystem::path& path, const Scene& scene, std::span<const float> row_error) {
+    const bool errors = row_error.size() >= scene.size();
     write_file_atomically(path, [&](std::ostream& out) {
         fmt::memory_buffer buf;
-        buf.append(std::string_view("patch,object,area,cx,cy,cz,nx,ny,nz\n"));
+        buf.append(std::string_view(errors ? "patch,object,area,cx,cy,cz,nx,ny,nz,error_estimate\n"
+                                           : "patch,object,area,cx,cy,cz,nx,ny,nz\n"));
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             const Vec3 c = p.centroid + scene.origin;  // the user's coordinates (Scene::origin)
-            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", i,
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}", i,
                            csv_field(scene.objects[p.object]), p.area, c.x, c.y, c.z,
                            p.normal.x, p.normal.y, p.normal.z);
+            if (errors) {
+                if (std::isnan(row_error[i])) buf.append(std::string_view(","));
+                else fmt::format_to(std::back_inserter(buf), ",{:.3g}", row_error[i]);
+            }
+            buf.push_back('\n');
             flush_if_full(out, buf);
         }
         flush_if_full(out, buf, true);

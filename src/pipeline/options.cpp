@@ -158,6 +158,10 @@ void validate(const RowOptions& o) {
     if (o.method == RowMethod::Hemicube || o.method_auto) check_row_resolution(o.resolution);
     if ((o.method == RowMethod::Raycast || o.rays_given) && o.rays == 0)
         throw InputError("--rays 0: at least 1 ray per patch");
+    if ((o.tolerance != 0 || o.tolerance_given) && !(o.tolerance >= kMinTolerance && o.tolerance < 1.0))
+        throw InputError(fmt::format("--tolerance {}: must be a number from {} (what double precision can honour in a "
+                                     "row's sum) to below 1",
+                                     o.tolerance, kMinTolerance));
     if (!(o.near_k > 0) || !std::isfinite(o.near_k))
         throw InputError(fmt::format("--near-k {}: must be a finite number > 0", o.near_k));
     if (!(o.near_min_ff >= 0 && o.near_min_ff <= 1))
@@ -185,9 +189,12 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     return h;
 }
 
+bool rays_refined(const RowOptions& o) { return o.tolerance > 0 && !o.rays_given; }
+
 RaycastOptions raycast_options(const RowOptions& o) {
     RaycastOptions r;
     r.rays = o.rays;
+    r.tolerance = rays_refined(o) ? o.tolerance : 0.0;
     r.threads = o.threads;
     r.seed = o.seed;
     return r;
@@ -199,7 +206,8 @@ NearFieldOptions near_field_options(const RowOptions& o) {
         // per-row error estimate. No far field: its rows carry no pixel error to remove.
         NearFieldOptions nf;
         nf.k = o.near_k;
-        nf.rays = static_cast<double>(o.rays);
+        // Rows refined to a tolerance measure their own noise (RowStages::measured): none modelled.
+        nf.rays = rays_refined(o) ? 0.0 : static_cast<double>(o.rays);
         nf.min_near_value = o.near_min_ff;
         nf.obstruction_receivers = false;  // it credits either side of an obstruction (raycast_provider.cpp)
         nf.exact_visibility_occluders = o.exact_visibility_auto ? 0 : o.exact_visibility_occluders;

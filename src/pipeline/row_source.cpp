@@ -107,10 +107,13 @@ FfmMetadata row_metadata(const RowOptions& o) {
     meta.method = std::string(to_string(o.method));
     if (o.method == RowMethod::Raycast) {
         // sampler: the rays of an older build (padded strata) are other rows: not resumed into.
-        meta.settings = fmt::format("rays={} seed={} sampler=sobol", o.rays, o.seed);
+        meta.settings = rays_refined(o) ? fmt::format("tolerance={} seed={} sampler=sobol-replicates", o.tolerance, o.seed)
+                                        : fmt::format("rays={} seed={} sampler=sobol", o.rays, o.seed);
     } else {
         meta.resolution = static_cast<std::uint32_t>(o.resolution);
         meta.settings = fmt::format("rotate={} seed={}", o.rotate ? 1 : 0, o.seed);
+        // Recorded though hemicube rows are not refined to it yet: the report says which rows meet it.
+        if (o.tolerance > 0) meta.settings += fmt::format(" tolerance={}", o.tolerance);
     }
     // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
     if (o.correct == Correction::Near) {
@@ -145,7 +148,61 @@ namespace {
 
 // `rows`: how many rows the caller asks for (the radiating ones; the estimates cover the scene as
 // drawn).
-void report_correction(Report& r, const CorrectedRowProvider& corrected, std::size_t rows) {
+// Accuracy by target: the target, what the rows' estimates came to (median, 95th percentile,
+// largest), and the rows above it, counted and the first ones named (also on stderr: never
+// accepted silently).
+void report_tolerance(Report& r, const CorrectedRowProvider& corrected, const RowOptions& o, std::span<const float> est) {
+    if (!(o.tolerance > 0)) return;
+    std::vector<double> v;
+    std::vector<std::uint32_t> above;
+    for (std::size_t i = 0; i < est.size(); ++i) {
+        if (std::isnan(est[i])) continue;
+        v.push_back(est[i]);
+        if (!(est[i] <= o.tolerance)) above.push_back(static_cast<std::uint32_t>(i));
+    }
+    const bool refined = o.method == RowMethod::Raycast && rays_refined(o);
+    const char* why = refined                           ? ""
+                      : o.method == RowMethod::Raycast ? "--rays fixes the ray count"
+                                                        : "hemicube rows are not refined to a tolerance yet (--method raycast is)";
+    r.set("tolerance.target", o.tolerance);
+    r.set("tolerance.rows_refined", refined);
+    r.set("tolerance.not_refined_because", why);
+    r.set("tolerance.rows", v.size());
+    r.set("tolerance.rows_above", above.size());
+    const auto at = [&](double q) {
+        if (v.empty()) return 0.0;
+        std::vector<double> s = v;
+        const std::size_t k = std::min(s.size() - 1, static_cast<std::size_t>(std::ceil(q * static_cast<double>(s.size())) - 1));
+        std::nth_element(s.begin(), s.begin() + static_cast<std::ptrdiff_t>(k), s.end());
+        return s[k];
+    };
+    r.set("tolerance.estimate_median", at(0.5));
+    r.set("tolerance.estimate_p95", at(0.95));
+    r.set("tolerance.estimate_max", v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()));
+    std::vector<std::string> named;
+    for (std::size_t k = 0; k < above.size() && k < 20; ++k) named.push_back(corrected.patch_name(above[k]));
+    r.set_array("tolerance.rows_above_first", named);
+    if (above.empty()) {
+        info("tolerance {:g}: every row's estimated error is within it (median {:.2g}, 95th percentile {:.2g}, largest "
+             "{:.2g})",
+             o.tolerance, at(0.5), at(0.95), v.empty() ? 0.0 : *std::max_element(v.begin(), v.end()));
+        return;
+    }
+    const std::string line =
+        fmt::format("tolerance {:g}: {} of {} rows have an estimated error above it ({}; median {:.2g}, 95th percentile "
+                    "{:.2g}, largest {:.2g}): {}{}",
+                    o.tolerance, above.size(), v.size(), refined ? "their budget of rays ran out" : why, at(0.5), at(0.95),
+                    *std::max_element(v.begin(), v.end()), named.front(),
+                    above.size() > 1 ? fmt::format(" and {} more (the report lists the first 20)", above.size() - 1) : "");
+    // Rows that tried and missed are a warning; rows made without trying (hemicube rows, a fixed
+    // ray count) are said plainly, as the run's choice.
+    if (refined)
+        log_warning(line);
+    else
+        info("{}", line);
+}
+
+void report_correction(Report& r, const CorrectedRowProvider& corrected, std::size_t rows, const RowOptions& options) {
     const NearFieldStats& c = corrected.stats();
     r.set("corrections.kind", "near");
     r.set("corrections.rows", c.rows);
@@ -206,6 +263,7 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("row_error_estimate.mean", counted ? sum / static_cast<double>(counted) : 0.0);
     r.set("row_error_estimate.worst_row", worst);
     r.set_array("row_error_estimate.rows", values);
+    report_tolerance(r, corrected, options, est);
     // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
     // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
     // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs
@@ -286,7 +344,8 @@ void report_row_source(Report& r, const RowSource& rows) {
             r.set("cost_model.pixel_ns", m.pixel_ns);
             r.set("cost_model.cpu_scale", m.cpu_scale);
         }
-        report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size());
+        report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size(),
+                          rows.options());
         const NearFieldStats& s = c->stats();
         if (c->corrector().exact_visibility_mode() == "auto" && (s.exact_visibility > 0 || s.exact_visibility_over_budget > 0))
             info("exact visibility (auto; off: --exact-visibility off): {} near pairs exact past their occluders in {} rows "
@@ -307,7 +366,15 @@ void report_row_source(Report& r, const RowSource& rows) {
                  a.fallback_calls, a.calls, a.fallbacks);
     }
     if (const RaycastRowProvider* rc = rows.raycast()) {
-        r.set("rays_per_patch", rc->rays());
+        if (rc->tolerance() > 0) {  // refined to the tolerance: rays per row vary
+            const RayBudget b = tolerance_rays(rc->tolerance());
+            r.set("rays_per_patch_least", b.least);
+            r.set("rays_per_patch_most", b.most);
+            r.set("rays_per_patch_mean", rc->refined_rows() ? static_cast<double>(rc->rays_traced()) / static_cast<double>(rc->refined_rows()) : 0.0);
+            r.set("rows_at_ray_budget", rc->rows_at_budget());
+        } else {
+            r.set("rays_per_patch", rc->rays());
+        }
         r.set("rays_traced", rc->rays_traced());
         r.set("threads", rc->threads());
     }

@@ -43,6 +43,17 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report,
         if (!(drop_in && max_d)) ignored.push_back(x);  // `ffcube view3d` applies maxD
     }
     report.set_array("view3d.ignored_controls", ignored);
+    // eps: View3D's convergence criterion becomes the accuracy target, unless the command line
+    // gave one (docs/accuracy.md, "Accuracy by target": the mapping).
+    if (v.eps > 0.0) {
+        report.set("view3d.eps", v.eps);
+        if (!rows.tolerance_given) {
+            rows.tolerance = v.eps;
+            info("{}:{}: eps={}: the accuracy target (--tolerance {})", scene.source, v.eps_line, v.eps, v.eps);
+        } else if (rows.tolerance != v.eps) {
+            info("{}:{}: eps={} is overridden by --tolerance {}", scene.source, v.eps_line, v.eps, rows.tolerance);
+        }
+    }
     if (drop_in) {
         // View3D's row=n computes row n alone and writes its N factors one a line (%.5f), with
         // col=m F(n→m) only to its log: a debugging run, not the matrix a pipeline reads.
@@ -133,8 +144,9 @@ View3dTable view3d_table(std::vector<std::vector<double>> object_factors, const 
 namespace {
 
 // The sky statistics (always) and the files that need only the sky view factors and the scene.
+// row_error: each row's estimated error (NaN: not computed here), the patch table's last column.
 void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf, const Scene& scene, Report& report,
-                         std::span<const double> obstructed) {
+                         std::span<const double> obstructed, std::span<const float> row_error) {
     if (!obstructed.empty()) {
         FFCUBE_CHECK(obstructed.size() == svf.size());
         for (std::size_t i = 0; i < svf.size(); ++i) svf[i] = std::max(0.0, svf[i] - obstructed[i]);
@@ -150,7 +162,7 @@ void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf,
         else
             write_object_sky_csv(o.sky, scene.objects, object_areas(scene), object_means(svf, scene));
     }
-    if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene);
+    if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene, row_error);
 }
 
 const char* view3d_format_name(int out) { return out == 2 ? "sparse" : out == 1 ? "binary" : "text"; }
@@ -239,8 +251,8 @@ namespace {
 }  // namespace
 
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress, std::span<const double> obstructed) {
-    write_sky_and_table(o, sky_view_factors(F), scene, report, obstructed);
+                           bool progress, std::span<const double> obstructed, std::span<const float> row_error) {
+    write_sky_and_table(o, sky_view_factors(F), scene, report, obstructed, row_error);
     if (!o.view3d.empty()) write_view3d_file(o, object_form_factors(F, scene), scene, report);
     if (!o.elmer.empty()) {
         Progress bar(fmt::format("writing {} (rows)", o.elmer), F.size(), progress);
@@ -255,14 +267,14 @@ std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::
 
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
                            const RowStreamChecks& checks, const Scene& scene, Report& report,
-                           std::span<const double> obstructed) {
-    write_sky_outputs(o, row_sums, scene, report, obstructed);
+                           std::span<const double> obstructed, std::span<const float> row_error) {
+    write_sky_outputs(o, row_sums, scene, report, obstructed, row_error);
     if (!o.view3d.empty()) write_view3d_file(o, checks.object_factors(), scene, report);
 }
 
 void write_sky_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene, Report& report,
-                       std::span<const double> obstructed) {
-    write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed);
+                       std::span<const double> obstructed, std::span<const float> row_error) {
+    write_sky_and_table(o, sky_view_factors(row_sums), scene, report, obstructed, row_error);
 }
 
 }  // namespace ffcube

@@ -146,6 +146,13 @@ std::string Kwargs::scene_option_given() const {
 
 void Kwargs::read_row_options(RowOptions& o, bool enforce) {
     o.method_auto = true;  // method="auto", the command line's default, unless named
+    // The rows' accuracy target: tolerance= where the function makes a matrix (form_factors), as
+    // --tolerance; row_tolerance= where tolerance= is the solver's (solve), as --row-tolerance.
+    o.tolerance = kDefaultTolerance;
+    if (py::object v = take(enforce ? "tolerance" : "row_tolerance"); !v.is_none()) {
+        o.tolerance = number(enforce ? "tolerance" : "row_tolerance", v);
+        o.tolerance_given = true;
+    }
     if (py::object v = take("method"); !v.is_none()) set_row_method(word("method", v), o);
     if (py::object v = take("resolution"); !v.is_none())
         o.resolution = static_cast<int>(integer("resolution", v, INT_MIN, INT_MAX));  // check_row_resolution says the rule

@@ -280,9 +280,17 @@ struct RaycastRowProvider::Impl {
     std::vector<Vec3> normal;                 // per patch, packed: every hit reads one
     std::vector<std::uint32_t> twin;          // per patch: twin_patches (kNoPatch: none)
     mutable std::atomic<std::uint64_t> traced{0};
+    // Rows refined to the tolerance: how many, and how many stopped at the budget above it.
+    mutable std::atomic<std::uint64_t> refined_rows{0}, rows_at_budget{0};
+    void note(const RowFigures& f) const {
+        refined_rows.fetch_add(1, std::memory_order_relaxed);
+        if (!(f.noise <= opt.tolerance)) rows_at_budget.fetch_add(1, std::memory_order_relaxed);
+    }
 
     Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
         if (opt.rays == 0) throw InputError("raycast: the number of rays per row must be at least 1");
+        if (!(opt.tolerance >= 0) || !std::isfinite(opt.tolerance))
+            throw InputError(fmt::format("raycast: tolerance {} must be a finite number >= 0", opt.tolerance));
         threads = opt.threads ? opt.threads : std::max(1u, std::thread::hardware_concurrency());
         if (scene.size() == 0) return;
         build_embree_mesh(scene, mesh, "raycast");
@@ -310,6 +318,87 @@ struct RaycastRowProvider::Impl {
         return std::abs(glm::dot(b.centroid - a.centroid, a.normal)) <= 1e-9 * std::max(a.size, b.size);
     }
 
+    // Accuracy by target (RaycastOptions::tolerance): the row as the mean of kReplicates
+    // independently scrambled copies of the sequence (randomized quasi-Monte Carlo), whose spread
+    // is the row's measured error. Each copy's first m points are a net for every power of two m,
+    // so the copies double together, from tolerance_rays' least count, until the estimate
+    // t · σ of the mean, for the largest entry and for the row's sum (entries `exact` will replace
+    // left out of both), is at most the tolerance, or the budget is spent. Student's t for
+    // kReplicates − 1 degrees of freedom makes it a 95% two-sided bound when the copies' errors
+    // are about normal (docs/accuracy.md, "Accuracy by target"). `cast` is row()'s cast_points,
+    // `wsum` the weight it adds to.
+    template <class Cast>
+    void replicated_row(Rng& rng, SparseRow& out, RowScratch& sc, double& wsum, Cast& cast,
+                        std::span<const std::pair<std::uint32_t, double>> exact, RowFigures* figures) const {
+        constexpr std::size_t K = kReplicates;
+        std::uint32_t seeds[K][4], states[K][4] = {};
+        for (auto& sd : seeds)
+            for (std::uint32_t& w : sd) w = static_cast<std::uint32_t>(rng.next() >> 32);
+        double weight[K] = {};
+        if (sc.slot.size() != scene.size()) sc.slot.assign(scene.size(), kNoSlot);
+        sc.cols.clear();
+        sc.rep.clear();
+        const auto [least, most] = tolerance_rays(opt.tolerance);
+        std::uint64_t done = 0, target = least / K;  // points per copy
+        double estimate = INFINITY;
+        for (;;) {
+            for (std::size_t k = 0; k < K; ++k) {
+                wsum = 0.0;
+                cast(done, target, states[k], seeds[k]);
+                weight[k] += wsum;
+                for (const std::uint32_t j : sc.touched) {
+                    if (sc.slot[j] == kNoSlot) {
+                        sc.slot[j] = static_cast<std::uint32_t>(sc.cols.size());
+                        sc.cols.push_back(j);
+                        sc.rep.resize(sc.rep.size() + K, 0.0);
+                    }
+                    sc.rep[sc.slot[j] * K + k] += sc.acc[j];
+                    sc.acc[j] = 0.0;
+                }
+                sc.touched.clear();
+            }
+            done = target;
+            // The spread of the copies: per entry, and of their sums over the entries kept.
+            double sums[K] = {}, worst = 0.0;
+            for (std::size_t c = 0; c < sc.cols.size(); ++c) {
+                const std::uint32_t j = sc.cols[c];
+                const auto at = std::lower_bound(exact.begin(), exact.end(), j,
+                                                 [](const auto& e, std::uint32_t x) { return e.first < x; });
+                if (at != exact.end() && at->first == j) continue;
+                double v[K], mean = 0.0;
+                for (std::size_t k = 0; k < K; ++k) mean += v[k] = sc.rep[c * K + k] / weight[k], sums[k] += v[k];
+                mean /= K;
+                double ss = 0.0;
+                for (std::size_t k = 0; k < K; ++k) ss += (v[k] - mean) * (v[k] - mean);
+                worst = std::max(worst, ss);
+            }
+            double mean = 0.0, ss = 0.0;
+            for (std::size_t k = 0; k < K; ++k) mean += sums[k];
+            mean /= K;
+            for (std::size_t k = 0; k < K; ++k) ss += (sums[k] - mean) * (sums[k] - mean);
+            // σ of a mean of K: √(ss / (K − 1) / K).
+            // Below it, what no ray has seen yet (the rule of three: tolerance_rays).
+            estimate = std::max(kReplicateT * std::sqrt(std::max(worst, ss) / static_cast<double>((K - 1) * K)),
+                                3.0 / static_cast<double>(done * K));
+            if (estimate <= opt.tolerance || 2 * done * K > most) break;
+            target = 2 * done;
+        }
+        // The row: the copies' mean, columns in order.
+        std::sort(sc.cols.begin(), sc.cols.end());
+        for (const std::uint32_t j : sc.cols) {
+            const std::uint32_t c = sc.slot[j];
+            double v = 0.0;
+            for (std::size_t k = 0; k < K; ++k) v += sc.rep[c * K + k] / weight[k];
+            out.col.push_back(j);
+            out.val.push_back(v / K);
+        }
+        for (const std::uint32_t j : sc.cols) sc.slot[j] = kNoSlot;
+        if (figures) {
+            figures->noise = estimate;
+            figures->rays = done * K;
+        }
+    }
+
     // Row i into out; the scratch's acc (size n, all zero) and touched (empty) are left as they
     // were found.
     //
@@ -320,7 +409,8 @@ struct RaycastRowProvider::Impl {
     // 2^k × 2^k grid and spread the origins as evenly, jointly with the directions. They are made
     // kChunk at a time and cast in the tile order of their direction cells (tile_key), traced 16
     // at a time (rtcIntersect16), their hits counted in that order.
-    void row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
+    void row(std::uint32_t i, SparseRow& out, RowScratch& scratch, std::span<const std::pair<std::uint32_t, double>> exact = {},
+             RowFigures* figures = nullptr) const {
         std::vector<double>& acc = scratch.acc;
         std::vector<std::uint32_t>& touched = scratch.touched;
         std::vector<std::uint32_t>& points = scratch.points;
@@ -389,42 +479,53 @@ struct RaycastRowProvider::Impl {
             }
             pk.lanes = 0;
         };
-        // The row's Sobol' points in chunks of at most kChunk (each an aligned block of the
-        // sequence, so a net of its own), each chunk cast in its direction cells' tile order.
+        // Points [first, first + count) of the sequence scrambled by `seed` (its Gray-code walk at
+        // `state`) in chunks of at most kChunk (each an aligned block of the sequence, so a net of
+        // its own), each chunk cast in its direction cells' tile order.
+        const auto cast_points = [&](std::uint64_t first, std::uint64_t end, std::uint32_t state[4],
+                                     const std::uint32_t seed[4]) {
+            while (first < end) {
+                const auto count = static_cast<std::uint32_t>(std::min<std::uint64_t>(kChunk, end - first));
+                points.resize(4 * static_cast<std::size_t>(count));
+                sobol_walk(first, count, state, points.data());
+                scramble(points.data(), count, seed);
+                // Counting sort by the direction cell of a 2^b × 2^b grid, 16 · 4^b ≤ count: about
+                // one packet a cell (exactly 16 points each for a count of 4^k: the directions are a
+                // (0,2)-net), the cells in tile order.
+                int b = 0;
+                while (b < 12 && (std::uint64_t{64} << (2 * b)) <= count) ++b;
+                const std::uint32_t cells = 1u << (2 * b);
+                start.assign(cells + 1, 0);
+                order.resize(count);  // each point's cell, then the points sorted, one dimension after another
+                for (std::uint32_t k = 0; k < count; ++k) {
+                    const std::uint32_t* q = &points[4 * static_cast<std::size_t>(k)];
+                    order[k] = tile_key(top_bits(q[0], b), top_bits(q[1], b), b);
+                    ++start[order[k] + 1];
+                }
+                for (std::uint32_t cell = 0; cell < cells; ++cell) start[cell + 1] += start[cell];
+                sorted.resize(4 * static_cast<std::size_t>(count));
+                for (std::uint32_t k = 0; k < count; ++k)
+                    std::copy_n(&points[4 * static_cast<std::size_t>(k)], 4,
+                                &sorted[4 * static_cast<std::size_t>(start[order[k]]++)]);
+                for (std::uint32_t at = 0; at < count; at += 16) {
+                    pk.lanes = static_cast<int>(std::min<std::uint32_t>(16, count - at));
+                    const std::uint32_t* q = &sorted[4 * static_cast<std::size_t>(at)];
+                    for (int l = 0; l < pk.lanes; ++l)
+                        for (int d = 0; d < 4; ++d) pk.word[d][l] = q[4 * l + d];
+                    trace();
+                }
+                trace();
+                first += count;
+            }
+        };
+        if (opt.tolerance > 0) {
+            replicated_row(rng, out, scratch, wsum, cast_points, exact, figures);
+            traced.fetch_add(traced_here, std::memory_order_relaxed);
+            return;
+        }
         std::uint32_t state[4] = {0, 0, 0, 0}, seed[4];
         for (std::uint32_t& sd : seed) sd = static_cast<std::uint32_t>(rng.next() >> 32);
-        for (std::uint64_t first = 0; first < opt.rays;) {
-            const auto count = static_cast<std::uint32_t>(std::min<std::uint64_t>(kChunk, opt.rays - first));
-            points.resize(4 * static_cast<std::size_t>(count));
-            sobol_walk(first, count, state, points.data());
-            scramble(points.data(), count, seed);
-            // Counting sort by the direction cell of a 2^b × 2^b grid, 16 · 4^b ≤ count: about one
-            // packet a cell (exactly 16 points each for a count of 4^k: the directions are a
-            // (0,2)-net), the cells in tile order.
-            int b = 0;
-            while (b < 12 && (std::uint64_t{64} << (2 * b)) <= count) ++b;
-            const std::uint32_t cells = 1u << (2 * b);
-            start.assign(cells + 1, 0);
-            order.resize(count);  // each point's cell, then the points sorted, one dimension after another
-            for (std::uint32_t k = 0; k < count; ++k) {
-                const std::uint32_t* q = &points[4 * static_cast<std::size_t>(k)];
-                order[k] = tile_key(top_bits(q[0], b), top_bits(q[1], b), b);
-                ++start[order[k] + 1];
-            }
-            for (std::uint32_t cell = 0; cell < cells; ++cell) start[cell + 1] += start[cell];
-            sorted.resize(4 * static_cast<std::size_t>(count));
-            for (std::uint32_t k = 0; k < count; ++k)
-                std::copy_n(&points[4 * static_cast<std::size_t>(k)], 4, &sorted[4 * static_cast<std::size_t>(start[order[k]]++)]);
-            for (std::uint32_t at = 0; at < count; at += 16) {
-                pk.lanes = static_cast<int>(std::min<std::uint32_t>(16, count - at));
-                const std::uint32_t* q = &sorted[4 * static_cast<std::size_t>(at)];
-                for (int l = 0; l < pk.lanes; ++l)
-                    for (int d = 0; d < 4; ++d) pk.word[d][l] = q[4 * l + d];
-                trace();
-            }
-            trace();
-            first += count;
-        }
+        cast_points(0, opt.rays, state, seed);
         traced.fetch_add(traced_here, std::memory_order_relaxed);
         std::sort(touched.begin(), touched.end());
         for (std::uint32_t j : touched) {
@@ -443,6 +544,21 @@ RaycastRowProvider::~RaycastRowProvider() = default;
 
 std::uint32_t RaycastRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene.size()); }
 std::uint64_t RaycastRowProvider::rays() const { return impl_->opt.rays; }
+double RaycastRowProvider::tolerance() const { return impl_->opt.tolerance; }
+std::uint64_t RaycastRowProvider::refined_rows() const { return impl_->refined_rows.load(); }
+std::uint64_t RaycastRowProvider::rows_at_budget() const { return impl_->rows_at_budget.load(); }
+
+RayBudget tolerance_rays(double tolerance) {
+    const auto pow2_at_least = [](double x) {
+        std::uint64_t p = 1;
+        while (p < (std::uint64_t{1} << 24) && static_cast<double>(p) < x) p <<= 1;
+        return p;
+    };
+    RayBudget b;
+    b.least = std::max<std::uint64_t>(4096, pow2_at_least(3.0 / tolerance));
+    b.most = std::max(b.least, std::min<std::uint64_t>(std::uint64_t{1} << 24, pow2_at_least(256.0 / tolerance)));
+    return b;
+}
 unsigned RaycastRowProvider::threads() const { return impl_->threads; }
 std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.load(); }
 
@@ -471,8 +587,16 @@ void RaycastRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows
     // Per worker: the row's accumulator (n doubles, all zero between rows) and its lists.
     std::vector<RowScratch> scratch(T);
     for (RowScratch& s : scratch) s.acc.assign(n, 0.0);
+    const bool refine = im.opt.tolerance > 0;
     const auto make = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
-        im.row(i, out, scratch[w]);
+        std::span<const std::pair<std::uint32_t, double>> exact;
+        if (refine && stages.exact_entries) exact = stages.exact_entries(k, i);
+        RowFigures figures;
+        im.row(i, out, scratch[w], exact, &figures);
+        if (refine) {
+            im.note(figures);
+            if (stages.measured) stages.measured(k, i, figures.noise);
+        }
         if (stages.finish) stages.finish(k, i, out);
     };
     if (T == 1) {

@@ -146,12 +146,22 @@ private:
                     fmt::format("{}={}: only `ffcube view3d` applies the cut-off distance; every pair is computed", key, value));
                 continue;
             }
+            if (lower == "eps") {
+                // The same rule as --tolerance (validate(RowOptions)): a target double precision
+                // can honour in a row's sum, below 1.
+                if (!(value >= kMinTolerance && value < 1.0))
+                    fail_at(source_, number_, fmt::format("control {}={} must be a number from {} to below 1 (the accuracy "
+                                                          "target: ffcube's --tolerance)",
+                                                          key, value, kMinTolerance));
+                model_.view3d.eps = value;
+                model_.view3d.eps_line = number_;
+                continue;
+            }
             static const std::map<std::string, std::string> kIgnored = {
-                {"eps", "ffcube's accuracy is set by --resolution and --correct"},
-                {"maxu", "ffcube's accuracy is set by --resolution and --correct"},
-                {"maxo", "ffcube's accuracy is set by --resolution and --correct"},
-                {"mino", "ffcube's accuracy is set by --resolution and --correct"},
-                {"maxv", "ffcube's accuracy is set by --resolution and --correct"},
+                {"maxu", "ffcube's accuracy is set by --tolerance (eps)"},
+                {"maxo", "ffcube's accuracy is set by --tolerance (eps)"},
+                {"mino", "ffcube's accuracy is set by --tolerance (eps)"},
+                {"maxv", "ffcube's accuracy is set by --tolerance (eps)"},
                 {"row", "ffcube computes every row (read one row from the output)"},
                 {"col", "ffcube computes every column (read one column from the output)"},
                 {"list", "ffcube's log is set by --quiet"},

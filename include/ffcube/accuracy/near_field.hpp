@@ -236,6 +236,9 @@ struct NearAnalysis {
     bool sampled_unproven = false;  // sampled for far pairs not proven unoccluded only
     double far_error = 0;  // Σ of the error bounds of its integrated values (far and separated near)
     double seconds = 0;                                   // spent making it
+    // The inner provider's own estimate of its measuring error on the row (a ray caster refining
+    // to a tolerance: RowProvider::RowStages::measured), −1 when it gave none.
+    double measured_error = -1;
     bool done = false;
 };
 
@@ -343,9 +346,10 @@ public:
         return n;
     }
 
-private:
-    // The range check's messages (src/accuracy/row_range.hpp): "patch I (object 'NAME')".
+    // "patch I (object 'NAME')": the range check's messages, the report's rows above the tolerance.
     std::string patch_name(std::uint32_t i) const;
+
+private:
     std::string out_of_range_message(std::uint32_t i, const SparseRow& row, bool analytic) const;
     void warn_out_of_range();
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <span>
 #include <memory>
 #include <span>
 #include <string>
@@ -87,7 +88,9 @@ void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix
 // One line per patch, header "patch,object,area,cx,cy,cz,nx,ny,nz": the row/column index i
 // (0-based, as in .ffm; Matrix Market's row i+1), its object's name, its area (scene units²), its
 // centroid and its unit normal (front side).
-void write_patch_table(const std::filesystem::path& path, const Scene& scene);
+// row_error: when given (one per patch), a last column error_estimate: the row's estimated error
+// (docs/accuracy.md, "Accuracy by target"), empty where the row was not computed in this run.
+void write_patch_table(const std::filesystem::path& path, const Scene& scene, std::span<const float> row_error = {});
 
 // Sky view factors per patch: header "patch,object,area,sky_view_factor".
 void write_patch_sky_csv(const std::filesystem::path& path, const Scene& scene, const std::vector<double>& svf);

@@ -71,11 +71,11 @@ View3dTable view3d_table(std::vector<std::vector<double>> object_factors, const 
 // `obstructed` (RowSource::obstructed(): empty, or per row the share obstruction-only surfaces
 // intercepted) is taken off the sky view factors.
 void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress, std::span<const double> obstructed = {});
+                           bool progress, std::span<const double> obstructed = {}, std::span<const float> row_error = {});
 // Only what needs each row's sum and the scene: the sky statistics, --sky and --patch-table (what
 // `solve --sky` writes; the overloads here call it too).
 void write_sky_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene, Report& report,
-                       std::span<const double> obstructed = {});
+                       std::span<const double> obstructed = {}, std::span<const float> row_error = {});
 // For a streamed matrix: Elmer's file is written from the rows as they come, by the sink this
 // gives (null when --elmer is not asked) and the caller feeds and finishes; the rest comes from
 // each row's sum and from `checks` (the streamed rows' RowStreamChecks: View3D's object factors),
@@ -83,6 +83,6 @@ void write_sky_outputs(const SurfaceOutputOptions& o, std::span<const double> ro
 std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::uint32_t n);
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
                            const RowStreamChecks& checks, const Scene& scene, Report& report,
-                           std::span<const double> obstructed = {});
+                           std::span<const double> obstructed = {}, std::span<const float> row_error = {});
 
 }  // namespace ffcube

@@ -31,6 +31,12 @@ struct ObjFace {
 
 // What a View3D file's control lines (C) and title (T) ask for, kept for the parts of ffcube that
 // honour them (docs/scene-format.md, "View3D control keys"). From other formats: present = false.
+// The smallest accuracy target (--tolerance, a .vs3's eps) ffcube accepts: a row's sum of about
+// 10^4 entries in double precision, and the analytic kernels' own error (about 1e-12 relative),
+// stay far below it; float storage of F (6e-8 relative) does not, for entries near 1, which the
+// .ffm's documentation says.
+constexpr double kMinTolerance = 1e-9;
+
 struct View3dControls {
     bool present = false;  // the scene came from a .vs3 file
     int encl = 0;          // 1: the surfaces form an enclosure: rows are made to conserve energy (--enforce closure)
@@ -46,6 +52,10 @@ struct View3dControls {
     // maxD (a pair of surfaces whose centroids lie farther apart gets no factor: honoured there).
     int row = 0, col = 0;
     double max_distance = 0.0;  // maxD; 0: none (View3D's default, infinity)
+    // eps: View3D's convergence criterion, ffcube's --tolerance when the command line gives none
+    // (0: not given; View3D's default is 1e-4, ffcube's too).
+    double eps = 0.0;
+    std::uint32_t eps_line = 0;
     std::uint32_t row_line = 0, col_line = 0, max_distance_line = 0;
     // Masking surfaces (M): each lies on its base facing it; the covered part of the base is cut
     // out of the base's faces and the mask is an obstruction-only object (it blocks what would
