@@ -123,6 +123,8 @@ void put_scene(Writer& w, const Scene& s) {
     w.put<std::int32_t>(s.view3d.emit);
     w.put<std::int32_t>(s.view3d.out);
     w.put(s.view3d.title);
+    w.put<double>(s.view3d.eps);  // the accuracy target every rank's rows must share
+    w.put<std::uint32_t>(s.view3d.eps_line);
     w.put_all(s.view3d.ignored, [&](const std::string& x) { w.put(x); });
     w.put_all(s.view3d.masks, [&](const View3dControls::Mask& m) {
         w.put(m.name);
@@ -182,6 +184,8 @@ Scene get_scene(Reader& r) {
     s.view3d.emit = r.get<std::int32_t>();
     s.view3d.out = r.get<std::int32_t>();
     s.view3d.title = r.get_string();
+    s.view3d.eps = r.get<double>();
+    s.view3d.eps_line = r.get<std::uint32_t>();
     s.view3d.ignored.resize(r.count(8, "ignored View3D controls"));
     for (std::string& x : s.view3d.ignored) x = r.get_string();
     s.view3d.masks.resize(r.count(32, "View3D masks"));

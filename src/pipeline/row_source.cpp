@@ -72,7 +72,13 @@ void rebind_row_source(RowSource& rows, const Scene& radiating) {
 std::vector<std::string> describe(const RowSource& rows) {
     std::vector<std::string> lines;
     if (const RaycastRowProvider* r = rows.raycast())
-        lines.push_back(fmt::format("raycast (Embree), {} thread(s), {} rays per patch{}", r->threads(), r->rays(),
+        lines.push_back(fmt::format("raycast (Embree), {} thread(s), {}{}", r->threads(),
+                                    r->tolerance() > 0
+                                        ? fmt::format("{} to {}", tolerance_rays(r->tolerance()).least,
+                                                      tolerance_rays(r->tolerance()).most) +
+                                              fmt::format(" rays per patch until each row is within --tolerance {:g}",
+                                                          r->tolerance())
+                                        : fmt::format("{} rays per patch", r->rays()),
                                     rows.options().auto_raycast
                                         ? fmt::format(" (--method {}; --method hemicube draws hemicubes)",
                                                       rows.options().method_choice)

@@ -194,11 +194,13 @@ TEST(FormfactorsCli, MethodAutoCastsRaysOnAMeshOfManyFacets) {
     TempDir dir;
     const std::string city = dir / "city.stl";
     ASSERT_EQ(test::gen_city(city, 1200, 2), 0);
-    const std::string base = "formfactors " + city + " --no-subdivide --resolution 32 --threads 2";
+    // A loose target keeps the rows cheap (4,096 to 32,768 rays each): what is tested is the choice.
+    const std::string base = "formfactors " + city + " --no-subdivide --resolution 32 --threads 2 --tolerance 1e-2";
     const auto a = run_ffcube(base + " -o " + (dir / "auto.ffm") + " --report " + (dir / "auto.json"));
     ASSERT_EQ(a.code, 0) << a.output;
-    EXPECT_NE(a.output.find("2048 rays per patch (--method auto"), std::string::npos) << a.output;
-    const auto named = run_ffcube(base + " --method raycast --rays 2048 -o " + (dir / "named.ffm"));
+    EXPECT_NE(a.output.find("rays per patch until each row is within --tolerance 0.01 (--method auto"), std::string::npos)
+        << a.output;
+    const auto named = run_ffcube(base + " --method raycast -o " + (dir / "named.ffm"));
     ASSERT_EQ(named.code, 0) << named.output;
     EXPECT_EQ(test::read_text(dir / "auto.ffm"), test::read_text(dir / "named.ffm"));
     const auto ra = nlohmann::json::parse(test::read_text(dir / "auto.json"));

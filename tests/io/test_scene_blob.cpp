@@ -24,7 +24,9 @@ Scene cornell() {
     s.view3d.emit = 1;
     s.view3d.out = 1;
     s.view3d.title = "a title";
-    s.view3d.ignored = {"eps=1e-6: ffcube's accuracy is --resolution and --correct"};
+    s.view3d.ignored = {"maxU=10: ffcube's accuracy is set by --tolerance (eps)"};
+    s.view3d.eps = 2e-4;  // the accuracy target: every rank's rows must be refined to the same
+    s.view3d.eps_line = 3;
     return s;
 }
 
@@ -71,6 +73,8 @@ TEST(SceneBlob, RoundTripIsExact) {
     EXPECT_EQ(b.view3d.encl, a.view3d.encl);
     EXPECT_EQ(b.view3d.emit, a.view3d.emit);
     EXPECT_EQ(b.view3d.out, a.view3d.out);
+    EXPECT_EQ(b.view3d.eps, a.view3d.eps);
+    EXPECT_EQ(b.view3d.eps_line, a.view3d.eps_line);
     EXPECT_EQ(b.view3d.title, a.view3d.title);
     EXPECT_EQ(b.view3d.ignored, a.view3d.ignored);
     EXPECT_EQ(serialize_scene(b), serialize_scene(a));
