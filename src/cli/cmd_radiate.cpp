@@ -32,7 +32,7 @@ constexpr const char* kSkyNode = "(sky)";
 struct Options {
     SceneFlags scene;
     RowOptions rows;
-    std::string surfaces, matrix, out, patch_out, conductances, default_surface, report;
+    std::string surfaces, bands, matrix, out, patch_out, conductances, default_surface, report;
     double sky_temperature = 0.0;
     CLI::Option* sky_option = nullptr;
     double conductance_threshold = 1e-6;
@@ -40,6 +40,8 @@ struct Options {
     std::uint64_t max_iterations = 5000;
     std::uint32_t restart = 60;
     double open_threshold = 1e-6;
+    double outer_tolerance = 1e-8;
+    std::uint32_t max_outer_iterations = 50;
 };
 
 std::string num(double v) { return fmt::format("{:.10g}", v); }
@@ -134,12 +136,22 @@ int run(const Options& o) {
     ro.max_iterations = o.max_iterations;
     ro.restart = o.restart;
     ro.open_threshold = o.open_threshold;
+    ro.outer_tolerance = o.outer_tolerance;
+    ro.max_outer_iterations = o.max_outer_iterations;
+    if (!(o.outer_tolerance > 0.0 && o.outer_tolerance < 1.0))
+        throw InputError(fmt::format("--outer-tolerance {}: must be in (0, 1)", o.outer_tolerance));
+    if (o.max_outer_iterations < 1) throw InputError("--max-outer-iterations: must be >= 1");
+    if (!o.bands.empty() && !o.conductances.empty())
+        throw InputError("--conductances with --bands: the conductances of non-gray surfaces depend on the temperatures; "
+                         "they are computed for gray surfaces only (leave out --bands)");
     validate(ro);
     validate(o.rows);
     const std::vector<NamedSurface> lines =
         parse_surfaces_csv(read_input_file(o.surfaces, "a CSV file", "the surfaces"), o.surfaces);
     std::optional<SurfaceSpec> fallback;
     if (!o.default_surface.empty()) fallback = parse_default_surface(o.default_surface);
+    std::vector<NamedBand> band_lines;
+    if (!o.bands.empty()) band_lines = parse_bands_csv(read_input_file(o.bands, "a CSV file", "the bands"), o.bands);
 
     Report report;
     report.set("command", "radiate");
@@ -152,6 +164,13 @@ int run(const Options& o) {
                                      scene.source));
     const std::vector<SurfaceSpec> object_spec = surfaces_for_objects(scene.objects, lines, o.surfaces, fallback);
     report.set("surfaces", o.surfaces);
+    std::optional<BandModel> bands;
+    if (!o.bands.empty()) {
+        std::vector<double> gray(object_spec.size());
+        for (std::size_t k = 0; k < gray.size(); ++k) gray[k] = object_spec[k].emissivity;
+        bands = bands_for_objects(scene.objects, band_lines, o.bands, gray);
+        report.set("bands", o.bands);
+    }
     report.set("patches", scene.size());
     report.set("objects", scene.objects.size());
 
@@ -197,7 +216,7 @@ int run(const Options& o) {
     watch.restart();
     RadiateResult r;
     try {
-        r = solve_radiation(F, area, spec, ro);
+        r = bands ? solve_radiation_bands(F, area, spec, object, *bands, ro) : solve_radiation(F, area, spec, ro);
     } catch (const NotConvergedError& e) {
         refuse(e);
         throw;
@@ -207,6 +226,11 @@ int run(const Options& o) {
     report.set("solver.iterations", r.iterations);
     report.set("solver.residual", r.residual);
     report.set("solver.min_emissivity", r.min_emissivity);
+    report.set("solver.bands", r.bands);
+    if (bands) {
+        report.set("solver.outer_iterations", r.outer_iterations);
+        report.set("solver.outer_residual", r.outer_residual);
+    }
     double sky_area = 0.0, total_area = 0.0, sky_max = 0.0;
     for (std::size_t i = 0; i < scene.size(); ++i) {
         sky_area += area[i] * r.sky_view[i];
@@ -271,6 +295,8 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     opts->sky_option = sub->add_option("--sky-temperature", opts->sky_temperature,
                                        "K: what the openings of an open scene see (required when the scene is open)");
     sub->add_option("--default-surface", opts->default_surface, "EMISSIVITY,TEMPERATURE for objects the CSV does not list");
+    sub->add_option("--bands", opts->bands,
+                    "CSV object,lambda_min_um,lambda_max_um,emissivity: non-gray surfaces by spectral bands");
     sub->add_option("--matrix", opts->matrix, "take F from F.ffm (from `ffcube formfactors`) instead of computing it");
     sub->add_option("-o,--out", opts->out, "write per object: object,area,emissivity,temperature,heat_flux,power");
     sub->add_option("--patch-out", opts->patch_out,
@@ -287,6 +313,12 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     expert(sub->add_option("--open-threshold", opts->open_threshold,
                            "a patch whose sky view factor exceeds this makes the scene open")
                ->default_val(1e-6));
+    expert(sub->add_option("--outer-tolerance", opts->outer_tolerance,
+                           "--bands: heat-flux residual, relative to the largest emissive power, of the temperature iteration")
+               ->default_val(1e-8));
+    expert(sub->add_option("--max-outer-iterations", opts->max_outer_iterations,
+                           "--bands: most outer iterations for the temperatures of heat-flux surfaces")
+               ->default_val(50));
     sub->callback([opts, &action] {
         action = [opts] {
             if (opts->scene.quiet) set_log_level(LogLevel::Quiet);
