@@ -303,24 +303,48 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
                 at_zero ? fmt::format("; {} patches are held at 0 K: their heat flux may need a temperature below 0 K",
                                       at_zero)
                         : std::string()));
-        // The gray linearised response: ε̄_i = Σ_k ε_ik ∂E_bk/∂(σT⁴) at T_i (Σ_k ∂E_bk/∂(σT⁴) = 1),
+        // The gray linearised response: a heat-flux patch's σT⁴ changes by Δe, which it emits in band k
+        // as f_ik Δe (f_ik = ∂E_bk/∂(σT⁴) at T_i, Σ_k f_ik = 1) with emissivity ε_ik: in one gray
+        // system, ε̄_i = Σ_k ε_ik f_ik. What the other patches reflect of it is in the spectrum of that
+        // change, w_k ∝ Σ_{heat-flux i} A_i ε_ik f_ik: they reflect 1 − Σ_k ε_jk w_k. Then
         // Δq = ε̄(Δe − ΔG) on heat-flux patches (Δe = 0 on the others): ΔJ − c ∘ F ΔJ = (0 | r).
+        std::vector<double> w(K, 0.0), f(K);
+        double w_sum = 0.0;
         for (std::uint32_t i = 0; i < n; ++i) {
             double eps_bar = 0.0, lo = 1.0, hi = 0.0;
             for (std::uint32_t k = 0; k < K; ++k) {
                 const double eps = bands.emissivity[group[i] * K + k];
                 const double df = fraction_at(bands.edges[k + 1], temp[i]) - fraction_at(bands.edges[k], temp[i]);
                 const double ds = slope_at(bands.edges[k + 1], temp[i]) - slope_at(bands.edges[k], temp[i]);
-                eps_bar += eps * (df + 0.25 * ds);
+                f[k] = df + 0.25 * ds;
+                eps_bar += eps * f[k];
                 lo = std::min(lo, eps);
                 hi = std::max(hi, eps);
             }
-            eps_bar = std::clamp(eps_bar, lo, hi);
+            g[i] = std::clamp(eps_bar, lo, hi);  // kept for the update below
+            if (spec[i].condition == SurfaceCondition::HeatFlux)
+                for (std::uint32_t k = 0; k < K; ++k) {
+                    const double x = area[i] * bands.emissivity[group[i] * K + k] * f[k];
+                    w[k] += x;
+                    w_sum += x;
+                }
+        }
+        for (std::uint32_t i = 0; i < n; ++i) {
             const bool flux = spec[i].condition == SurfaceCondition::HeatFlux;
-            c[i] = flux ? 1.0 : 1.0 - eps_bar;
+            double reflect = 1.0 - g[i];
+            if (!flux && w_sum > 0.0) {
+                double eps_w = 0.0, lo = 1.0, hi = 0.0;
+                for (std::uint32_t k = 0; k < K; ++k) {
+                    const double eps = bands.emissivity[group[i] * K + k];
+                    eps_w += eps * w[k] / w_sum;
+                    lo = std::min(lo, eps);
+                    hi = std::max(hi, eps);
+                }
+                reflect = 1.0 - std::clamp(eps_w, lo, hi);
+            }
+            c[i] = flux ? 1.0 : reflect;
             b[i] = residual[i];
             dj[i] = b[i];
-            g[i] = eps_bar;  // kept for the update below
         }
         const ReflectionOperator op{F, c};
         const SolveOutcome solved = solve_reflections(op, b, dj, options, "bands: the temperature correction");
