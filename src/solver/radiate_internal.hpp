@@ -12,6 +12,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "ffcube/core/error.hpp"
@@ -92,15 +93,35 @@ inline double emissive_power(double t) {  // σ T⁴
 struct ReflectionOperator {
     const CsrMatrix& F;
     std::span<const double> c;
-    void gather(std::span<const double> x, std::span<double> g) const {  // g = F x
+    // Threads for the gather (0: all cores). Each g_i is one row's sum in one order, so the result
+    // is the same bits for any thread count; rows are split into contiguous ranges of equal nonzeros.
+    unsigned threads = 0;
+    void gather_rows(std::span<const double> x, std::span<double> g, std::uint32_t lo, std::uint32_t hi) const {
         const auto& ptr = F.row_ptr();
         const auto& col = F.col();
         const auto& val = F.val();
-        for (std::uint32_t i = 0; i < F.size(); ++i) {
+        for (std::uint32_t i = lo; i < hi; ++i) {
             double s = 0.0;
             for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
             g[i] = s;
         }
+    }
+    void gather(std::span<const double> x, std::span<double> g) const {  // g = F x
+        const std::uint32_t n = F.size();
+        unsigned t = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
+        // Threads pay off from about a million nonzeros (a thread start costs ~50 us).
+        if (t <= 1 || F.nnz() < 1000000) return gather_rows(x, g, 0, n);
+        t = std::min(t, 64u);
+        std::vector<std::uint32_t> cut(t + 1, n);
+        cut[0] = 0;
+        const auto& ptr = F.row_ptr();
+        for (unsigned k = 1; k < t; ++k)
+            cut[k] = static_cast<std::uint32_t>(
+                std::lower_bound(ptr.begin(), ptr.begin() + n, F.nnz() * k / t) - ptr.begin());
+        std::vector<std::thread> pool;
+        for (unsigned k = 1; k < t; ++k) pool.emplace_back([&, k] { gather_rows(x, g, cut[k], std::max(cut[k], cut[k + 1])); });
+        gather_rows(x, g, 0, cut[1]);
+        for (std::thread& th : pool) th.join();
     }
     void operator()(std::span<const double> x, std::span<double> y) const {
         gather(x, y);

@@ -200,7 +200,10 @@ TEST_F(RadiateCli, UnconvergedIsExit5WithoutResults) {
 // naming B.csv:LINE (exit 2, nothing written); an outer iteration stopped short is exit 5.
 TEST_F(RadiateCli, BandsOneBandIsGrayAndBadBandsAreRefused) {
     write_file(dir / "s.csv", "object,emissivity,temperature,heat_flux\ninner,0.4,800,\nouter,0.6,,-100\n");
-    const std::string base = "radiate " + (dir / "box.obj") + " --no-subdivide -q --surfaces " + (dir / "s.csv");
+    // F once (every run below reads it): each run then costs milliseconds.
+    ASSERT_EQ(run_ffcube("formfactors " + (dir / "box.obj") + " --no-subdivide -q -o " + (dir / "F.ffm")).code, 0);
+    const std::string base = "radiate " + (dir / "box.obj") + " --no-subdivide -q --matrix " + (dir / "F.ffm") +
+                             " --surfaces " + (dir / "s.csv");
     const std::string h = "object,lambda_min_um,lambda_max_um,emissivity\n";
     // One band over all wavelengths. 'outer' (a given heat flux) goes through the outer iteration,
     // stopped here at a flux residual r ≤ 1e-12 × σ(800 K)⁴ = 2.3e-8 W/m². Its σT⁴ then errs by
@@ -220,7 +223,8 @@ TEST_F(RadiateCli, BandsOneBandIsGrayAndBadBandsAreRefused) {
     EXPECT_NEAR(column(read_text(dir / "one.csv"), "heat_flux").at("inner"), qg, 2e-9 * std::abs(qg));
     // Temperatures only: byte for byte.
     write_file(dir / "s2.csv", "object,emissivity,temperature,heat_flux\ninner,0.4,800,\nouter,0.6,300,\n");
-    const std::string base2 = "radiate " + (dir / "box.obj") + " --no-subdivide -q --surfaces " + (dir / "s2.csv");
+    const std::string base2 = "radiate " + (dir / "box.obj") + " --no-subdivide -q --matrix " + (dir / "F.ffm") +
+                              " --surfaces " + (dir / "s2.csv");
     ASSERT_EQ(run_ffcube(base2 + " -o " + (dir / "gray2.csv")).code, 0);
     ASSERT_EQ(run_ffcube(base2 + " --bands " + (dir / "b.csv") + " -o " + (dir / "one2.csv")).code, 0);
     EXPECT_EQ(read_text(dir / "one2.csv"), read_text(dir / "gray2.csv"));
