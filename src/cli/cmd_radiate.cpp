@@ -18,9 +18,11 @@
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
+#include "ffcube/io/ply.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
+#include "ffcube/render/shading.hpp"
 #include "ffcube/solver/radiate.hpp"
 
 namespace ffcube::cli {
@@ -32,7 +34,7 @@ constexpr const char* kSkyNode = "(sky)";
 struct Options {
     SceneFlags scene;
     RowOptions rows;
-    std::string surfaces, bands, matrix, out, patch_out, conductances, default_surface, report;
+    std::string surfaces, bands, matrix, out, patch_out, conductances, default_surface, report, mesh;
     double sky_temperature = 0.0;
     CLI::Option* sky_option = nullptr;
     double conductance_threshold = 1e-6;
@@ -88,6 +90,30 @@ void write_patches(const std::string& path, const Scene& scene, const RadiateRes
     });
 }
 
+// The mesh coloured by net heat flux, one flat colour per patch: white at 0, to red at the largest
+// flux leaving (+qmax) and to blue at the largest flux arriving (−qmax), linear in q; the PLY's
+// comment gives qmax. Returns qmax.
+double write_heat_flux_mesh(const std::string& path, const Scene& scene, const RadiateResult& r) {
+    double qmax = 0.0;
+    for (const double q : r.heat_flux) qmax = std::max(qmax, std::abs(q));
+    std::vector<Vec3> values(scene.size());
+    for (std::size_t i = 0; i < scene.size(); ++i) values[i] = Vec3(r.heat_flux[i]);
+    const ShadedMesh shaded = shade_patches(scene, values, Shading::Flat);
+    PlyMesh ply;
+    ply.positions = shaded.positions;
+    for (Vec3& x : ply.positions) x += scene.origin;
+    for (const Vec3& v : shaded.values) {
+        const double t = qmax > 0.0 ? std::clamp(v.r / qmax, -1.0, 1.0) : 0.0;
+        const auto fade = static_cast<std::uint8_t>(std::lround(255.0 * (1.0 - std::abs(t))));
+        ply.colors.push_back(t >= 0.0 ? std::array<std::uint8_t, 3>{255, fade, fade} : std::array<std::uint8_t, 3>{fade, fade, 255});
+    }
+    ply.face_sizes = shaded.face_sizes;
+    ply.face_indices = shaded.face_indices;
+    write_ply(path, ply,
+              fmt::format("ffcube radiate: net heat flux leaving, white 0, red +{:.6g} W/m^2, blue -{:.6g} W/m^2", qmax, qmax));
+    return qmax;
+}
+
 // One line per pair of objects (scene order, from < to), GR the mean of GR_kl and GR_lk (equal for
 // reciprocal rows; the report gives their largest difference), and one per object to the sky;
 // couplings below threshold × the largest are dropped. Returns {written, dropped}.
@@ -125,8 +151,11 @@ int run(const Options& o) {
     // Everything that can be refused is refused before any work.
     Stopwatch total;
     for (const auto& [option, path] : {std::pair{"-o", &o.out}, {"--patch-out", &o.patch_out},
-                                       {"--conductances", &o.conductances}, {"--report", &o.report}})
+                                       {"--conductances", &o.conductances}, {"--report", &o.report},
+                                       {"--mesh", &o.mesh}})
         check_output_path(option, *path);
+    if (!o.mesh.empty() && !o.mesh.ends_with(".ply"))
+        throw InputError(fmt::format("--mesh {}: the name must end in .ply", o.mesh));
     if (!(o.conductance_threshold >= 0.0 && o.conductance_threshold < 1.0))
         throw InputError(fmt::format("--conductance-threshold {}: must be in [0, 1)", o.conductance_threshold));
     if (mpi_distributed()) throw InputError("ffcube radiate runs in one process; run it without mpirun");
@@ -271,6 +300,7 @@ int run(const Options& o) {
     watch.restart();
     if (!o.out.empty()) write_objects(o.out, scene, object_spec, r);
     if (!o.patch_out.empty()) write_patches(o.patch_out, scene, r);
+    if (!o.mesh.empty()) report.set("mesh.heat_flux_max", write_heat_flux_mesh(o.mesh, scene, r));
     if (g) {
         const auto [written, dropped] = write_conductances(o.conductances, scene, *g, o.conductance_threshold);
         report.set("conductances.written", written);
@@ -301,6 +331,7 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("-o,--out", opts->out, "write per object: object,area,emissivity,temperature,heat_flux,power");
     sub->add_option("--patch-out", opts->patch_out,
                     "write per patch: patch,object,area,temperature,heat_flux,radiosity,irradiation");
+    sub->add_option("--mesh", opts->mesh, "write the mesh coloured by net heat flux as OUT.ply (white 0, red out, blue in)");
     sub->add_option("--conductances", opts->conductances, "write Gebhart conductances between objects: from,to,GR (m^2)");
     sub->add_option("--report", opts->report, "write a JSON report (energy balance, solver, timings)");
     expert(sub->add_option("--conductance-threshold", opts->conductance_threshold,

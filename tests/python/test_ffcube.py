@@ -480,6 +480,38 @@ class Radiate(unittest.TestCase):
         with self.assertRaises(ValueError):
             ffcube.Radiation(F, scene, 1.5)
 
+    def test_command_line_mesh_is_coloured_by_heat_flux(self):
+        # `ffcube radiate --mesh OUT.ply`: one flat colour per patch (faces in patch order, each with its
+        # own vertices), white at 0, red to +qmax, blue to -qmax, fade = round(255 (1 - |q|/qmax)).
+        with tempfile.TemporaryDirectory() as d:
+            ply, patches = os.path.join(d, "heat.ply"), os.path.join(d, "p.csv")
+            r = run_cli("radiate", CUBE, "--max-patch-edge", "0.5", "--surfaces", self.SURFACES, "--mesh", ply,
+                        "--patch-out", patches, "-q")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(patches) as f:
+                q = np.array([float(line.split(",")[4]) for line in f.read().splitlines()[1:]])
+            with open(ply, "rb") as f:
+                data = f.read()
+        head, body = data.split(b"end_header\n", 1)
+        nv = int(head.split(b"element vertex ")[1].split(b"\n")[0])
+        self.assertIn(b"red +", head)
+        vertex = np.frombuffer(body[:nv * 15], dtype=[("p", "<f4", 3), ("c", "u1", 3)])
+        qmax = np.abs(q).max()
+        # Faces: a uchar count then uint32 indices; flat shading gives each patch its own vertices.
+        faces, at = [], nv * 15
+        while at < len(body):
+            k = body[at]
+            faces.append(np.frombuffer(body[at + 1:at + 1 + 4 * k], dtype="<u4"))
+            at += 1 + 4 * k
+        self.assertEqual(len(faces), len(q))
+        for i, face in enumerate(faces):
+            t = q[i] / qmax
+            fade = round(255 * (1 - abs(t)))
+            want = [255, fade, fade] if t >= 0 else [fade, fade, 255]
+            for v in face:
+                # The CSV's 10 digits can move the fade by one step at a .5 boundary.
+                np.testing.assert_allclose(vertex["c"][v], want, atol=1)
+
     def test_conductances_match_a_dense_gebhart_solve(self):
         scene = ffcube.load_scene(CUBE, max_patch_edge=0.5, quiet=True)
         F = ffcube.form_factors(scene, quiet=True)
