@@ -291,7 +291,7 @@ PyRadiation make_radiation(const py::object& f, const PyScene& s, const py::obje
 }
 
 py::dict radiation_solve(const PyRadiation& self, const py::object& temperature, const py::object& heat_flux,
-                         const py::object& sky_temperature) {
+                         const py::object& sky_temperature, double tolerance) {
     const Scene& scene = *self.scene;
     const std::vector<double> t = per_patch(temperature, scene, "temperature");
     const std::vector<double> q = per_patch(heat_flux, scene, "heat_flux");
@@ -306,6 +306,8 @@ py::dict radiation_solve(const PyRadiation& self, const py::object& temperature,
                    has_t ? t[i] : q[i]};
     }
     RadiateOptions opt;
+    opt.tolerance = tolerance;
+    validate(opt);
     opt.sky_temperature = sky_temperature.is_none() ? self.sky : std::optional<double>(sky_temperature.cast<double>());
     opt.patch_name = [&scene, &self](std::uint32_t i) {
         return fmt::format("patch {} of object '{}'", i, scene.objects[self.object[i]]);
@@ -338,8 +340,9 @@ void add_radiate(py::module_& m) {
              "F: scipy.sparse matrix (form_factors()) or a .ffm path; scene: the Scene F was computed on; emissivity: "
              "a number, a dict {object: e} or n values.")
         .def("solve", &radiation_solve, py::arg("temperature") = py::none(), py::arg("heat_flux") = py::none(),
-             py::arg("sky_temperature") = py::none(),
-             "solve(temperature=None, heat_flux=None, sky_temperature=None) -> dict (as radiate()'s). Each of "
+             py::arg("sky_temperature") = py::none(), py::arg("tolerance") = 1e-10,
+             "solve(temperature=None, heat_flux=None, sky_temperature=None, tolerance=1e-10) -> dict (as radiate()'s; "
+             "tolerance: GMRES's relative residual, as `ffcube radiate --set tolerance=`). Each of "
              "temperature (K) and heat_flux (W/m^2, net leaving) is a number, a dict {object: value} or n values with "
              "NaN where not given; every patch needs exactly one.")
         .def(
