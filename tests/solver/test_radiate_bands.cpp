@@ -221,6 +221,42 @@ TEST(RadiateBands, TwoSurfaceNonGrayMatchesTheBandByBandClosedForm) {
     }
 }
 
+// An open scene: two facing patches that see each other with F = 1/2 and the sky with the other
+// half, the sky at 250 K. Per band the 2 × 2 system J_i − (1 − ε_ik) F J_j = ε_ik E_bk(T_i) +
+// (1 − ε_ik) F_sky E_bk(T_sky) is solved by hand (Cramer); q_i = Σ_k ε_ik (E_bk(T_i) − G_ik). The
+// energy balance: Σ A q equals the net exchange with the sky, to 1e-9 of the powers (issue 38).
+TEST(RadiateBands, OpenScenePerBandAgainstCramerAndTheSkyBalance) {
+    const CsrMatrix F = dense_to_csr({{0.0, 0.5}, {0.5, 0.0}});
+    const BandModel m = model({0.0, 4.0, 12.0, kInf}, {{0.3, 0.8, 0.6}, {0.9, 0.2, 0.05}});
+    const double t[2] = {700.0, 400.0}, tsky = 250.0;
+    RadiateOptions o = tight();
+    o.sky_temperature = tsky;
+    const RadiateResult r = solve_radiation_bands(F, std::vector{1.0, 1.0}, std::vector{temp(0.5, t[0]), temp(0.5, t[1])},
+                                                  std::vector<std::uint32_t>{0, 1}, m, o);
+    double q[2] = {0.0, 0.0}, scale = 0.0;
+    for (std::uint32_t k = 0; k < 3; ++k) {
+        const auto ebk = [&](double temp_k) {
+            const double lo = m.edges[k] == 0.0 ? 0.0 : blackbody_fraction(m.edges[k] * temp_k);
+            const double hi = std::isinf(m.edges[k + 1]) ? 1.0 : blackbody_fraction(m.edges[k + 1] * temp_k);
+            return (hi - lo) * kSigma * std::pow(temp_k, 4);
+        };
+        const double e0 = m.emissivity[k], e1 = m.emissivity[3 + k];
+        const double b0 = e0 * ebk(t[0]) + (1 - e0) * 0.5 * ebk(tsky), b1 = e1 * ebk(t[1]) + (1 - e1) * 0.5 * ebk(tsky);
+        // [1, −(1−e0)/2; −(1−e1)/2, 1] J = b.
+        const double a01 = -(1 - e0) * 0.5, a10 = -(1 - e1) * 0.5, det = 1.0 - a01 * a10;
+        const double j0 = (b0 - a01 * b1) / det, j1 = (b1 - a10 * b0) / det;
+        q[0] += e0 * (ebk(t[0]) - (0.5 * j1 + 0.5 * ebk(tsky)));
+        q[1] += e1 * (ebk(t[1]) - (0.5 * j0 + 0.5 * ebk(tsky)));
+        scale = std::max(scale, j0);
+    }
+    // The solves' 1e-10 (header) of J: fluxes within 1e-10 × J_max per band, 3 bands.
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(r.heat_flux[i], q[i], 3e-10 * scale) << i;
+    EXPECT_GT(std::abs(r.sky), 0.1 * r.absolute_power);  // the sky takes a real share
+    EXPECT_LE(r.balance_error, 1e-9);
+    std::cout << "[measured] open two-plate, 3 bands: q error " << std::abs(r.heat_flux[0] - q[0]) << ", "
+              << std::abs(r.heat_flux[1] - q[1]) << " W/m2; balance error " << r.balance_error << "\n";
+}
+
 TEST(RadiateBands, OuterIterationThatCannotConvergeIsRefused) {
     // Body 2 asked to absorb more than everything body 1 can send: it would need T < 0 K; the iteration
     // holds it at 0 K and stops at the limit: NotConvergedError, never a result.
