@@ -166,6 +166,7 @@ int run(const Options& o) {
     ro.restart = o.restart;
     ro.open_threshold = o.open_threshold;
     ro.outer_tolerance = o.outer_tolerance;
+    ro.threads = o.rows.threads;  // --threads: the rows and the products with them
     ro.max_outer_iterations = o.max_outer_iterations;
     if (!(o.outer_tolerance > 0.0 && o.outer_tolerance < 1.0))
         throw InputError(fmt::format("--outer-tolerance {}: must be in (0, 1)", o.outer_tolerance));

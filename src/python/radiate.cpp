@@ -167,6 +167,7 @@ py::tuple radiate(const py::object& what, const py::kwargs& kwargs) {
     kw.read_row_options(ro, /*enforce=*/false);
     RadiateOptions opt;
     opt.sky_temperature = kw.optional_number("sky_temperature");
+    opt.threads = ro.threads;
     const std::string matrix = kw.optional_path("matrix");
     const std::string bands_path = kw.optional_path("bands");
     const py::object surfaces = kw.value("surfaces");

@@ -201,7 +201,7 @@ RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, 
         }
         j[i] = s.condition == SurfaceCondition::Temperature ? emissive_power(s.value) : b[i];
     }
-    const ReflectionOperator op{F, c};
+    const ReflectionOperator op{F, c, options.threads};
     const SolveOutcome solved = solve_reflections(op, b, j, options, "radiation");
     r.iterations = solved.iterations;
     r.residual = solved.residual;
@@ -261,7 +261,7 @@ ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const dou
         r.emittance[object[i]] += emissivity[i] * area[i];
     }
     const std::vector<double> sky = sky_view_factors(F);
-    const ReflectionOperator op{F, c};
+    const ReflectionOperator op{F, c, options.threads};
     std::vector<double> b(n), j(n), g(n);
     for (std::uint32_t k = 0; k < objects; ++k) {
         if (!(r.emittance[k] > 0.0)) continue;

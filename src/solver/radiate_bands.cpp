@@ -261,7 +261,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
                 b[i] = eps * emission + c[i] * (r.sky_view[i] * sky_band);
                 if (first) jk[k][i] = emission;
             }
-            const ReflectionOperator op{F, c};
+            const ReflectionOperator op{F, c, options.threads};
             const SolveOutcome solved = solve_reflections(op, b, jk[k], options, band_name(bands, k));
             r.iterations += solved.iterations;
             r.residual = std::max(r.residual, solved.residual);
@@ -346,7 +346,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
             b[i] = residual[i];
             dj[i] = b[i];
         }
-        const ReflectionOperator op{F, c};
+        const ReflectionOperator op{F, c, options.threads};
         const SolveOutcome solved = solve_reflections(op, b, dj, options, "bands: the temperature correction");
         r.iterations += solved.iterations;
         std::vector<double>& eps_bar = g;

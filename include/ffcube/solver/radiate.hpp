@@ -78,6 +78,9 @@ struct RadiateOptions {
     // the problem (patches, sky, |q_given|), and is refused (NotConvergedError) after
     // max_outer_iterations.
     double outer_tolerance = 1e-8;
+    // Threads for the products with the rows (0: every core; used from a million nonzeros). The
+    // results are the same bits for any number.
+    unsigned threads = 0;
     std::uint32_t max_outer_iterations = 50;
     // Names patch i in messages ("patch 12 of object 'floor'"); empty: "patch i".
     std::function<std::string(std::uint32_t)> patch_name;
