@@ -65,7 +65,11 @@ CsrMatrix csr_argument(const py::object& m, std::size_t n, const char* function)
     if (!py::hasattr(m, "tocsr"))
         throw py::type_error(fmt::format("{}(): F must be a scipy.sparse matrix or a path to a .ffm file, not {}", function,
                                          type_name(m)));
-    const py::object csr = m.attr("tocsr")();
+    py::object csr = m.attr("tocsr")();
+    if (!csr.attr("has_canonical_format").cast<bool>()) {  // sorted columns, no duplicates: on a copy
+        csr = csr.attr("copy")();
+        csr.attr("sum_duplicates")();
+    }
     const py::tuple shape = csr.attr("shape");
     if (shape[0].cast<std::size_t>() != n || shape[1].cast<std::size_t>() != n)
         throw InputError(fmt::format("{}(): F is {} x {} but the scene has {} patches", function,
@@ -73,18 +77,29 @@ CsrMatrix csr_argument(const py::object& m, std::size_t n, const char* function)
     const auto ptr = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>(csr.attr("indptr"));
     const auto col = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>(csr.attr("indices"));
     const auto val = py::array_t<float, py::array::c_style | py::array::forcecast>(csr.attr("data"));
+    const auto p = ptr.unchecked<1>();
+    const auto cl = col.unchecked<1>();
+    const auto vl = val.unchecked<1>();
+    if (static_cast<std::size_t>(p.shape(0)) != n + 1 || cl.shape(0) != vl.shape(0) || p(0) != 0 ||
+        p(static_cast<py::ssize_t>(n)) != vl.shape(0))
+        throw InputError(fmt::format("{}(): F's indptr, indices and data do not fit together", function));
     CsrMatrix F(static_cast<std::uint32_t>(n));
     std::vector<std::uint32_t> c;
     std::vector<float> v;
     for (std::size_t i = 0; i < n; ++i) {
         c.clear();
         v.clear();
-        for (std::int64_t k = ptr.at(i); k < ptr.at(i + 1); ++k) {
-            const float x = val.at(k);
+        const auto r0 = p(static_cast<py::ssize_t>(i)), r1 = p(static_cast<py::ssize_t>(i + 1));
+        if (r1 < r0) throw InputError(fmt::format("{}(): F's indptr decreases at row {}", function, i));
+        for (std::int64_t k = r0; k < r1; ++k) {
+            const float x = vl(k);
+            const std::int64_t j = cl(k);
+            if (j < 0 || static_cast<std::size_t>(j) >= n)
+                throw InputError(fmt::format("{}(): F[{}, {}]: column out of range", function, i, j));
             if (!std::isfinite(x) || x < 0.0f)
-                throw InputError(fmt::format("{}(): F[{}, {}] = {} must be finite and >= 0", function, i, col.at(k), x));
+                throw InputError(fmt::format("{}(): F[{}, {}] = {} must be finite and >= 0", function, i, j, x));
             if (x == 0.0f) continue;
-            c.push_back(static_cast<std::uint32_t>(col.at(k)));
+            c.push_back(static_cast<std::uint32_t>(j));
             v.push_back(x);
         }
         // append_row wants ascending columns: sort this row's pairs (csr_matrix may be unsorted).

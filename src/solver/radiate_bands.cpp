@@ -277,7 +277,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
         }
     };
 
-    std::vector<double> dj(n), residual(n);
+    std::vector<double> dj(n), residual(n), eps_bar(n), gathered(n);
     for (std::uint32_t outer = 0;; ++outer) {
         sweep();
         if (!any_flux) break;
@@ -311,17 +311,17 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
         std::vector<double> w(K, 0.0), f(K);
         double w_sum = 0.0;
         for (std::uint32_t i = 0; i < n; ++i) {
-            double eps_bar = 0.0, lo = 1.0, hi = 0.0;
+            double eps_bar_i = 0.0, lo = 1.0, hi = 0.0;
             for (std::uint32_t k = 0; k < K; ++k) {
                 const double eps = bands.emissivity[group[i] * K + k];
                 const double df = fraction_at(bands.edges[k + 1], temp[i]) - fraction_at(bands.edges[k], temp[i]);
                 const double ds = slope_at(bands.edges[k + 1], temp[i]) - slope_at(bands.edges[k], temp[i]);
                 f[k] = df + 0.25 * ds;
-                eps_bar += eps * f[k];
+                eps_bar_i += eps * f[k];
                 lo = std::min(lo, eps);
                 hi = std::max(hi, eps);
             }
-            g[i] = std::clamp(eps_bar, lo, hi);  // kept for the update below
+            eps_bar[i] = std::clamp(eps_bar_i, lo, hi);
             if (spec[i].condition == SurfaceCondition::HeatFlux)
                 for (std::uint32_t k = 0; k < K; ++k) {
                     const double x = area[i] * bands.emissivity[group[i] * K + k] * f[k];
@@ -331,7 +331,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
         }
         for (std::uint32_t i = 0; i < n; ++i) {
             const bool flux = spec[i].condition == SurfaceCondition::HeatFlux;
-            double reflect = 1.0 - g[i];
+            double reflect = 1.0 - eps_bar[i];
             if (!flux && w_sum > 0.0) {
                 double eps_w = 0.0, lo = 1.0, hi = 0.0;
                 for (std::uint32_t k = 0; k < K; ++k) {
@@ -349,8 +349,6 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
         const ReflectionOperator op{F, c, options.threads};
         const SolveOutcome solved = solve_reflections(op, b, dj, options, "bands: the temperature correction");
         r.iterations += solved.iterations;
-        std::vector<double>& eps_bar = g;
-        std::vector<double> gathered(n);
         op.gather(dj, gathered);
         for (std::uint32_t i = 0; i < n; ++i) {
             if (spec[i].condition != SurfaceCondition::HeatFlux) continue;
