@@ -55,8 +55,18 @@ def main():
             r = json.load(f)
         print(f"ffcube radiate --matrix: {secs:.2f} s wall, peak {mb:.0f} MB; patches {r['patches']}, "
               f"nnz {r.get('nnz', '?')}; loading {r['time']['loading']:.2f} s, rows (reading F) {r['time']['rows']:.2f} s, "
+              f"matrix checks {r['time']['matrix_checks']:.2f} s, "
               f"solve {r['time']['solve']:.3f} s ({r['solver']['iterations']} GMRES products, residual "
               f"{r['solver']['residual']:.2e}), energy balance {r['energy']['relative_error']:.2e}")
+
+        secs, mb = timed([BINARY, "radiate", CUBE, "--patches", str(patches), "--matrix", ffm, "--surfaces", surfaces,
+                          "--set", "stream-matrix=true", "-q", "-o", os.path.join(d, "qs.csv"), "--report", report])
+        with open(report) as f:
+            r = json.load(f)
+        with open(os.path.join(d, "q.csv")) as a, open(os.path.join(d, "qs.csv")) as b:
+            same = a.read() == b.read()
+        print(f"ffcube radiate --matrix --set stream-matrix=true: {secs:.2f} s wall, peak {mb:.0f} MB; solve "
+              f"{r['time']['solve']:.2f} s, {r['matrix_passes']} passes over the file; Q.csv {'identical' if same else 'DIFFERENT'}")
 
         scene = ffcube.load_scene(CUBE, patches=patches, quiet=True)
         t0 = time.perf_counter()

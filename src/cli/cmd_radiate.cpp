@@ -44,6 +44,42 @@ struct Options {
     double open_threshold = 1e-6;
     double outer_tolerance = 1e-8;
     std::uint32_t max_outer_iterations = 50;
+    bool stream_matrix = false;
+};
+
+// F's rows read block by block from a version-2 .ffm at every product (--stream-matrix): memory
+// bounded by one block, one pass over the file per product. Row i's sum is taken in column order
+// as CsrRowProduct does, so the results are the same bits as with F in memory.
+class StreamedRows final : public RowProduct {
+public:
+    explicit StreamedRows(const std::string& path) : reader_(path) {}
+    const FfmHead& head() const { return reader_.head(); }
+    std::uint32_t size() const override { return reader_.head().n; }
+    void multiply(std::span<const double> x, std::span<double> y) const override {
+        each_row([&](std::uint32_t i, RowView r) {
+            double s = 0.0;
+            for (std::size_t k = 0; k < r.col.size(); ++k) s += double(r.val[k]) * x[r.col[k]];
+            y[i] = s;
+        });
+    }
+    std::vector<double> row_sums() const override {
+        std::vector<double> s(size());
+        each_row([&](std::uint32_t i, RowView r) { s[i] = r.sum(); });
+        return s;
+    }
+    std::uint64_t passes() const { return passes_; }
+
+private:
+    template <class F>
+    void each_row(F&& f) const {
+        reader_.rewind();
+        while (reader_.next(block_))
+            for (std::uint32_t k = 0; k < block_.rows; ++k) f(block_.first_row + k, block_.row(k));
+        ++passes_;
+    }
+    mutable FfmReader reader_;
+    mutable FfmBlock block_;
+    mutable std::uint64_t passes_ = 0;
 };
 
 std::string num(double v) { return fmt::format("{:.10g}", v); }
@@ -171,6 +207,8 @@ int run(const Options& o) {
     if (!(o.outer_tolerance > 0.0 && o.outer_tolerance < 1.0))
         throw InputError(fmt::format("--outer-tolerance {}: must be in (0, 1)", o.outer_tolerance));
     if (o.max_outer_iterations < 1) throw InputError("--max-outer-iterations: must be >= 1");
+    if (o.stream_matrix && o.matrix.empty())
+        throw InputError("--stream-matrix needs --matrix F.ffm (a version-2 file, as `ffcube formfactors -o F.ffm` writes)");
     if (!o.bands.empty() && !o.conductances.empty())
         throw InputError("--conductances with --bands: the conductances of non-gray surfaces depend on the temperatures; "
                          "they are computed for gray surfaces only (leave out --bands)");
@@ -207,7 +245,13 @@ int run(const Options& o) {
     // Rows: once, into a CsrMatrix (from the file, checked against the scene, or computed).
     watch.restart();
     CsrMatrix F;
-    if (!o.matrix.empty()) {
+    std::unique_ptr<StreamedRows> streamed;
+    if (o.stream_matrix) {
+        streamed = std::make_unique<StreamedRows>(o.matrix);
+        check_ffm_matches(streamed->head(), scene);
+        report.set("rows", "matrix, streamed");
+        report.set("matrix", o.matrix);
+    } else if (!o.matrix.empty()) {
         FfmFile ffm = read_ffm(o.matrix);
         check_ffm_matches(ffm, scene);
         F = std::move(ffm.matrix);
@@ -222,8 +266,23 @@ int run(const Options& o) {
     }
     report.set("time.rows", watch.seconds());
     watch.restart();
-    report_matrix_checks(report, F, scene, false);  // row sums and reciprocity: a transpose of F
+    if (streamed) {  // row sums only: reciprocity needs F's transpose
+        const std::vector<double> sums = streamed->row_sums();
+        double lo = 1e300, hi = -1e300, mean = 0.0;
+        for (const double x : sums) {
+            lo = std::min(lo, x);
+            hi = std::max(hi, x);
+            mean += x;
+        }
+        report.set("row_sums.min", sums.empty() ? 0.0 : lo);
+        report.set("row_sums.max", sums.empty() ? 0.0 : hi);
+        report.set("row_sums.mean", sums.empty() ? 0.0 : mean / double(sums.size()));
+    } else {
+        report_matrix_checks(report, F, scene, false);  // row sums and reciprocity: a transpose of F
+    }
     report.set("time.matrix_checks", watch.seconds());
+    const CsrRowProduct in_memory(F, ro.threads);
+    const RowProduct& rows_of_f = streamed ? static_cast<const RowProduct&>(*streamed) : in_memory;
 
     std::vector<double> area(scene.size()), emissivity(scene.size());
     std::vector<std::uint32_t> object(scene.size());
@@ -248,7 +307,7 @@ int run(const Options& o) {
     watch.restart();
     RadiateResult r;
     try {
-        r = bands ? solve_radiation_bands(F, area, spec, object, *bands, ro) : solve_radiation(F, area, spec, ro);
+        r = bands ? solve_radiation_bands(rows_of_f, area, spec, object, *bands, ro) : solve_radiation(rows_of_f, area, spec, ro);
     } catch (const NotConvergedError& e) {
         refuse(e);
         throw;
@@ -283,7 +342,7 @@ int run(const Options& o) {
     if (!o.conductances.empty()) {
         watch.restart();
         try {
-            g = radiative_conductances(F, area, emissivity, object, static_cast<std::uint32_t>(scene.objects.size()), ro);
+            g = radiative_conductances(rows_of_f, area, emissivity, object, static_cast<std::uint32_t>(scene.objects.size()), ro);
         } catch (const NotConvergedError& e) {
             refuse(e);
             throw;
@@ -299,6 +358,7 @@ int run(const Options& o) {
              g->iterations, g->reciprocity_error, g->sum_rule_error);
     }
 
+    if (streamed) report.set("matrix_passes", streamed->passes());
     // Every result is computed and converged; now the files, each atomically.
     watch.restart();
     if (!o.out.empty()) write_objects(o.out, scene, object_spec, r);
@@ -347,6 +407,9 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     expert(sub->add_option("--open-threshold", opts->open_threshold,
                            "a patch whose sky view factor exceeds this makes the scene open")
                ->default_val(1e-6));
+    expert(sub->add_flag("--stream-matrix", opts->stream_matrix,
+                         "with --matrix: read F block by block at every product instead of holding it (memory: one "
+                         "block; time: one pass over the file per product; the same results)"));
     expert(sub->add_option("--outer-tolerance", opts->outer_tolerance,
                            "--bands: heat-flux residual, relative to the largest emissive power, of the temperature iteration")
                ->default_val(1e-8));

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <thread>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/solver/linear.hpp"
@@ -122,7 +123,7 @@ void validate(const RadiateOptions& o) {
 
 namespace radiate_detail {
 
-double prepare_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+double prepare_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                          const RadiateOptions& options, RadiateResult& r) {
     validate(options);
     check_sizes(F, area.size(), spec.size(), "surface specs");
@@ -180,7 +181,51 @@ void finish_energy(RadiateResult& r, std::span<const double> area, double sky_po
 
 }  // namespace radiate_detail
 
+void CsrRowProduct::multiply(std::span<const double> x, std::span<double> y) const {
+    const std::uint32_t n = F_.size();
+    const auto& ptr = F_.row_ptr();
+    const auto& col = F_.col();
+    const auto& val = F_.val();
+    const auto rows = [&](std::uint32_t lo, std::uint32_t hi) {
+        for (std::uint32_t i = lo; i < hi; ++i) {
+            double s = 0.0;
+            for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
+            y[i] = s;
+        }
+    };
+    unsigned t = threads_ ? threads_ : std::max(1u, std::thread::hardware_concurrency());
+    if (t <= 1 || F_.nnz() < 1000000) return rows(0, n);
+    t = std::min(t, 64u);
+    std::vector<std::uint32_t> cut(t + 1, n);
+    cut[0] = 0;
+    for (unsigned k = 1; k < t; ++k)
+        cut[k] = static_cast<std::uint32_t>(std::lower_bound(ptr.begin(), ptr.begin() + n, F_.nnz() * k / t) - ptr.begin());
+    std::vector<std::thread> pool;
+    for (unsigned k = 1; k < t; ++k) pool.emplace_back([&, k] { rows(cut[k], std::max(cut[k], cut[k + 1])); });
+    rows(0, cut[1]);
+    for (std::thread& th : pool) th.join();
+}
+
+std::vector<double> CsrRowProduct::row_sums() const {
+    if (F_.rows_filled() != F_.size())
+        throw InputError(fmt::format("radiation: F has {} of its {} rows filled", F_.rows_filled(), F_.size()));
+    std::vector<double> s(F_.size());
+    for (std::uint32_t i = 0; i < F_.size(); ++i) s[i] = F_.row(i).sum();
+    return s;
+}
+
 RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                              const RadiateOptions& options) {
+    return solve_radiation(CsrRowProduct(F, options.threads), area, spec, options);
+}
+
+ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+                                         std::span<const double> emissivity, std::span<const std::uint32_t> object,
+                                         std::uint32_t objects, const RadiateOptions& options) {
+    return radiative_conductances(CsrRowProduct(F, options.threads), area, emissivity, object, objects, options);
+}
+
+RadiateResult solve_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                               const RadiateOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();
     RadiateResult r;
@@ -201,7 +246,7 @@ RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, 
         }
         j[i] = s.condition == SurfaceCondition::Temperature ? emissive_power(s.value) : b[i];
     }
-    const ReflectionOperator op{F, c, options.threads};
+    const ReflectionOperator op{F, c};
     const SolveOutcome solved = solve_reflections(op, b, j, options, "radiation");
     r.iterations = solved.iterations;
     r.residual = solved.residual;
@@ -241,7 +286,7 @@ RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, 
     return r;
 }
 
-ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+ConductanceResult radiative_conductances(const RowProduct& F, std::span<const double> area,
                                          std::span<const double> emissivity, std::span<const std::uint32_t> object,
                                          std::uint32_t objects, const RadiateOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -261,7 +306,7 @@ ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const dou
         r.emittance[object[i]] += emissivity[i] * area[i];
     }
     const std::vector<double> sky = sky_view_factors(F);
-    const ReflectionOperator op{F, c, options.threads};
+    const ReflectionOperator op{F, c};
     std::vector<double> b(n), j(n), g(n);
     for (std::uint32_t k = 0; k < objects; ++k) {
         if (!(r.emittance[k] > 0.0)) continue;

@@ -205,6 +205,12 @@ BandModel bands_for_objects(std::span<const std::string> objects, std::span<cons
 RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                                     std::span<const std::uint32_t> group, const BandModel& bands,
                                     const RadiateOptions& options) {
+    return solve_radiation_bands(CsrRowProduct(F, options.threads), area, spec, group, bands, options);
+}
+
+RadiateResult solve_radiation_bands(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                                    std::span<const std::uint32_t> group, const BandModel& bands,
+                                    const RadiateOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();
     RadiateResult r;
     const double sky_power = prepare_radiation(F, area, spec, options, r);
@@ -261,7 +267,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
                 b[i] = eps * emission + c[i] * (r.sky_view[i] * sky_band);
                 if (first) jk[k][i] = emission;
             }
-            const ReflectionOperator op{F, c, options.threads};
+            const ReflectionOperator op{F, c};
             const SolveOutcome solved = solve_reflections(op, b, jk[k], options, band_name(bands, k));
             r.iterations += solved.iterations;
             r.residual = std::max(r.residual, solved.residual);
@@ -346,7 +352,7 @@ RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> 
             b[i] = residual[i];
             dj[i] = b[i];
         }
-        const ReflectionOperator op{F, c, options.threads};
+        const ReflectionOperator op{F, c};
         const SolveOutcome solved = solve_reflections(op, b, dj, options, "bands: the temperature correction");
         r.iterations += solved.iterations;
         op.gather(dj, gathered);

@@ -12,7 +12,6 @@
 #include <span>
 #include <string>
 #include <string_view>
-#include <thread>
 #include <vector>
 
 #include "ffcube/core/error.hpp"
@@ -91,38 +90,9 @@ inline double emissive_power(double t) {  // σ T⁴
 // y = x − c ∘ (F x), the operator of both problems (c = 1 − ε for a patch that reflects what it
 // receives on top of a given emission, 1 for a patch whose net flux is given).
 struct ReflectionOperator {
-    const CsrMatrix& F;
+    const RowProduct& F;
     std::span<const double> c;
-    // Threads for the gather (0: all cores). Each g_i is one row's sum in one order, so the result
-    // is the same bits for any thread count; rows are split into contiguous ranges of equal nonzeros.
-    unsigned threads = 0;
-    void gather_rows(std::span<const double> x, std::span<double> g, std::uint32_t lo, std::uint32_t hi) const {
-        const auto& ptr = F.row_ptr();
-        const auto& col = F.col();
-        const auto& val = F.val();
-        for (std::uint32_t i = lo; i < hi; ++i) {
-            double s = 0.0;
-            for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
-            g[i] = s;
-        }
-    }
-    void gather(std::span<const double> x, std::span<double> g) const {  // g = F x
-        const std::uint32_t n = F.size();
-        unsigned t = threads ? threads : std::max(1u, std::thread::hardware_concurrency());
-        // Threads pay off from about a million nonzeros (a thread start costs ~50 us).
-        if (t <= 1 || F.nnz() < 1000000) return gather_rows(x, g, 0, n);
-        t = std::min(t, 64u);
-        std::vector<std::uint32_t> cut(t + 1, n);
-        cut[0] = 0;
-        const auto& ptr = F.row_ptr();
-        for (unsigned k = 1; k < t; ++k)
-            cut[k] = static_cast<std::uint32_t>(
-                std::lower_bound(ptr.begin(), ptr.begin() + n, F.nnz() * k / t) - ptr.begin());
-        std::vector<std::thread> pool;
-        for (unsigned k = 1; k < t; ++k) pool.emplace_back([&, k] { gather_rows(x, g, cut[k], std::max(cut[k], cut[k + 1])); });
-        gather_rows(x, g, 0, cut[1]);
-        for (std::thread& th : pool) th.join();
-    }
+    void gather(std::span<const double> x, std::span<double> g) const { F.multiply(x, g); }  // g = F x
     void operator()(std::span<const double> x, std::span<double> y) const {
         gather(x, y);
         for (std::size_t i = 0; i < y.size(); ++i) y[i] = x[i] - c[i] * y[i];
@@ -165,22 +135,22 @@ inline SolveOutcome solve_reflections(const ReflectionOperator& op, std::span<co
     return result;
 }
 
-inline std::vector<double> sky_view_factors(const CsrMatrix& F) {
-    std::vector<double> sky(F.size());
-    for (std::uint32_t i = 0; i < F.size(); ++i) sky[i] = 1.0 - F.row(i).sum();
+inline std::vector<double> sky_view_factors(const RowProduct& F) {
+    std::vector<double> sky = F.row_sums();
+    for (double& s : sky) s = 1.0 - s;
     return sky;
 }
 
-inline void check_sizes(const CsrMatrix& F, std::size_t area, std::size_t other, const char* what) {
-    if (F.rows_filled() != F.size() || area != F.size() || other != F.size())
-        throw InputError(fmt::format("radiation: F has {} rows ({} filled), {} areas and {} {}: one each per patch",
-                                     F.size(), F.rows_filled(), area, other, what));
+inline void check_sizes(const RowProduct& F, std::size_t area, std::size_t other, const char* what) {
+    if (area != F.size() || other != F.size())
+        throw InputError(fmt::format("radiation: F has {} rows, {} areas and {} {}: one each per patch", F.size(), area,
+                                     other, what));
 }
 
 // The checks every solve starts with (options, sizes, areas, specs; an open scene without a sky
 // temperature; no temperature at all): fills r.min_emissivity and r.sky_view, returns σT_sky⁴ (0
 // without a sky). InputError naming the patch and the rule. radiate.cpp.
-double prepare_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+double prepare_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                          const RadiateOptions& options, RadiateResult& r);
 // r.power, r.sky, r.absolute_power and r.balance_error from r.heat_flux, r.radiosity, r.sky_view.
 void finish_energy(RadiateResult& r, std::span<const double> area, double sky_power);

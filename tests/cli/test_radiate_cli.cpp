@@ -249,5 +249,25 @@ TEST_F(RadiateCli, BandsOneBandIsGrayAndBadBandsAreRefused) {
     }
 }
 
+// --stream-matrix: F read block by block at every product gives the same bytes as F in memory
+// (each row summed in the same order), for the fluxes, the patches and the conductances.
+TEST_F(RadiateCli, StreamedMatrixGivesTheSameBytes) {
+    write_file(dir / "s.csv", "object,emissivity,temperature,heat_flux\ninner,0.3,700,\nouter,0.05,,0\n");
+    ASSERT_EQ(run_ffcube("formfactors " + (dir / "box.obj") + " --max-patch-edge 1 -q -o " + (dir / "F.ffm")).code, 0);
+    const std::string base = "radiate " + (dir / "box.obj") + " --max-patch-edge 1 -q --matrix " + (dir / "F.ffm") +
+                             " --sky-temperature 3 --surfaces " + (dir / "s.csv");
+    for (const std::string tag : {"m", "s"}) {
+        const RunResult r = run_ffcube(base + (tag == "s" ? " --set stream-matrix=true" : "") + " -o " + (dir / ("q" + tag)) +
+                                       " --patch-out " + (dir / ("p" + tag)) + " --conductances " + (dir / ("g" + tag)));
+        ASSERT_EQ(r.code, 0) << r.output;
+    }
+    for (const std::string f : {"q", "p", "g"}) EXPECT_EQ(read_text(dir / (f + "s")), read_text(dir / (f + "m"))) << f;
+    const RunResult no_matrix = run_ffcube("radiate " + (dir / "box.obj") + " -q --surfaces " + (dir / "s.csv") +
+                                           " --set stream-matrix=true -o " + (dir / "q.csv"));
+    EXPECT_EQ(no_matrix.code, 2) << no_matrix.output;
+    EXPECT_NE(no_matrix.output.find("--stream-matrix needs --matrix"), std::string::npos) << no_matrix.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+}
+
 }  // namespace
 }  // namespace ffcube::test

@@ -34,6 +34,32 @@ inline constexpr double kStefanBoltzmann = 5.670374419e-8;
 
 enum class SurfaceCondition : std::uint8_t { Temperature, HeatFlux };
 
+// The rows of F as the solves use them: products y = F x and row sums, never a dense matrix. Held
+// in memory (CsrRowProduct) or read block by block from a .ffm file at every product (the command
+// line's streamed rows, src/cli): either way y_i is row i's sum in column order, so the results are
+// the same bits.
+class RowProduct {
+public:
+    virtual ~RowProduct() = default;
+    virtual std::uint32_t size() const = 0;
+    virtual void multiply(std::span<const double> x, std::span<double> y) const = 0;  // y = F x
+    virtual std::vector<double> row_sums() const = 0;                                // RowView::sum of each row
+};
+
+// F in memory. The product is split over `threads` (0: every core) in row ranges of equal nonzeros
+// from a million nonzeros on (a thread start costs ~50 us); the same bits for any number.
+class CsrRowProduct final : public RowProduct {
+public:
+    CsrRowProduct(const CsrMatrix& F, unsigned threads) : F_(F), threads_(threads) {}
+    std::uint32_t size() const override { return F_.size(); }
+    void multiply(std::span<const double> x, std::span<double> y) const override;
+    std::vector<double> row_sums() const override;
+
+private:
+    const CsrMatrix& F_;
+    unsigned threads_;
+};
+
 // What one surface (object or patch) is given: its emissivity in (0, 1] and either its
 // temperature (K, ≥ 0) or the net heat flux leaving it (W/m², adiabatic = 0).
 struct SurfaceSpec {
@@ -117,6 +143,9 @@ struct RadiateResult {
 // (exit 5) when GMRES stops short of the tolerance. The result is always converged.
 RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                               const RadiateOptions& options);
+// The same on rows given as products (CsrRowProduct, or streamed from a file).
+RadiateResult solve_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                              const RadiateOptions& options);
 
 struct ConductanceResult {
     // gr[k][l] = ε_k A_k B_kl (m²): the power object l absorbs, reflections included, of what object
@@ -140,6 +169,9 @@ struct ConductanceResult {
 // reflects here (1 − ε_i), whatever its condition in the temperature problem: conductances are a
 // property of geometry and emissivities. NotConvergedError when a solve does not converge.
 ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+                                         std::span<const double> emissivity, std::span<const std::uint32_t> object,
+                                         std::uint32_t objects, const RadiateOptions& options);
+ConductanceResult radiative_conductances(const RowProduct& F, std::span<const double> area,
                                          std::span<const double> emissivity, std::span<const std::uint32_t> object,
                                          std::uint32_t objects, const RadiateOptions& options);
 
@@ -196,6 +228,9 @@ BandModel bands_for_objects(std::span<const std::string> objects, std::span<cons
 // emissivity is not used (the bands give it). With one band [0, +inf) and temperatures only, the
 // result is solve_radiation's bit for bit.
 RadiateResult solve_radiation_bands(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                                    std::span<const std::uint32_t> group, const BandModel& bands,
+                                    const RadiateOptions& options);
+RadiateResult solve_radiation_bands(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
                                     std::span<const std::uint32_t> group, const BandModel& bands,
                                     const RadiateOptions& options);
 
