@@ -267,6 +267,15 @@ TEST_F(RadiateCli, StreamedMatrixGivesTheSameBytes) {
     EXPECT_EQ(no_matrix.code, 2) << no_matrix.output;
     EXPECT_NE(no_matrix.output.find("--stream-matrix needs --matrix"), std::string::npos) << no_matrix.output;
     EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+    // A .ffm made for another meshing of the scene: refused, in memory or streamed (exit 2, nothing written).
+    for (const std::string stream : {"", " --set stream-matrix=true"}) {
+        const RunResult other = run_ffcube("radiate " + (dir / "box.obj") + " --max-patch-edge 2 -q --matrix " +
+                                           (dir / "F.ffm") + " --sky-temperature 3 --surfaces " + (dir / "s.csv") + stream +
+                                           " -o " + (dir / "q.csv"));
+        EXPECT_EQ(other.code, 2) << other.output;
+        EXPECT_NE(other.output.find("was computed for a different scene or meshing"), std::string::npos) << other.output;
+        EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+    }
 }
 
 }  // namespace
