@@ -32,7 +32,7 @@ struct Options {
     std::string direction, angles, out, by, report, backend = "auto";
     SunOptions sun;
     std::string series, albedo, matrix, sky_patches;
-    double reflection_tolerance = 1e-13;
+    double reflection_tolerance = 1e-12;
     std::uint32_t batch = 32;
 };
 
@@ -205,7 +205,7 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
                ->default_val(std::uint64_t{1} << 27));
     expert(sub->add_option("--reflection-tolerance", opts->reflection_tolerance,
                            "--sun-series: stop the reflections when a sweep changes them by less than this x the incident power")
-               ->default_val(1e-13));
+               ->default_val(1e-12));
     expert(sub->add_option("--batch", opts->batch, "--sun-series: steps solved together (one pass over F serves them all)")
                ->default_val(32));
     expert(sub->add_option("--tile", opts->sun.tile, "tile side in pixels (0: min(4096, GL limits))")->default_val(0));

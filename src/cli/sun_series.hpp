@@ -13,7 +13,7 @@ struct SunSeriesRequest {
     SceneFlags scene;
     std::string series, albedo, matrix, sky_patches = "isotropic", out, by = "patch", report;
     SunOptions sun;         // the item buffer of every step (backend resolved)
-    double tolerance = 1e-13;  // the reflections' stopping rule (ShortwaveControl::tolerance)
+    double tolerance = 1e-12;  // the reflections' stopping rule (ShortwaveControl::tolerance)
     std::uint32_t batch = 32;  // steps solved together
 };
 

@@ -1,28 +1,34 @@
 // Shortwave with reflections on the rows of F (solver/shortwave.hpp, docs/urban.md).
 //
-// The sweep. P = ρ ∘ (Q + R), R = Fᵀ P. Starting from R⁰ = 0, each sweep computes
-//     P^m = ρ ∘ (Q + R^m),   R^{m+1} = Fᵀ P^m,
-// which is the series of bounces (R^m holds the first m of them). In the L1 norm one sweep
-// multiplies the change by at most c = max_j Σ_i ρ_i F_ji < 1, so it converges for every albedo
-// below 1 whatever F's reciprocity.
+// The sweeps. P = ρ ∘ (Q + R), R = Fᵀ P. Starting from P = ρ ∘ Q (R = 0), Gauss–Seidel sweeps
+// over the rows of Fᵀ in order: R_i = Σ_j F_ji P_j with the P_j of this sweep where already
+// updated, then P_i = ρ_i (Q_i + R_i). The system I − ρ∘Fᵀ is an M-matrix whose Jacobi sweep (the
+// series of bounces) contracts by c = max_j Σ_i ρ_i F_ji < 1 in the L1 norm, so Gauss–Seidel
+// converges too (Stein–Rosenberg), about twice as fast, for every albedo below 1 whatever F's
+// reciprocity.
 //
-// The balance. After the last sweep (R = R^{M}, P^{M−1} the reflections that made it), the answer is
-// absorbed_i = (1 − ρ_i)(Q_i + R_i) and P_i = ρ_i (Q_i + R_i), escaped = Σ_j P_j e_j with
+// The balance. After the sweeps (P from them), one last product R' = Fᵀ P gives the answer:
+// absorbed_i = (1 − ρ_i)(Q_i + R'_i), P'_i = ρ_i (Q_i + R'_i), escaped = Σ_j P'_j e_j with
 // e_j = 1 − Σ_i F_ji. Then
-//     Σ absorbed + escaped − Σ Q = Σ_i R_i − Σ_j P_j Σ_i F_ji = Σ_j (P^{M−1}_j − P_j) Σ_i F_ji,
-// and |P^{M−1}_j − P_j| = ρ_j |R^{M−1}_j − R^M_j|: the balance error is at most the last sweep's
-// change Σ|ΔR| (times max ρ·row sum < 1). The stopping rule bounds that change relative to Σ Q.
+//     Σ absorbed + escaped − Σ Q = Σ_i R'_i − Σ_j P'_j Σ_i F_ji = Σ_j (P_j − P'_j) Σ_i F_ji,
+// and |P_j − P'_j| = ρ_j |R_j − R'_j|: the balance error is at most Σ|R − R'| (times max ρ·row
+// sum < 1), that last product's change, which is of the order of the last sweep's. The stopping
+// rule bounds the sweeps' change relative to Σ Q, and ShortwaveSolution::change reports the last
+// product's.
 //
-// Threads work on fixed blocks of rows (each row of Fᵀ by one thread, in column order), and the
-// change is summed over the blocks in order: the same result for every thread count.
+// The right-hand sides are solved in groups of kGroup columns, each group on its own (its own
+// sweeps and stopping rule, over all its columns) by one thread: a group's vectors (n × 8 doubles,
+// 1.5 MB for 22,881 patches) stay in cache while the rows of Fᵀ stream past, and no column's
+// numbers depend on the thread count.
 #include "ffcube/solver/shortwave.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <limits>
 #include <map>
-#include <set>
 #include <thread>
 
 #include "ffcube/core/error.hpp"
@@ -31,26 +37,27 @@
 namespace ffcube {
 namespace {
 
-constexpr std::uint32_t kBlockRows = 512;
+constexpr std::uint32_t kGroup = 8;  // columns (right-hand sides) a row of Fᵀ is applied to at once
+// Sweeps read P rounded to float (relative error 6e-8) while they change R by more than this
+// (relative to Σ Q): far above that rounding, so they still converge as in double.
+constexpr double kFloatSweeps = 1e-5;
 
-// Runs body(first, last, block) over the blocks of kBlockRows rows, on `threads` threads (static
-// assignment: block b by thread b mod threads).
-template <class Body>
-void for_blocks(std::uint32_t n, unsigned threads, const Body& body) {
-    const std::uint32_t blocks = (n + kBlockRows - 1) / kBlockRows;
-    const auto run = [&](unsigned t, unsigned stride) {
-        for (std::uint32_t b = t; b < blocks; b += stride)
-            body(b * kBlockRows, std::min(n, (b + 1) * kBlockRows), b);
-    };
-    const unsigned used = std::max(1u, std::min<unsigned>(threads, blocks));
-    if (used <= 1) {
-        run(0, 1);
-        return;
+// y[0..8) = Σ_e val[e] · P[col[e] · stride + 0..8): one row of Fᵀ on one group of columns. Built
+// for AVX2 as well as the baseline, picked at run time. The same bits in both: each y[c] is summed
+// in the same order, and ISO C++ mode (-std=c++20) does not contract a·b + c into an FMA.
+template <class T>
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+__attribute__((target_clones("arch=haswell", "default")))
+#endif
+void row_times_group(const std::uint32_t* col, const float* val, std::uint64_t count, const T* P, std::size_t stride,
+                     double* y) {
+    double acc[kGroup] = {};
+    for (std::uint64_t e = 0; e < count; ++e) {
+        const double v = val[e];
+        const T* p = P + std::size_t(col[e]) * stride;
+        for (std::uint32_t c = 0; c < kGroup; ++c) acc[c] += v * static_cast<double>(p[c]);
     }
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < used; ++t) pool.emplace_back(run, t, used);
-    run(0, used);
-    for (std::thread& th : pool) th.join();
+    for (std::uint32_t c = 0; c < kGroup; ++c) y[c] = acc[c];
 }
 
 }  // namespace
@@ -100,6 +107,98 @@ ShortwaveSystem make_shortwave_system(const CsrMatrix& F, std::vector<double> al
     return s;
 }
 
+namespace {
+
+struct GroupResult {
+    std::uint32_t iterations = 0;
+    double change = 0.0;
+};
+
+// Solves the kGroup columns [c0, c0 + kGroup) (those ≥ k are zero) on their own: Gauss–Seidel
+// sweeps, then the last product; writes the columns of out.
+GroupResult solve_group(const ShortwaveSystem& s, std::span<const double> incident, std::uint32_t k, std::uint32_t c0,
+                        const ShortwaveControl& control, ShortwaveSolution& out) {
+    const std::uint32_t n = s.n;
+    const std::uint32_t width = std::min(kGroup, k - c0);
+    std::vector<double> Q(std::size_t(n) * kGroup, 0.0), R(Q.size(), 0.0), P(Q.size(), 0.0);
+    double total[kGroup] = {}, change[kGroup] = {};
+    for (std::uint32_t i = 0; i < n; ++i)
+        for (std::uint32_t c = 0; c < width; ++c) {
+            const double q = incident[std::size_t(i) * k + c0 + c];
+            Q[std::size_t(i) * kGroup + c] = q;
+            P[std::size_t(i) * kGroup + c] = s.albedo[i] * q;
+            total[c] += q;
+        }
+    const auto largest_change = [&] {
+        double worst = 0.0;
+        for (std::uint32_t c = 0; c < width; ++c) {
+            const double rel = total[c] > 0.0 ? change[c] / total[c] : 0.0;
+            if (!std::isfinite(rel))
+                throw NotConvergedError("shortwave reflections: a value became infinite or NaN (incident power not finite?)");
+            worst = std::max(worst, rel);
+        }
+        return worst;
+    };
+    GroupResult g;
+    // One Gauss–Seidel sweep over the rows in order, in place: R_i = Σ_j F_ji P_j with the P_j
+    // already updated, then P_i = ρ_i (Q_i + R_i); Σ_i |ΔR_i| per column. The first sweeps read a
+    // float copy of P (half the memory traffic) until the change is below kFloatSweeps; the rest,
+    // and the last product, read P itself (double).
+    std::vector<float> Pf(P.size());
+    for (std::size_t x = 0; x < P.size(); ++x) Pf[x] = static_cast<float>(P[x]);
+    bool single = true;
+    do {
+        if (g.iterations >= control.max_iterations)
+            throw NotConvergedError(fmt::format("shortwave reflections: {} sweeps without reaching the tolerance {:g} "
+                                                "(last change {:.3g}; contraction {:.6g})",
+                                                g.iterations, control.tolerance, g.change, s.contraction));
+        std::fill(change, change + kGroup, 0.0);
+        for (std::uint32_t i = 0; i < n; ++i) {
+            double y[kGroup];
+            const std::uint32_t* col = s.t_col.data() + s.t_ptr[i];
+            const float* val = s.t_val.data() + s.t_ptr[i];
+            const std::uint64_t count = s.t_ptr[i + 1] - s.t_ptr[i];
+            if (single)
+                row_times_group(col, val, count, Pf.data(), kGroup, y);
+            else
+                row_times_group(col, val, count, P.data(), kGroup, y);
+            const std::size_t x = std::size_t(i) * kGroup;
+            for (std::uint32_t c = 0; c < kGroup; ++c) {
+                change[c] += std::abs(y[c] - R[x + c]);
+                R[x + c] = y[c];
+                P[x + c] = s.albedo[i] * (Q[x + c] + y[c]);
+                Pf[x + c] = static_cast<float>(P[x + c]);
+            }
+        }
+        ++g.iterations;
+        g.change = largest_change();
+        if (single && g.change <= kFloatSweeps) {
+            single = false;
+            g.change = std::numeric_limits<double>::infinity();  // at least one sweep in double
+        }
+    } while (g.change > control.tolerance);
+    // The answer from one last product with the P of the sweeps (the balance above): R' = Fᵀ P,
+    // absorbed and escaped from P' = ρ (Q + R'). Its change bounds the balance error.
+    std::fill(change, change + kGroup, 0.0);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        double y[kGroup];
+        row_times_group(s.t_col.data() + s.t_ptr[i], s.t_val.data() + s.t_ptr[i], s.t_ptr[i + 1] - s.t_ptr[i], P.data(), kGroup,
+                        y);
+        for (std::uint32_t c = 0; c < width; ++c) {
+            const std::size_t x = std::size_t(i) * kGroup + c, o = std::size_t(i) * k + c0 + c;
+            change[c] += std::abs(y[c] - R[x]);
+            const double arriving = Q[x] + y[c];
+            out.reflected[o] = y[c];
+            out.absorbed[o] = (1.0 - s.albedo[i]) * arriving;
+        }
+    }
+    ++g.iterations;
+    g.change = largest_change();
+    return g;
+}
+
+}  // namespace
+
 ShortwaveSolution solve_shortwave(const ShortwaveSystem& s, std::span<const double> incident, std::uint32_t k,
                                   const ShortwaveControl& control) {
     const std::uint32_t n = s.n;
@@ -108,62 +207,38 @@ ShortwaveSolution solve_shortwave(const ShortwaveSystem& s, std::span<const doub
     const unsigned threads = control.threads > 0 ? control.threads : std::max(1u, std::thread::hardware_concurrency());
     ShortwaveSolution out;
     out.k = k;
-    const std::size_t nk = std::size_t(n) * k;
-    std::vector<double> total(k, 0.0);
-    for (std::uint32_t i = 0; i < n; ++i)
-        for (std::uint32_t c = 0; c < k; ++c) total[c] += incident[std::size_t(i) * k + c];
-
-    std::vector<double> R(nk, 0.0), next(nk, 0.0), P(nk, 0.0);
-    const std::uint32_t blocks = (n + kBlockRows - 1) / kBlockRows;
-    std::vector<double> block_change(std::size_t(blocks) * k, 0.0);
-    const auto reflect = [&](std::uint32_t first, std::uint32_t last) {  // P = ρ (Q + R)
-        for (std::size_t x = std::size_t(first) * k; x < std::size_t(last) * k; ++x) P[x] = s.albedo[x / k] * (incident[x] + R[x]);
-    };
-    bool converged = false;
-    while (!converged) {
-        if (out.iterations >= control.max_iterations)
-            throw NotConvergedError(fmt::format("shortwave reflections: {} sweeps without reaching the tolerance {:g} "
-                                                "(last change {:.3g}; contraction {:.6g})",
-                                                out.iterations, control.tolerance, out.change, s.contraction));
-        for_blocks(n, threads, [&](std::uint32_t first, std::uint32_t last, std::uint32_t) { reflect(first, last); });
-        for_blocks(n, threads, [&](std::uint32_t first, std::uint32_t last, std::uint32_t b) {
-            double* change = block_change.data() + std::size_t(b) * k;
-            std::fill(change, change + k, 0.0);
-            for (std::uint32_t i = first; i < last; ++i) {
-                double* y = next.data() + std::size_t(i) * k;
-                std::fill(y, y + k, 0.0);
-                for (std::uint64_t e = s.t_ptr[i]; e < s.t_ptr[i + 1]; ++e) {
-                    const double v = s.t_val[e];
-                    const double* p = P.data() + std::size_t(s.t_col[e]) * k;
-                    for (std::uint32_t c = 0; c < k; ++c) y[c] += v * p[c];
-                }
-                const double* r = R.data() + std::size_t(i) * k;
-                for (std::uint32_t c = 0; c < k; ++c) change[c] += std::abs(y[c] - r[c]);
+    out.reflected.assign(std::size_t(n) * k, 0.0);
+    out.absorbed.assign(std::size_t(n) * k, 0.0);
+    // Groups of kGroup columns are independent solves: each thread takes whole groups (group g by
+    // thread g mod threads), so no column's numbers depend on the thread count.
+    const std::uint32_t groups = (k + kGroup - 1) / kGroup;
+    std::vector<GroupResult> result(groups);
+    std::vector<std::exception_ptr> failure(groups);
+    const unsigned used = std::max(1u, std::min<unsigned>(threads, groups));
+    const auto part = [&](unsigned t) {
+        for (std::uint32_t g = t; g < groups; g += used) {
+            try {
+                result[g] = solve_group(s, incident, k, g * kGroup, control, out);
+            } catch (...) {
+                failure[g] = std::current_exception();
             }
-        });
-        R.swap(next);
-        ++out.iterations;
-        converged = true;
-        out.change = 0.0;
-        for (std::uint32_t c = 0; c < k; ++c) {
-            double sum = 0.0;
-            for (std::uint32_t b = 0; b < blocks; ++b) sum += block_change[std::size_t(b) * k + c];
-            const double rel = total[c] > 0.0 ? sum / total[c] : 0.0;
-            if (!std::isfinite(rel))
-                throw NotConvergedError("shortwave reflections: a value became infinite or NaN (incident power not finite?)");
-            out.change = std::max(out.change, rel);
-            if (rel > control.tolerance) converged = false;
         }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < used; ++t) pool.emplace_back(part, t);
+    part(0);
+    for (std::thread& th : pool) th.join();
+    for (const std::exception_ptr& e : failure)
+        if (e) std::rethrow_exception(e);
+    for (const GroupResult& g : result) {
+        out.iterations = std::max(out.iterations, g.iterations);
+        out.change = std::max(out.change, g.change);
     }
-    out.reflected = R;
-    out.absorbed.resize(nk);
     out.escaped.assign(k, 0.0);
     for (std::uint32_t i = 0; i < n; ++i)
         for (std::uint32_t c = 0; c < k; ++c) {
-            const std::size_t x = std::size_t(i) * k + c;
-            const double arriving = incident[x] + R[x];
-            out.absorbed[x] = (1.0 - s.albedo[i]) * arriving;
-            out.escaped[c] += s.albedo[i] * arriving * s.escape[i];
+            const std::size_t o = std::size_t(i) * k + c;
+            out.escaped[c] += s.albedo[i] * (incident[o] + out.reflected[o]) * s.escape[i];
         }
     return out;
 }

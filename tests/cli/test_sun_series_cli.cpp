@@ -165,11 +165,11 @@ TEST(SunSeriesCli, ADayOnACityConservesEnergyEachStepAndSolvesTheReflections) {
             const RowView row = F.row(j);
             for (std::size_t e = 0; e < row.col.size(); ++e) arriving[row.col[e]] += row.val[e] * leaving[j];
         }
-        // The balance (the 1e-9): the solver closes it to ~1e-13 (solver/shortwave.hpp), and
+        // The balance (the 1e-9): the solver closes it to ~1e-12 (its default tolerance, solver/shortwave.hpp), and
         // the file's 12 significant digits add at most 5e-12 relative per value.
         EXPECT_NEAR(absorbed + escaped, incident, 1e-9 * incident) << step[0].time;
         // Every row of B = E + ρFB: what arrives at i from reflections is Σ_j F_ji ρ_j A_j H_j. The
-        // sweeps stop when the change is below 1e-13 Σ Q; printing adds 5e-12 relative: 1e-9 Σ Q.
+        // sweeps stop when the change is below 1e-12 Σ Q; printing adds 5e-12 relative: 1e-9 Σ Q.
         for (std::uint32_t i = 0; i < n; ++i)
             EXPECT_NEAR(step[i].area * step[i].reflected, arriving[i], 1e-9 * incident) << step[0].time << " patch " << i;
     }

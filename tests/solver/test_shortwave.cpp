@@ -52,7 +52,9 @@ TEST(Shortwave, MatchesADenseSolveOfTheSameSystem) {
     for (double& a : albedo) a = 0.9 * u(rng);
     for (double& q : Q) q = 1000.0 * u(rng);
     const ShortwaveSystem s = make_shortwave_system(F, albedo, name_of);
-    const ShortwaveSolution x = solve_shortwave(s, Q, k);
+    ShortwaveControl control;
+    control.tolerance = 1e-13;
+    const ShortwaveSolution x = solve_shortwave(s, Q, k, control);
 
     // Dense: (I − diag(ρ) Fᵀ) P = ρ Q, then R = Fᵀ P.
     DenseMatrix A(n);

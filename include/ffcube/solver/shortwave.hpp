@@ -41,7 +41,7 @@ ShortwaveSystem make_shortwave_system(const CsrMatrix& F, std::vector<double> al
 struct ShortwaveControl {
     // Stop when Σ_i |R_i − R_i(previous)| ≤ tolerance × Σ_i Q_i for every right-hand side: the
     // balance Σ absorbed + escaped − Σ Q is bounded by that change (shortwave.cpp).
-    double tolerance = 1e-13;
+    double tolerance = 1e-12;
     std::uint32_t max_iterations = 100000;
     unsigned threads = 0;  // 0: hardware concurrency
 };
@@ -52,12 +52,12 @@ struct ShortwaveSolution {
     std::vector<double> reflected;  // R, patch-major like incident (W arriving from reflections)
     std::vector<double> absorbed;   // (1 − ρ_i)(Q_i + R_i), patch-major (W)
     std::vector<double> escaped;    // per right-hand side (W)
-    std::uint32_t iterations = 0;   // sweeps (products with Fᵀ)
-    double change = 0.0;            // the largest relative change of the last sweep
+    std::uint32_t iterations = 0;   // sweeps and the last product (passes over Fᵀ)
+    double change = 0.0;            // the last product's largest Σ|ΔR| / Σ Q: bounds the balance error
 };
 
-// Jacobi sweeps (the Neumann series of the reflections, each sweep one more bounce) on all
-// right-hand sides together: one pass over Fᵀ serves k of them. NotConvergedError after
+// Gauss–Seidel sweeps on all right-hand sides together (one pass over Fᵀ serves k of them), then
+// one product with Fᵀ that closes the balance (shortwave.cpp). NotConvergedError after
 // max_iterations.
 ShortwaveSolution solve_shortwave(const ShortwaveSystem& system, std::span<const double> incident, std::uint32_t k,
                                   const ShortwaveControl& control = {});
