@@ -41,6 +41,7 @@ constexpr std::uint32_t kGroup = 8;  // columns (right-hand sides) a row of Fᵀ
 // Sweeps read P rounded to float (relative error 6e-8) while they change R by more than this
 // (relative to Σ Q): far above that rounding, so they still converge as in double.
 constexpr double kFloatSweeps = 1e-5;
+constexpr double kMaxIrradiance = 1e5;  // W/m², parse_sun_series
 
 // y[0..8) = Σ_e val[e] · P[col[e] · stride + 0..8): one row of Fᵀ on one group of columns. Built
 // for AVX2 as well as the baseline, picked at run time. The same bits in both: each y[c] is summed
@@ -304,9 +305,11 @@ std::vector<SunStep> parse_sun_series(std::string_view text, const std::string& 
         }
         s.elevation = std::asin(std::clamp(s.z, -1.0, 1.0)) * 180.0 / M_PI;
         s.dni = v[0], s.dhi = v[1];
-        if (!(s.dni >= 0.0)) throw InputError(fmt::format("{}: direct_normal_irradiance {} must be >= 0 (W/m^2)", where, s.dni));
-        if (!(s.dhi >= 0.0))
-            throw InputError(fmt::format("{}: diffuse_horizontal_irradiance {} must be >= 0 (W/m^2)", where, s.dhi));
+        // At most kMaxIrradiance: 70 times the solar constant (1361 W/m²) is no sunlight, and keeps
+        // every power of a city far from overflow.
+        for (const auto& [value, name] : {std::pair{s.dni, "direct_normal_irradiance"}, {s.dhi, "diffuse_horizontal_irradiance"}})
+            if (!(value >= 0.0 && value <= kMaxIrradiance))
+                throw InputError(fmt::format("{}: {} {} must be in [0, {:g}] W/m^2", where, name, value, kMaxIrradiance));
         seen.emplace(s.time, line_no);
         out.push_back(std::move(s));
     }

@@ -89,8 +89,7 @@ TEST(Shortwave, MatchesADenseSolveOfTheSameSystem) {
 }
 
 TEST(Shortwave, TheSameBitsForOneOrManyThreads) {
-    // 1,300 rows: three blocks of 512, so the threads really split the rows.
-    const std::uint32_t n = 1300, k = 5;
+    const std::uint32_t n = 1300, k = 21;  // 3 groups of 8 columns: the threads really split them
     const CsrMatrix F = random_rows(n, 30, 0.9, 3);
     std::vector<double> albedo(n, 0.35), Q(n * k);
     for (std::size_t x = 0; x < Q.size(); ++x) Q[x] = static_cast<double>((x * 2654435761u) % 1000);
@@ -178,8 +177,9 @@ TEST(SunSeries, RefusesEveryBadLineNamingFileLineAndRule) {
         {h + "t,180,30,800\n", "s.csv:2: 4 fields"},
         {h + "t,180,thirty,800,100\n", "s.csv:2: elevation 'thirty' is not a finite number"},
         {h + "t,180,91,800,100\n", "s.csv:2: elevation 91 must be in [-90, 90]"},
-        {h + "t,180,30,-1,100\n", "s.csv:2: direct_normal_irradiance -1 must be >= 0"},
-        {h + "t,180,30,800,-2\n", "s.csv:2: diffuse_horizontal_irradiance -2 must be >= 0"},
+        {h + "t,180,30,-1,100\n", "s.csv:2: direct_normal_irradiance -1 must be in [0, 100000] W/m^2"},
+        {h + "t,180,30,800,-2\n", "s.csv:2: diffuse_horizontal_irradiance -2 must be in [0, 100000] W/m^2"},
+        {h + "t,180,30,1e300,2\n", "s.csv:2: direct_normal_irradiance 1e+300 must be in [0, 100000] W/m^2"},
         {h + "t,180,30,inf,100\n", "s.csv:2: direct_normal_irradiance 'inf' is not a finite number"},
         {h + "t,180,30,800,\n", "s.csv:2: diffuse_horizontal_irradiance is missing"},
         {h + ",180,30,800,100\n", "s.csv:2: the time is empty"},
