@@ -17,9 +17,10 @@
 // product's.
 //
 // The right-hand sides are solved in groups of kGroup columns, each group on its own (its own
-// sweeps and stopping rule, over all its columns) by one thread: a group's vectors (n × 8 doubles,
-// 1.5 MB for 22,881 patches) stay in cache while the rows of Fᵀ stream past, and no column's
-// numbers depend on the thread count.
+// sweeps and stopping rule, over all its columns) by one thread: a group's vectors (n × 4 doubles,
+// 0.7 MB for 22,881 patches; half that in float) stay in cache while the rows of Fᵀ stream past,
+// and no column's numbers depend on the thread count. (4 columns measured faster per CPU second
+// than 2, 8 or 16 on the 22,881-facet city: tools/bench_shortwave_solve.)
 #include "ffcube/solver/shortwave.hpp"
 
 #include <fmt/format.h>
@@ -37,13 +38,13 @@
 namespace ffcube {
 namespace {
 
-constexpr std::uint32_t kGroup = 8;  // columns (right-hand sides) a row of Fᵀ is applied to at once
+constexpr std::uint32_t kGroup = 4;  // columns (right-hand sides) a row of Fᵀ is applied to at once
 // Sweeps read P rounded to float (relative error 6e-8) while they change R by more than this
 // (relative to Σ Q): far above that rounding, so they still converge as in double.
 constexpr double kFloatSweeps = 1e-5;
 constexpr double kMaxIrradiance = 1e5;  // W/m², parse_sun_series
 
-// y[0..8) = Σ_e val[e] · P[col[e] · stride + 0..8): one row of Fᵀ on one group of columns. Built
+// y[0..kGroup) = Σ_e val[e] · P[col[e] · stride + 0..kGroup): one row of Fᵀ on one group of columns. Built
 // for AVX2 as well as the baseline, picked at run time. The same bits in both: each y[c] is summed
 // in the same order, and ISO C++ mode (-std=c++20) does not contract a·b + c into an FMA.
 template <class T>

@@ -89,7 +89,7 @@ TEST(Shortwave, MatchesADenseSolveOfTheSameSystem) {
 }
 
 TEST(Shortwave, TheSameBitsForOneOrManyThreads) {
-    const std::uint32_t n = 1300, k = 21;  // 3 groups of 8 columns: the threads really split them
+    const std::uint32_t n = 1300, k = 21;  // 6 groups of 4 columns: the threads really split them
     const CsrMatrix F = random_rows(n, 30, 0.9, 3);
     std::vector<double> albedo(n, 0.35), Q(n * k);
     for (std::size_t x = 0; x < Q.size(); ++x) Q[x] = static_cast<double>((x * 2654435761u) % 1000);
