@@ -44,9 +44,11 @@ constexpr std::uint32_t kGroup = 4;  // columns (right-hand sides) a row of Fᵀ
 constexpr double kFloatSweeps = 1e-5;
 constexpr double kMaxIrradiance = 1e5;  // W/m², parse_sun_series
 
-// y[0..kGroup) = Σ_e val[e] · P[col[e] · stride + 0..kGroup): one row of Fᵀ on one group of columns. Built
-// for AVX2 as well as the baseline, picked at run time. The same bits in both: each y[c] is summed
-// in the same order, and ISO C++ mode (-std=c++20) does not contract a·b + c into an FMA.
+// y[0..kGroup) = Σ_e val[e] · P[col[e] · stride + 0..kGroup): one row of Fᵀ on one group of
+// columns. Built for AVX2 (Haswell: with FMA) as well as the baseline, picked at run time. Each
+// y[c] is summed in the same order in both, but GCC may fuse a·b + c into one FMA in the Haswell
+// clone, so the last bits can differ between a machine with FMA and one without; on one machine
+// they never depend on the thread count.
 template <class T>
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=haswell", "default")))
