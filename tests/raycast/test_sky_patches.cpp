@@ -116,5 +116,16 @@ TEST(SkyPatches, ALongWallTakesItsClosedFormShareOfTheSky) {
     EXPECT_GT(v.rays, 0u);
 }
 
+TEST(SkyPatches, TheSameBitsForOneOrManyThreads) {
+    std::vector<NamedPolygon> polys = {{"wall", {{1, -3, 0}, {1, -3, 1}, {1, 3, 1}, {1, 3, 0}}}};
+    for (int k = 0; k < 6; ++k) polys.push_back(test::square_z("g" + std::to_string(k), 0.0, true, 0.5, Vec3(-k * 0.5, 0, 0)));
+    const Scene scene = whole_faces(polys);
+    SkyPatchOptions one, three;
+    one.threads = 1;
+    three.threads = 3;
+    const std::vector<SkyPatch> sky = tregenza_patches();
+    EXPECT_EQ(sky_patch_view_factors(scene, sky, one).v, sky_patch_view_factors(scene, sky, three).v);
+}
+
 }  // namespace
 }  // namespace ffcube
