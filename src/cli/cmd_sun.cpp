@@ -206,7 +206,7 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
     expert(sub->add_option("--reflection-tolerance", opts->reflection_tolerance,
                            "--sun-series: stop the reflections when a sweep changes them by less than this x the incident power")
                ->default_val(1e-12));
-    expert(sub->add_option("--batch", opts->batch, "--sun-series: steps solved together (one pass over F serves them all)")
+    expert(sub->add_option("--batch", opts->batch, "--sun-series: steps computed, solved and written together (memory: 4 x steps x patches doubles)")
                ->default_val(32));
     expert(sub->add_option("--tile", opts->sun.tile, "tile side in pixels (0: min(4096, GL limits))")->default_val(0));
     sub->callback([opts, &action] {

@@ -10,7 +10,10 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <optional>
+#include <span>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/input_file.hpp"
@@ -31,49 +34,46 @@ namespace {
 
 std::string num(double v) { return fmt::format("{:.12g}", v); }
 
-// Irradiances per patch and step (W/m²), patch-major within a step: [s][i].
+// Irradiances per step of a batch and patch (W/m²): [s][i].
 struct Series {
     std::vector<std::vector<double>> direct, diffuse, reflected, absorbed;
 };
 
-void write_series(const std::string& path, const Scene& scene, const std::vector<SunStep>& steps,
-                  const std::vector<double>& albedo, const Series& r, bool by_object) {
-    write_file_atomically(path, [&](std::ostream& os) {
-        if (!by_object) {
-            os << "time,patch,object,area,albedo,direct,diffuse,reflected,absorbed\n";
-            for (std::size_t s = 0; s < steps.size(); ++s) {
-                const std::string time = csv_field(steps[s].time);
-                for (std::size_t i = 0; i < scene.size(); ++i) {
-                    const Patch& p = scene.patches[i];
-                    os << time << ',' << i << ',' << csv_field(scene.objects[p.object]) << ',' << num(p.area) << ','
-                       << num(albedo[i]) << ',' << num(r.direct[s][i]) << ',' << num(r.diffuse[s][i]) << ','
-                       << num(r.reflected[s][i]) << ',' << num(r.absorbed[s][i]) << '\n';
-                }
-            }
-            return;
-        }
-        // Per object: area-weighted means Σ A x / Σ A of its patches.
-        const std::size_t m = scene.objects.size();
-        std::vector<double> area(m, 0.0);
-        for (const Patch& p : scene.patches) area[p.object] += p.area;
-        os << "time,object,area,direct,diffuse,reflected,absorbed\n";
+// The lines of a batch of steps (r holds the batch's irradiances, in step order).
+void write_lines(std::ostream& os, const Scene& scene, std::span<const SunStep> steps, const std::vector<double>& albedo,
+                 const Series& r, bool by_object) {
+    if (!by_object) {
         for (std::size_t s = 0; s < steps.size(); ++s) {
-            std::vector<std::array<double, 4>> sum(m, {0.0, 0.0, 0.0, 0.0});
+            const std::string time = csv_field(steps[s].time);
             for (std::size_t i = 0; i < scene.size(); ++i) {
                 const Patch& p = scene.patches[i];
-                sum[p.object][0] += p.area * r.direct[s][i];
-                sum[p.object][1] += p.area * r.diffuse[s][i];
-                sum[p.object][2] += p.area * r.reflected[s][i];
-                sum[p.object][3] += p.area * r.absorbed[s][i];
-            }
-            const std::string time = csv_field(steps[s].time);
-            for (std::size_t k = 0; k < m; ++k) {
-                os << time << ',' << csv_field(scene.objects[k]) << ',' << num(area[k]);
-                for (const double x : sum[k]) os << ',' << num(area[k] > 0.0 ? x / area[k] : 0.0);
-                os << '\n';
+                os << time << ',' << i << ',' << csv_field(scene.objects[p.object]) << ',' << num(p.area) << ','
+                   << num(albedo[i]) << ',' << num(r.direct[s][i]) << ',' << num(r.diffuse[s][i]) << ','
+                   << num(r.reflected[s][i]) << ',' << num(r.absorbed[s][i]) << '\n';
             }
         }
-    });
+        return;
+    }
+    // Per object: area-weighted means Σ A x / Σ A of its patches.
+    const std::size_t m = scene.objects.size();
+    std::vector<double> area(m, 0.0);
+    for (const Patch& p : scene.patches) area[p.object] += p.area;
+    for (std::size_t s = 0; s < steps.size(); ++s) {
+        std::vector<std::array<double, 4>> sum(m, {0.0, 0.0, 0.0, 0.0});
+        for (std::size_t i = 0; i < scene.size(); ++i) {
+            const Patch& p = scene.patches[i];
+            sum[p.object][0] += p.area * r.direct[s][i];
+            sum[p.object][1] += p.area * r.diffuse[s][i];
+            sum[p.object][2] += p.area * r.reflected[s][i];
+            sum[p.object][3] += p.area * r.absorbed[s][i];
+        }
+        const std::string time = csv_field(steps[s].time);
+        for (std::size_t k = 0; k < m; ++k) {
+            os << time << ',' << csv_field(scene.objects[k]) << ',' << num(area[k]);
+            for (const double x : sum[k]) os << ',' << num(area[k] > 0.0 ? x / area[k] : 0.0);
+            os << '\n';
+        }
+    }
 }
 
 }  // namespace
@@ -150,78 +150,90 @@ int run_sun_series(const SunSeriesRequest& q) {
     report.set("sky.model", q.sky_patches);
     report.set("time.sky", watch.seconds());
 
-    // The direct beam, step by step (one item buffer each, for the suns above the horizon).
-    Series r;
-    r.direct.assign(steps.size(), std::vector<double>(n, 0.0));
-    r.diffuse.assign(steps.size(), std::vector<double>(n, 0.0));
-    r.reflected.assign(steps.size(), std::vector<double>(n, 0.0));
-    r.absorbed.assign(steps.size(), std::vector<double>(n, 0.0));
-    double sun_seconds = 0.0;
-    std::size_t renders = 0;
-    std::vector<std::size_t> lit;  // steps with any incident energy
-    for (std::size_t s = 0; s < steps.size(); ++s) {
-        const SunStep& st = steps[s];
-        if (st.z > 0.0 && st.dni > 0.0) {
-            const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun);
-            sun_seconds += sun.seconds;
-            ++renders;
-            for (std::size_t i = 0; i < n; ++i) r.direct[s][i] = st.dni * sun.fraction[i] * std::max(0.0, sun.cosine[i]);
-        }
-        for (std::size_t i = 0; i < n; ++i) r.diffuse[s][i] = st.dhi * svf[i];
-        if (st.dhi > 0.0 || (st.z > 0.0 && st.dni > 0.0)) lit.push_back(s);
+    // Batch by batch of steps (memory: a batch's irradiances, not the whole series): the direct
+    // beam of each step (one item buffer with the sun up), the sky, the reflections of the steps
+    // with light all at once, then the batch's lines.
+    std::optional<AtomicFile> file;
+    if (!q.out.empty()) {
+        file.emplace(q.out);
+        file->stream() << (q.by == "object" ? "time,object,area,direct,diffuse,reflected,absorbed\n"
+                                            : "time,patch,object,area,albedo,direct,diffuse,reflected,absorbed\n");
     }
-    report.set("time.sun", sun_seconds);
-    report.set("sun.renders", renders);
-    info("direct beam: {} item buffers, {:.2f} s", renders, sun_seconds);
-
-    // Reflections, batch by batch of the steps with incident energy.
-    watch.restart();
     ShortwaveControl control;
     control.tolerance = q.tolerance;
     std::vector<double> incident_w(steps.size(), 0.0), absorbed_w(steps.size(), 0.0), escaped_w(steps.size(), 0.0);
     std::uint32_t max_sweeps = 0;
-    for (std::size_t b0 = 0; b0 < lit.size(); b0 += q.batch) {
-        const auto k = static_cast<std::uint32_t>(std::min<std::size_t>(q.batch, lit.size() - b0));
-        std::vector<double> Q(n * k);
-        for (std::size_t i = 0; i < n; ++i)
-            for (std::uint32_t c = 0; c < k; ++c) {
-                const std::size_t s = lit[b0 + c];
-                Q[i * k + c] = scene.patches[i].area * (r.direct[s][i] + r.diffuse[s][i]);
+    std::size_t renders = 0, solved = 0;
+    double sun_seconds = 0.0, solve_seconds = 0.0, write_seconds = 0.0;
+    for (std::size_t b0 = 0; b0 < steps.size(); b0 += q.batch) {
+        const std::size_t b1 = std::min(steps.size(), b0 + q.batch);
+        Series r;
+        r.direct.assign(b1 - b0, std::vector<double>(n, 0.0));
+        r.diffuse.assign(b1 - b0, std::vector<double>(n, 0.0));
+        r.reflected.assign(b1 - b0, std::vector<double>(n, 0.0));
+        r.absorbed.assign(b1 - b0, std::vector<double>(n, 0.0));
+        std::vector<std::size_t> lit;  // steps of the batch (0-based in it) with incident energy
+        for (std::size_t s = b0; s < b1; ++s) {
+            const SunStep& st = steps[s];
+            const bool sun_up = st.z > 0.0 && st.dni > 0.0;
+            if (sun_up) {
+                const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun);
+                sun_seconds += sun.seconds;
+                ++renders;
+                for (std::size_t i = 0; i < n; ++i)
+                    r.direct[s - b0][i] = st.dni * sun.fraction[i] * std::max(0.0, sun.cosine[i]);
             }
-        const ShortwaveSolution x = solve_shortwave(system, Q, k, control);
-        max_sweeps = std::max(max_sweeps, x.iterations);
-        for (std::uint32_t c = 0; c < k; ++c) {
-            const std::size_t s = lit[b0 + c];
-            for (std::size_t i = 0; i < n; ++i) {
-                const double a = scene.patches[i].area;
-                incident_w[s] += Q[i * k + c];
-                absorbed_w[s] += x.absorbed[i * k + c];
-                r.reflected[s][i] = a > 0.0 ? x.reflected[i * k + c] / a : 0.0;
-                r.absorbed[s][i] = a > 0.0 ? x.absorbed[i * k + c] / a : 0.0;
-            }
-            escaped_w[s] = x.escaped[c];
+            for (std::size_t i = 0; i < n; ++i) r.diffuse[s - b0][i] = st.dhi * svf[i];
+            if (sun_up || st.dhi > 0.0) lit.push_back(s - b0);
         }
+        watch.restart();
+        if (!lit.empty()) {
+            const auto k = static_cast<std::uint32_t>(lit.size());
+            std::vector<double> Q(n * k);
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::uint32_t c = 0; c < k; ++c)
+                    Q[i * k + c] = scene.patches[i].area * (r.direct[lit[c]][i] + r.diffuse[lit[c]][i]);
+            const ShortwaveSolution x = solve_shortwave(system, Q, k, control);
+            max_sweeps = std::max(max_sweeps, x.iterations);
+            solved += k;
+            for (std::uint32_t c = 0; c < k; ++c) {
+                const std::size_t s = lit[c];
+                for (std::size_t i = 0; i < n; ++i) {
+                    const double a = scene.patches[i].area;
+                    incident_w[b0 + s] += Q[i * k + c];
+                    absorbed_w[b0 + s] += x.absorbed[i * k + c];
+                    r.reflected[s][i] = a > 0.0 ? x.reflected[i * k + c] / a : 0.0;
+                    r.absorbed[s][i] = a > 0.0 ? x.absorbed[i * k + c] / a : 0.0;
+                }
+                escaped_w[b0 + s] = x.escaped[c];
+            }
+        }
+        solve_seconds += watch.seconds();
+        watch.restart();
+        if (file) write_lines(file->stream(), scene, std::span(steps).subspan(b0, b1 - b0), albedo, r, q.by == "object");
+        write_seconds += watch.seconds();
     }
-    const double solve_seconds = watch.seconds();
     double worst = 0.0;
     for (std::size_t s = 0; s < steps.size(); ++s)
         if (incident_w[s] > 0.0) worst = std::max(worst, std::abs(absorbed_w[s] + escaped_w[s] - incident_w[s]) / incident_w[s]);
+    report.set("time.sun", sun_seconds);
+    report.set("sun.renders", renders);
+    info("direct beam: {} item buffers, {:.2f} s", renders, sun_seconds);
+    const double rate = solve_seconds > 0.0 ? static_cast<double>(solved) / solve_seconds : 0.0;
     report.set("time.reflections", solve_seconds);
-    report.set("reflections.steps_solved", lit.size());
-    report.set("reflections.steps_per_second", solve_seconds > 0.0 ? static_cast<double>(lit.size()) / solve_seconds : 0.0);
+    report.set("reflections.steps_solved", solved);
+    report.set("reflections.steps_per_second", rate);
     report.set("reflections.max_sweeps", max_sweeps);
     report.set("reflections.tolerance", q.tolerance);
     report.set_array("energy.incident", incident_w);
     report.set_array("energy.absorbed", absorbed_w);
     report.set_array("energy.escaped", escaped_w);
     report.set("energy.max_relative_error", worst);
-    info("reflections: {} steps in {:.3f} s ({:.0f} steps/s), at most {} sweeps (contraction {:.3g}); balance error {:.3g}",
-         lit.size(), solve_seconds, solve_seconds > 0.0 ? static_cast<double>(lit.size()) / solve_seconds : 0.0, max_sweeps, system.contraction,
-         worst);
-
+    info("reflections: {} steps in {:.3f} s ({:.0f} steps/s), at most {} passes over F (contraction {:.3g}); balance error {:.3g}",
+         solved, solve_seconds, rate, max_sweeps, system.contraction, worst);
     watch.restart();
-    if (!q.out.empty()) write_series(q.out, scene, steps, albedo, r, q.by == "object");
-    report.set("time.writing", watch.seconds());
+    if (file) file->commit();
+    report.set("time.writing", write_seconds + watch.seconds());
     report.set("time.total", total.seconds());
     if (!q.report.empty()) report.write(q.report);
     return 0;

@@ -14,7 +14,7 @@ struct SunSeriesRequest {
     std::string series, albedo, matrix, sky_patches = "isotropic", out, by = "patch", report;
     SunOptions sun;         // the item buffer of every step (backend resolved)
     double tolerance = 1e-12;  // the reflections' stopping rule (ShortwaveControl::tolerance)
-    std::uint32_t batch = 32;  // steps solved together
+    std::uint32_t batch = 32;  // steps computed, solved and written together
 };
 
 int run_sun_series(const SunSeriesRequest& request);
