@@ -90,6 +90,10 @@ int run(const Options& o) {
     check_output_path("--report", o.report);
     if (o.by != "patch" && o.by != "object")
         throw InputError(fmt::format("--by {}: must be patch or object", o.by));
+    if (!(o.sun.tolerance > 0.0 && o.sun.tolerance < 1.0))
+        throw InputError(fmt::format("--tolerance {}: must be in (0, 1)", o.sun.tolerance));
+    if (o.sun.max_pixels < 1) throw InputError("--max-pixels 0: must be at least 1");
+    if (o.sun.tile < 0 || o.sun.tile == 1) throw InputError(fmt::format("--tile {}: must be 0 (automatic) or at least 2", o.sun.tile));
     if (!o.series.empty()) {
         if (!o.direction.empty() || !o.angles.empty())
             throw InputError("--sun-series gives the sun of every step; leave out --sun and --sun-direction");
@@ -121,10 +125,6 @@ int run(const Options& o) {
         const std::vector<double> v = parse_numbers(o.angles, 2, "--sun", "AZIMUTH,ELEVATION in degrees");
         s = sun_direction_from_angles(v[0], v[1]);
     }
-    if (!(o.sun.tolerance > 0.0 && o.sun.tolerance < 1.0))
-        throw InputError(fmt::format("--tolerance {}: must be in (0, 1)", o.sun.tolerance));
-    if (o.sun.max_pixels < 1) throw InputError("--max-pixels 0: must be at least 1");
-    if (o.sun.tile < 0 || o.sun.tile == 1) throw InputError(fmt::format("--tile {}: must be 0 (automatic) or at least 2", o.sun.tile));
     if (mpi_distributed()) throw InputError("ffcube sun runs in one process; run it without mpirun");
     SunOptions so = o.sun;
     so.backend = parse_backend(o.backend);
