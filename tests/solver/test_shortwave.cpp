@@ -217,3 +217,52 @@ TEST(Albedo, ReadsEveryObjectAndRefusesUnknownRepeatedMissingAndOutOfRange) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Mangled files (bytes changed, cut, doubled): each is read or refused with an InputError, and
+// what is read is sane (finite, a unit direction, irradiances in range, albedos in [0, 1)).
+TEST(SunSeries, MangledFilesAreReadSanelyOrRefused) {
+    const std::string series =
+        "time,azimuth,elevation,direct_normal_irradiance,diffuse_horizontal_irradiance\n"
+        "\"2024-06-21 06:00\",90,5.5,120.5,30\n07:00,100,15,400,60\n# note\n08:00,110,25.25,600,80\n";
+    const std::string albedo = "object,albedo\nroof,0.2\n\"wall, south\",0.35\nground,0.1\n";
+    const std::vector<std::string> objects = {"ground", "roof", "wall, south"};
+    std::mt19937 rng(2024);
+    const std::string alphabet = "0123456789.,-+e\"\n\r #xinfa";
+    std::size_t read = 0, refused = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const bool is_series = trial % 2 == 0;
+        std::string text = is_series ? series : albedo;
+        const int edits = 1 + static_cast<int>(rng() % 3);
+        for (int e = 0; e < edits; ++e) {
+            const std::size_t at = rng() % (text.size() + 1);
+            switch (rng() % 3) {
+                case 0: if (at < text.size()) text[at] = alphabet[rng() % alphabet.size()]; break;
+                case 1: text.insert(at, 1, alphabet[rng() % alphabet.size()]); break;
+                default: text.erase(at, std::min<std::size_t>(rng() % 4, text.size() - std::min(at, text.size())));
+            }
+        }
+        try {
+            if (is_series) {
+                for (const SunStep& s : parse_sun_series(text, "m.csv")) {
+                    EXPECT_NEAR(s.x * s.x + s.y * s.y + s.z * s.z, 1.0, 1e-12) << text;
+                    EXPECT_TRUE(s.dni >= 0.0 && s.dni <= 1e5 && s.dhi >= 0.0 && s.dhi <= 1e5) << text;
+                    EXPECT_TRUE(std::isfinite(s.elevation) && !s.time.empty()) << text;
+                }
+            } else {
+                for (const double a : parse_albedo_csv(text, "m.csv", objects)) EXPECT_TRUE(a >= 0.0 && a < 1.0) << text;
+            }
+            ++read;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()).rfind("m.csv", 0), 0u) << e.what();  // names the file first
+            ++refused;
+        }
+    }
+    EXPECT_GT(read, 100u);
+    EXPECT_GT(refused, 100u);
+}
+
+}  // namespace
+}  // namespace ffcube
