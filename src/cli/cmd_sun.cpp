@@ -31,7 +31,7 @@ struct Options {
     SceneFlags scene;
     std::string direction, angles, out, by, report, backend = "auto";
     SunOptions sun;
-    std::string series, albedo, matrix, sky_patches;
+    std::string series, albedo, matrix, sky_patches, sky_out;
     double reflection_tolerance = 1e-12;
     std::uint32_t batch = 32;
 };
@@ -104,6 +104,7 @@ int run(const Options& o) {
         q.albedo = o.albedo;
         q.matrix = o.matrix;
         q.sky_patches = o.sky_patches.empty() ? "isotropic" : o.sky_patches;
+        q.sky_out = o.sky_out;
         q.out = o.out;
         q.by = o.by;
         q.report = o.report;
@@ -113,7 +114,8 @@ int run(const Options& o) {
         q.batch = o.batch;
         return run_sun_series(q);
     }
-    for (const auto& [option, value] : {std::pair{"--albedo", &o.albedo}, {"--matrix", &o.matrix}, {"--sky-patches", &o.sky_patches}})
+    for (const auto& [option, value] : {std::pair{"--albedo", &o.albedo}, {"--matrix", &o.matrix}, {"--sky-patches", &o.sky_patches},
+                                               {"--sky-patches-out", &o.sky_out}})
         if (!value->empty()) throw InputError(fmt::format("{} goes with --sun-series (a series of sun positions)", option));
     if (o.direction.empty() == o.angles.empty())
         throw InputError("give the sun as exactly one of --sun-direction X,Y,Z (towards the sun) and --sun AZIMUTH,ELEVATION");
@@ -192,6 +194,8 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--matrix", opts->matrix, "with --sun-series: take F from F.ffm (made for this scene) instead of computing it");
     sub->add_option("--sky-patches", opts->sky_patches,
                     "with --sun-series: isotropic (default: sky view factor 1 - row sum of F) or tregenza (145 patches, traced)");
+    sub->add_option("--sky-patches-out", opts->sky_out,
+                    "with --sky-patches tregenza: write patch,object,p0..p144, the view factor of every patch to every sky patch");
     sub->add_option("-o,--out", opts->out,
                     "write patch,object,area,sunlit_fraction (--by object: object,area,sunlit_fraction); with --sun-series: "
                     "time,patch,object,area,albedo,direct,diffuse,reflected,absorbed (W/m^2)");

@@ -76,12 +76,29 @@ void write_lines(std::ostream& os, const Scene& scene, std::span<const SunStep> 
     }
 }
 
+// patch,object,p0,...,p144: V_ip per patch of the scene and Tregenza patch (docs/urban.md).
+void write_sky_patches(const std::string& path, const Scene& scene, const SkyPatchViewFactors& v) {
+    write_file_atomically(path, [&](std::ostream& os) {
+        os << "patch,object";
+        for (std::uint32_t p = 0; p < v.sky; ++p) os << ",p" << p;
+        os << '\n';
+        for (std::size_t i = 0; i < scene.size(); ++i) {
+            os << i << ',' << csv_field(scene.objects[scene.patches[i].object]);
+            for (std::uint32_t p = 0; p < v.sky; ++p) os << ',' << num(v.v[i * v.sky + p]);
+            os << '\n';
+        }
+    });
+}
+
 }  // namespace
 
 int run_sun_series(const SunSeriesRequest& q) {
     Stopwatch total;
     check_output_path("-o", q.out);
     check_output_path("--report", q.report);
+    check_output_path("--sky-patches-out", q.sky_out);
+    if (!q.sky_out.empty() && q.sky_patches != "tregenza")
+        throw InputError("--sky-patches-out writes the Tregenza view factors: give --sky-patches tregenza");
     if (q.by != "patch" && q.by != "object") throw InputError(fmt::format("--by {}: must be patch or object", q.by));
     if (q.sky_patches != "isotropic" && q.sky_patches != "tregenza")
         throw InputError(fmt::format("--sky-patches {}: must be isotropic (the sky view factor 1 - row sum of F) or tregenza "
@@ -137,10 +154,11 @@ int run_sun_series(const SunSeriesRequest& q) {
     // The sky: what an unobstructed horizontal plane's DHI becomes on each patch, per W/m² of DHI.
     watch.restart();
     std::vector<double> svf;
+    SkyPatchViewFactors v;  // --sky-patches tregenza: written with the other outputs, at the end
     if (q.sky_patches == "isotropic") {
         svf = sky_view_factors(F);
     } else {
-        const SkyPatchViewFactors v = sky_patch_view_factors(scene, tregenza_patches());
+        v = sky_patch_view_factors(scene, tregenza_patches());
         svf.assign(n, 0.0);
         for (std::size_t i = 0; i < n; ++i)
             for (std::uint32_t p = 0; p < v.sky; ++p) svf[i] += v.v[i * v.sky + p];  // isotropic radiance DHI/π per patch
@@ -233,6 +251,7 @@ int run_sun_series(const SunSeriesRequest& q) {
          solved, solve_seconds, rate, max_sweeps, system.contraction, worst);
     watch.restart();
     if (file) file->commit();
+    if (!q.sky_out.empty()) write_sky_patches(q.sky_out, scene, v);
     report.set("time.writing", write_seconds + watch.seconds());
     report.set("time.total", total.seconds());
     if (!q.report.empty()) report.write(q.report);

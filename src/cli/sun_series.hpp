@@ -11,7 +11,7 @@ namespace ffcube::cli {
 
 struct SunSeriesRequest {
     SceneFlags scene;
-    std::string series, albedo, matrix, sky_patches = "isotropic", out, by = "patch", report;
+    std::string series, albedo, matrix, sky_patches = "isotropic", sky_out, out, by = "patch", report;
     SunOptions sun;         // the item buffer of every step (backend resolved)
     double tolerance = 1e-12;  // the reflections' stopping rule (ShortwaveControl::tolerance)
     std::uint32_t batch = 32;  // steps computed, solved and written together

@@ -59,8 +59,35 @@ TEST(SunSeriesCli, APlaneAloneAbsorbsTheClosedForm) {
         {"t1", {35, 800, 120}}, {"t2", {5, 300, 40}}, {"night", {-10, 0, 0}}, {"t3", {80, 900, 0}}};
     for (const char* sky : {"isotropic", "tregenza"}) {
         const RunResult r = run_ffcube("sun " + (dir / "plane.obj") + " --no-subdivide -q --sun-series " + (dir / "sun.csv") +
-                                       " --albedo " + (dir / "a.csv") + " --sky-patches " + sky + " -o " + (dir / "sw.csv") + kBudget);
+                                       " --albedo " + (dir / "a.csv") + " --sky-patches " + sky + " -o " + (dir / "sw.csv") + kBudget +
+                                       (std::string(sky) == "tregenza" ? " --sky-patches-out " + (dir / "v.csv") : ""));
         ASSERT_EQ(r.code, 0) << r.output;
+        if (std::string(sky) == "tregenza") {
+            // The Tregenza layout (8 bands of 12°: 30, 30, 24, 24, 18, 12, 6 patches, and the cap):
+            // an unobstructed horizontal patch sees band patch p as (Δaz/2π)(sin² alt1 − sin² alt0).
+            std::vector<double> want;
+            const int counts[8] = {30, 30, 24, 24, 18, 12, 6, 1};
+            for (int b = 0; b < 8; ++b) {
+                const double a0 = b * 12.0 * M_PI / 180, a1 = b < 7 ? (b + 1) * 12.0 * M_PI / 180 : M_PI / 2;
+                for (int k = 0; k < counts[b]; ++k)
+                    want.push_back((std::pow(std::sin(a1), 2) - std::pow(std::sin(a0), 2)) / counts[b]);
+            }
+            std::istringstream v(read_text(dir / "v.csv"));
+            std::string line;
+            std::getline(v, line);
+            ASSERT_EQ(line.substr(0, 22), "patch,object,p0,p1,p2,");
+            std::getline(v, line);
+            std::vector<double> got;
+            std::stringstream ls(line);
+            for (std::string x; std::getline(ls, x, ',');) got.push_back(std::atof(x.c_str()));  // patch, object, V
+            ASSERT_EQ(got.size(), 2 + want.size()) << line;
+            double sum = 0.0;
+            for (std::size_t p = 0; p < want.size(); ++p) {
+                EXPECT_NEAR(got[2 + p], want[p], 1e-12) << "sky patch " << p;  // 12 digits printed
+                sum += got[2 + p];
+            }
+            EXPECT_NEAR(sum, 1.0, 1e-10);
+        }
         const std::vector<Row> rows = read_rows(read_text(dir / "sw.csv"));
         ASSERT_EQ(rows.size(), 4u);
         for (const Row& x : rows) {
@@ -195,6 +222,8 @@ TEST(SunSeriesCli, RefusesBadInputWithExit2AndNoOutput) {
         {"--sun-series " + (dir / "sun.csv") + " --albedo " + (dir / "a.csv") + " --sun 10,10", "leave out --sun"},
         {"--sun 10,10 --albedo " + (dir / "a.csv"), "--albedo goes with --sun-series"},
         {"--sun-series " + (dir / "sun.csv") + " --albedo " + (dir / "a.csv") + " --sky-patches perez", "--sky-patches perez"},
+        {"--sun-series " + (dir / "sun.csv") + " --albedo " + (dir / "a.csv") + " --sky-patches-out " + (dir / "v.csv"),
+         "give --sky-patches tregenza"},
         {"--sun-series " + (dir / "missing.csv") + " --albedo " + (dir / "a.csv"), "missing.csv"},
         {"--sun-series " + (dir / "sun.csv") + " --albedo " + (dir / "a.csv") + " --matrix " + (dir / "other.ffm"), "other.ffm"},
     };
