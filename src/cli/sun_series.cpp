@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <memory>
 #include <optional>
 #include <span>
 
@@ -183,6 +184,7 @@ int run_sun_series(const SunSeriesRequest& q) {
     std::uint32_t max_sweeps = 0;
     std::size_t renders = 0, solved = 0;
     double sun_seconds = 0.0, solve_seconds = 0.0, write_seconds = 0.0;
+    std::unique_ptr<GlContext> context;  // one for every step's item buffer, made at the first
     for (std::size_t b0 = 0; b0 < steps.size(); b0 += q.batch) {
         const std::size_t b1 = std::min(steps.size(), b0 + q.batch);
         Series r;
@@ -195,7 +197,8 @@ int run_sun_series(const SunSeriesRequest& q) {
             const SunStep& st = steps[s];
             const bool sun_up = st.z > 0.0 && st.dni > 0.0;
             if (sun_up) {
-                const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun);
+                if (!context) context = create_headless_context(q.sun.backend);
+                const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun, *context);
                 sun_seconds += sun.seconds;
                 ++renders;
                 for (std::size_t i = 0; i < n; ++i)
