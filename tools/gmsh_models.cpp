@@ -131,6 +131,8 @@ int main(int argc, char** argv) {
         gmsh::initialize(0, nullptr, false);
         gmsh::option::setNumber("General.Terminal", 0);
         gmsh::option::setNumber("General.NumThreads", 1);
+        // The size of the points OpenCASCADE makes would override Mesh.MeshSizeMax.
+        gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
         box();
         cavity();
         cylinder();

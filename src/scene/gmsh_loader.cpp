@@ -19,6 +19,8 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <set>
 #include <unordered_map>
@@ -114,8 +116,8 @@ struct PendingFace {
 
 class Collector {
 public:
-    Collector(std::string source, const FeLoadOptions& options, bool nastran)
-        : source_(std::move(source)), options_(options), nastran_(nastran) {
+    Collector(std::string source, const FeLoadOptions& options, bool nastran, bool cad)
+        : source_(std::move(source)), options_(options), nastran_(nastran), cad_(cad) {
         model_.source = source_;
         model_.materials.push_back(Material{"default", Vec3(0.5), Vec3(0.0)});
     }
@@ -135,7 +137,7 @@ public:
             model_.warnings.push_back(fmt::format("{}: {} surface elements lie on internal faces of the volume mesh (faces of two "
                                                   "volume elements) and do not radiate",
                                                   source_, dropped_internal_));
-        if (!ungrouped_.empty())
+        if (!ungrouped_.empty() && !cad_)  // a CAD model's faces have no groups: surface_<tag> is the rule there
             model_.warnings.push_back(fmt::format("{}: elements of {} entities are in no physical surface group and are named by "
                                                   "their entity ({}{})",
                                                   source_, ungrouped_.size(), *ungrouped_.begin(), ungrouped_.size() > 1 ? ", ..." : ""));
@@ -349,6 +351,7 @@ private:
     const std::string source_;
     const FeLoadOptions& options_;
     const bool nastran_;
+    const bool cad_;
     ObjModel model_;
     std::unordered_map<std::size_t, Vec3> node_coords_;
     std::unordered_map<std::size_t, std::uint32_t> vertex_index_;
@@ -359,14 +362,123 @@ private:
     std::size_t dropped_internal_ = 0;
 };
 
+// Gmsh keeps the first of two physical groups of one name and leaves the other unnamed without a
+// word, so ffcube reads a .msh file's $PhysicalNames section (text in every .msh version, binary
+// files included) itself: one name per dimension.
+void check_physical_names(std::string_view bytes, const std::string& source) {
+    const std::size_t at = bytes.find("$PhysicalNames");
+    if (at == std::string_view::npos) return;
+    const std::size_t end = bytes.find("$EndPhysicalNames", at);
+    if (end == std::string_view::npos)
+        throw InputError(fmt::format("{}: $PhysicalNames has no $EndPhysicalNames (the file is cut short)", source));
+    const std::size_t line0 = std::size_t(std::count(bytes.begin(), bytes.begin() + std::ptrdiff_t(at), '\n')) + 1;
+    std::map<std::pair<int, std::string>, std::size_t> seen;
+    std::size_t line_no = line0, pos = bytes.find('\n', at);
+    while (pos != std::string_view::npos && pos < end) {
+        const std::size_t next = bytes.find('\n', pos + 1);
+        const std::string_view line = bytes.substr(pos + 1, (next == std::string_view::npos ? bytes.size() : next) - pos - 1);
+        ++line_no;
+        pos = next;
+        const std::size_t q1 = line.find('"'), q2 = line.rfind('"');
+        if (q1 == std::string_view::npos || q2 <= q1) continue;  // the count line
+        const int dim = std::atoi(std::string(line.substr(0, q1)).c_str());
+        const auto [it, inserted] = seen.emplace(std::pair{dim, std::string(line.substr(q1 + 1, q2 - q1 - 1))}, line_no);
+        if (!inserted)
+            throw InputError(fmt::format("{}: line {}: the physical group name \"{}\" is used twice (also line {}); each group "
+                                         "needs its own name",
+                                         source, line_no, it->first.second, it->second));
+    }
+}
+
 // Gmsh's last error, or what it threw (it throws the message as a std::string, or an int).
-[[noreturn]] void rethrow_gmsh(const std::string& source, const std::string& what) {
-    std::string last;
+// When Gmsh refuses an ASCII .msh file and says only "Error loading", the reason may be an
+// element type it does not know: this scan (in the child, after the refusal) finds it and names
+// the line. $Elements of version 2.2 has "id type ntags ..." lines; of version 4, blocks with a
+// header "dim tag type count".
+std::string unknown_element_type(const std::filesystem::path& path) {
+    std::string text;
     try {
-        gmsh::logger::getLastError(last);
+        text = read_input_file(path, "a Gmsh mesh", "the scene");
+    } catch (const Error&) {
+        return {};
+    }
+    const std::size_t format = text.find("$MeshFormat\n");
+    const std::size_t elements = text.find("$Elements\n");
+    if (format == std::string::npos || elements == std::string::npos) return {};
+    double version = 0.0;
+    int binary = 1;
+    if (std::sscanf(text.c_str() + format + 12, "%lf %d", &version, &binary) != 2 || binary != 0) return {};
+    std::map<int, bool> known;
+    const auto is_known = [&](int type) {
+        const auto [it, inserted] = known.emplace(type, true);
+        if (inserted) {
+            try {
+                std::string name;
+                int dim = 0, order = 0, nodes = 0, primary = 0;
+                std::vector<double> local;
+                gmsh::model::mesh::getElementProperties(type, name, dim, order, nodes, local, primary);
+            } catch (...) {
+                it->second = false;
+            }
+        }
+        return it->second;
+    };
+    std::size_t line_no = std::size_t(std::count(text.begin(), text.begin() + std::ptrdiff_t(elements), '\n')) + 1;
+    std::size_t at = text.find('\n', elements) + 1;
+    const auto next_line = [&]() -> std::string_view {
+        if (at >= text.size()) return {};
+        std::size_t end = text.find('\n', at);
+        if (end == std::string::npos) end = text.size();
+        const std::string_view line(text.data() + at, end - at);
+        at = end + 1;
+        ++line_no;
+        return line;
+    };
+    const auto numbers = [](std::string_view line) {
+        std::vector<long long> v;
+        std::string s(line);
+        char* p = s.data();
+        for (char* e = nullptr;; p = e) {
+            const long long x = std::strtoll(p, &e, 10);
+            if (e == p) break;
+            v.push_back(x);
+        }
+        return v;
+    };
+    const std::vector<long long> head = numbers(next_line());
+    if (head.empty()) return {};
+    if (version < 3) {
+        for (long long k = 0; k < head[0] && at < text.size(); ++k) {
+            const std::vector<long long> e = numbers(next_line());
+            if (e.size() >= 2 && !is_known(int(e[1])))
+                return fmt::format("line {}: element {} is of type {}, which Gmsh does not know", line_no, e[0], e[1]);
+        }
+        return {};
+    }
+    for (long long b = 0; b < head[0] && at < text.size(); ++b) {
+        const std::vector<long long> block = numbers(next_line());
+        if (block.size() < 4) return {};
+        if (!is_known(int(block[2])))
+            return fmt::format("line {}: an element block of type {}, which Gmsh does not know", line_no, block[2]);
+        for (long long k = 0; k < block[3] && at < text.size(); ++k) next_line();
+    }
+    return {};
+}
+
+// Gmsh's errors, as its log has them (the first says why; what it throws may only say
+// "Error loading"), else what it threw.
+[[noreturn]] void rethrow_gmsh(const std::string& source, const std::string& what) {
+    std::vector<std::string> errors;
+    try {
+        std::vector<std::string> log;
+        gmsh::logger::get(log);
+        for (const std::string& line : log)
+            if (line.starts_with("Error: ")) errors.push_back(line.substr(7));
     } catch (...) {
     }
-    const std::string& message = !what.empty() ? what : last;
+    if (errors.empty() && !what.empty()) errors.push_back(what);
+    std::string message;
+    for (std::size_t i = 0; i < errors.size() && i < 3; ++i) message += (i ? "; " : "") + errors[i];
     throw InputError(fmt::format("{}: Gmsh cannot read it: {}", source, message.empty() ? "(no message)" : message));
 }
 
@@ -398,18 +510,25 @@ std::string read_in_child(const std::filesystem::path& path, const FeLoadOptions
                 }
                 size = std::sqrt(area / double(options.cad_patches));
             }
-            if (size > 0.0) gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+            if (size > 0.0) {
+                // Else the sizes OpenCASCADE gives the model's points win over the maximum.
+                gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+                gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+            }
             gmsh::model::mesh::generate(2);
         }
         std::string last;
         gmsh::logger::getLastError(last);
         if (!last.empty()) rethrow_gmsh(source, last);
-        Collector collector(source, options, ext == ".bdf" || ext == ".nas");
+        Collector collector(source, options, ext == ".bdf" || ext == ".nas", cad);
         return detail::encode_imported(collector.run(), ImportedMaterials{});
     } catch (const Error&) {
         throw;
     } catch (const std::string& s) {
         what = s;
+        if (ext == ".msh")
+            if (const std::string why = unknown_element_type(path); !why.empty())
+                throw InputError(fmt::format("{}: {}", source, why));
     } catch (const std::exception& e) {
         what = e.what();
     } catch (...) {
@@ -450,6 +569,7 @@ ObjModel load_with_gmsh(const std::filesystem::path& path, const FeLoadOptions& 
         const std::string ext = lower_extension(path.extension().string());
         if (bytes == 0) throw InputError(fmt::format("{}: the file is empty", source));
         if (ext == ".bdf" || ext == ".nas") check_nastran_cards(file.bytes(), source);
+        if (ext == ".msh") check_physical_names(file.bytes(), source);
         if (gmsh_is_cad_extension(ext)) {
             const std::string_view head = file.bytes().substr(0, 80);
             const bool step = ext == ".step" || ext == ".stp";
