@@ -200,13 +200,17 @@ void write_elmer_view_factors(const std::filesystem::path& path, const CsrMatrix
 void write_patch_table(const std::filesystem::path& path, const Scene& scene) {
     write_file_atomically(path, [&](std::ostream& out) {
         fmt::memory_buffer buf;
-        buf.append(std::string_view("patch,object,area,cx,cy,cz,nx,ny,nz\n"));
+        // A mesh read through Gmsh adds the element each patch comes from (Scene::patch_elements).
+        const bool ids = scene.patch_elements.size() == scene.size();
+        buf.append(std::string_view(ids ? "patch,object,area,cx,cy,cz,nx,ny,nz,element_id\n" : "patch,object,area,cx,cy,cz,nx,ny,nz\n"));
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             const Vec3 c = p.centroid + scene.origin;  // the user's coordinates (Scene::origin)
-            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}\n", i,
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}", i,
                            csv_field(scene.objects[p.object]), p.area, c.x, c.y, c.z,
                            p.normal.x, p.normal.y, p.normal.z);
+            if (ids) fmt::format_to(std::back_inserter(buf), ",{}", scene.patch_elements[i]);
+            buf.push_back('\n');
             flush_if_full(out, buf);
         }
         flush_if_full(out, buf, true);
@@ -217,11 +221,13 @@ void write_patch_sky_csv(const std::filesystem::path& path, const Scene& scene, 
     FFCUBE_CHECK(svf.size() == scene.size());
     write_file_atomically(path, [&](std::ostream& out) {
         fmt::memory_buffer buf;
-        buf.append(std::string_view("patch,object,area,sky_view_factor\n"));
+        const bool ids = scene.patch_elements.size() == scene.size();
+        buf.append(std::string_view(ids ? "patch,object,area,sky_view_factor,element_id\n" : "patch,object,area,sky_view_factor\n"));
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
-            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g}\n", i, csv_field(scene.objects[p.object]), p.area,
-                           svf[i]);
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g}", i, csv_field(scene.objects[p.object]), p.area, svf[i]);
+            if (ids) fmt::format_to(std::back_inserter(buf), ",{}", scene.patch_elements[i]);
+            buf.push_back('\n');
             flush_if_full(out, buf);
         }
         flush_if_full(out, buf, true);

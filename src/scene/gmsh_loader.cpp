@@ -342,6 +342,7 @@ private:
             ObjFace face;
             face.object = obj;
             face.line = static_cast<std::uint32_t>(std::min<std::size_t>(f.element, std::numeric_limits<std::uint32_t>::max()));
+            face.element = f.element;
             for (const std::size_t n : piece) face.v.push_back(vertex(n, f.element));
             if (f.reverse != flip) std::reverse(face.v.begin(), face.v.end());
             model_.faces.push_back(std::move(face));

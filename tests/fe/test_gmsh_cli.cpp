@@ -5,6 +5,7 @@
 // linear ones, and malformed files end with exit 2, a message naming the file, and no output.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -267,6 +268,86 @@ TEST(GmshCli, MalformedFilesAreRefused) {
     expect_refused(write("card.bdf", bdf), "card 'CORD2R' is not read");
     expect_refused(write("stl.step", "solid x\nendsolid x\n"), "not a STEP file");
     expect_refused(write("bad.step", "ISO-10303-21;\nHEADER;\nnonsense\n"), "Gmsh cannot read it");
+}
+
+}  // namespace
+}  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Element ids come back: with --no-subdivide each triangle of the .msh is one patch, and the
+// patch table, the per-patch sky file and the .vtu of --fields (read back by meshio, an
+// independent reader) carry its id. The .msh is parsed here (version 2.2 ASCII: "id x y z" node
+// lines, "id type ntags tags... nodes" element lines) for each element's centroid.
+TEST(GmshCli, ElementIdsRoundTripThroughPatchTableAndVtu) {
+    const TempDir& m = models();
+    TempDir out;
+    const std::string msh = read_text(m / "box_22.msh");
+    std::map<long, std::array<double, 3>> nodes;
+    std::map<long, std::array<double, 3>> centroid;  // triangle id -> centroid
+    {
+        std::istringstream in(msh.substr(msh.find("$Nodes\n") + 7));
+        std::size_t n = 0;
+        in >> n;
+        for (std::size_t i = 0; i < n; ++i) {
+            long id;
+            std::array<double, 3> p;
+            in >> id >> p[0] >> p[1] >> p[2];
+            nodes[id] = p;
+        }
+        std::istringstream el(msh.substr(msh.find("$Elements\n") + 10));
+        el >> n;
+        std::string line;
+        std::getline(el, line);
+        for (std::size_t i = 0; i < n && std::getline(el, line);) {
+            std::istringstream ls(line);
+            long id, type, ntags, v;
+            ls >> id >> type >> ntags;
+            for (long t = 0; t < ntags; ++t) ls >> v;
+            ++i;
+            if (type != 2) continue;
+            std::array<double, 3> c{0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                ls >> v;
+                for (int a = 0; a < 3; ++a) c[a] += nodes.at(v)[a] / 3.0;
+            }
+            centroid[id] = c;
+        }
+    }
+    ASSERT_GT(centroid.size(), 50u);
+    const auto r = run_ffcube("formfactors " + (m / "box_22.msh") + " --no-subdivide --method raycast -q --flip " +
+                              "xmin,xmax,ymin,ymax,zmin,zmax --patch-table " + (out / "t.csv") + " --sky " + (out / "s.csv") +
+                              " --fields " + (out / "f.vtu"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto table = csv(read_text(out / "t.csv"));
+    ASSERT_EQ(table.size(), centroid.size());
+    std::map<long, double> sky;
+    for (const auto& row : table) {
+        ASSERT_EQ(row.size(), 10u);
+        const long id = std::stol(row.at(9));
+        ASSERT_EQ(centroid.count(id), 1u) << "element " << id;
+        // The table prints 9 significant digits of coordinates at most 2: 5e-9 each.
+        for (int a = 0; a < 3; ++a) EXPECT_NEAR(std::stod(row.at(3 + a)), centroid[id][a], 1e-8) << "element " << id;
+        centroid.erase(id);  // each element once
+    }
+    for (const auto& row : csv(read_text(out / "s.csv"))) sky[std::stol(row.at(4))] = std::stod(row.at(3));
+    EXPECT_EQ(sky.size(), table.size());
+    // meshio reads the .vtu: element ids and sky view factors per cell.
+    const std::string script = "import meshio,sys\nm=meshio.read(sys.argv[1])\nd=m.cell_data\n"
+                               "for i,s in zip(d['element_id'][0],d['sky_view_factor'][0]): print(int(i),repr(float(s)))\n";
+    test::write_file(out / "read.py", script);
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + (out / "read.py") + " " + (out / "f.vtu") + " > " + (out / "v.txt")).c_str()), 0);
+    std::istringstream v(read_text(out / "v.txt"));
+    std::size_t cells = 0;
+    for (long id; v >> id;) {
+        double s;
+        v >> s;
+        ++cells;
+        ASSERT_EQ(sky.count(id), 1u) << "element " << id;
+        EXPECT_NEAR(s, sky[id], 5e-9) << "element " << id;  // the CSV's 9 digits of a value <= 1
+    }
+    EXPECT_EQ(cells, table.size());
 }
 
 }  // namespace
