@@ -363,35 +363,6 @@ private:
     std::size_t dropped_internal_ = 0;
 };
 
-// Gmsh keeps the first of two physical groups of one name and leaves the other unnamed without a
-// word, so ffcube reads a .msh file's $PhysicalNames section (text in every .msh version, binary
-// files included) itself: one name per dimension.
-void check_physical_names(std::string_view bytes, const std::string& source) {
-    const std::size_t at = bytes.find("$PhysicalNames");
-    if (at == std::string_view::npos) return;
-    const std::size_t end = bytes.find("$EndPhysicalNames", at);
-    if (end == std::string_view::npos)
-        throw InputError(fmt::format("{}: $PhysicalNames has no $EndPhysicalNames (the file is cut short)", source));
-    const std::size_t line0 = std::size_t(std::count(bytes.begin(), bytes.begin() + std::ptrdiff_t(at), '\n')) + 1;
-    std::map<std::pair<int, std::string>, std::size_t> seen;
-    std::size_t line_no = line0, pos = bytes.find('\n', at);
-    while (pos != std::string_view::npos && pos < end) {
-        const std::size_t next = bytes.find('\n', pos + 1);
-        const std::string_view line = bytes.substr(pos + 1, (next == std::string_view::npos ? bytes.size() : next) - pos - 1);
-        ++line_no;
-        pos = next;
-        const std::size_t q1 = line.find('"'), q2 = line.rfind('"');
-        if (q1 == std::string_view::npos || q2 <= q1) continue;  // the count line
-        const int dim = std::atoi(std::string(line.substr(0, q1)).c_str());
-        const auto [it, inserted] = seen.emplace(std::pair{dim, std::string(line.substr(q1 + 1, q2 - q1 - 1))}, line_no);
-        if (!inserted)
-            throw InputError(fmt::format("{}: line {}: the physical group name \"{}\" is used twice (also line {}); each group "
-                                         "needs its own name",
-                                         source, line_no, it->first.second, it->second));
-    }
-}
-
-// Gmsh's last error, or what it threw (it throws the message as a std::string, or an int).
 // When Gmsh refuses an ASCII .msh file and says only "Error loading", the reason may be an
 // element type it does not know: this scan (in the child, after the refusal) finds it and names
 // the line. $Elements of version 2.2 has "id type ntags ..." lines; of version 4, blocks with a
@@ -551,6 +522,35 @@ ChildLimits gmsh_limits(std::uint64_t input_bytes) {
 
 }  // namespace
 
+// Gmsh keeps the first of two physical groups of one name and leaves the other unnamed without a
+// word, so ffcube reads a .msh file's $PhysicalNames section (text in every .msh version, binary
+// files included) itself: one name per dimension.
+void check_msh_physical_names(std::string_view bytes, const std::string& source) {
+    const std::size_t at = bytes.find("$PhysicalNames");
+    if (at == std::string_view::npos) return;
+    const std::size_t end = bytes.find("$EndPhysicalNames", at);
+    if (end == std::string_view::npos)
+        throw InputError(fmt::format("{}: $PhysicalNames has no $EndPhysicalNames (the file is cut short)", source));
+    const std::size_t line0 = std::size_t(std::count(bytes.begin(), bytes.begin() + std::ptrdiff_t(at), '\n')) + 1;
+    std::map<std::pair<int, std::string>, std::size_t> seen;
+    std::size_t line_no = line0, pos = bytes.find('\n', at);
+    while (pos != std::string_view::npos && pos < end) {
+        const std::size_t next = bytes.find('\n', pos + 1);
+        const std::string_view line = bytes.substr(pos + 1, (next == std::string_view::npos ? bytes.size() : next) - pos - 1);
+        ++line_no;
+        pos = next;
+        const std::size_t q1 = line.find('"'), q2 = line.rfind('"');
+        if (q1 == std::string_view::npos || q2 <= q1) continue;  // the count line
+        const int dim = std::atoi(std::string(line.substr(0, q1)).c_str());
+        const auto [it, inserted] = seen.emplace(std::pair{dim, std::string(line.substr(q1 + 1, q2 - q1 - 1))}, line_no);
+        if (!inserted)
+            throw InputError(fmt::format("{}: line {}: the physical group name \"{}\" is used twice (also line {}); each group "
+                                         "needs its own name",
+                                         source, line_no, it->first.second, it->second));
+    }
+}
+
+// Gmsh's last error, or what it threw (it throws the message as a std::string, or an int).
 bool gmsh_reads_extension(std::string_view extension) {
     const std::string ext = lower_extension(extension);
     return ext == ".msh" || ext == ".unv" || ext == ".bdf" || ext == ".nas" || ext == ".vtk" || gmsh_is_cad_extension(ext);
@@ -570,7 +570,7 @@ ObjModel load_with_gmsh(const std::filesystem::path& path, const FeLoadOptions& 
         const std::string ext = lower_extension(path.extension().string());
         if (bytes == 0) throw InputError(fmt::format("{}: the file is empty", source));
         if (ext == ".bdf" || ext == ".nas") check_nastran_cards(file.bytes(), source);
-        if (ext == ".msh") check_physical_names(file.bytes(), source);
+        if (ext == ".msh") check_msh_physical_names(file.bytes(), source);
         if (gmsh_is_cad_extension(ext)) {
             const std::string_view head = file.bytes().substr(0, 80);
             const bool step = ext == ".step" || ext == ".stp";

@@ -178,7 +178,7 @@ TEST(GmshCli, TetrahedralBoxWithCavityRadiatesFromItsBoundary) {
     // The cavity is closed: its rows sum to 1 (rays cannot escape a closed box; float storage 1e-6);
     // the outer walls see nothing of the convex solid: their rows are 0 exactly.
     for (const auto& row : csv(read_text(out / "sky.csv"))) {
-        const double sky = std::stod(row.back());
+        const double sky = std::stod(row.at(3));  // patch,object,area,sky_view_factor,element_id
         if (row.at(1) == "cavity")
             EXPECT_NEAR(sky, 0.0, 1e-6) << "patch " << row.at(0);
         else

@@ -49,4 +49,8 @@ ObjModel load_with_gmsh(const std::filesystem::path& path, const FeLoadOptions& 
 // file, the line and the card. Exposed for the tests and the fuzzer.
 void check_nastran_cards(std::string_view text, const std::string& source);
 
+// The pre-check of a .msh file's $PhysicalNames (Gmsh keeps the first of two groups of one name
+// and drops the other name without a word): InputError naming the file and both lines.
+void check_msh_physical_names(std::string_view bytes, const std::string& source);
+
 }  // namespace ffcube
