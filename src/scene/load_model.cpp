@@ -56,6 +56,18 @@ SceneFormat format_for_path(const std::filesystem::path& path) {
 ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj,
                     ImportedMaterials* materials) {
     if (format == SceneFormat::Auto) format = format_for_path(path);
+    if (format != SceneFormat::Gmsh && !obj.fe.flip.empty())
+        throw InputError(fmt::format("{}: --flip {}: --flip reverses groups of a mesh read through Gmsh (.msh, .unv, .bdf, .nas, "
+                                     ".vtk, .step, .iges); this file is read as {}",
+                                     path.string(), obj.fe.flip.front(), to_string(format)));
+    if (format != SceneFormat::Gmsh && obj.fe.objects_by != FeObjectsBy::group)
+        throw InputError(fmt::format("{}: --objects-by entity and element apply to meshes read through Gmsh; this file is read "
+                                     "as {} (its words: auto, o, g, material)",
+                                     path.string(), to_string(format)));
+    if (format == SceneFormat::Gmsh && obj.objects_by != ObjObjectsBy::automatic)
+        throw InputError(fmt::format("{}: --objects-by o, g and material apply to OBJ files; a mesh read through Gmsh takes "
+                                     "group, entity or element",
+                                     path.string()));
     switch (format) {
     case SceneFormat::Obj: return load_obj(path, obj);
     case SceneFormat::Stl: return load_stl(path);

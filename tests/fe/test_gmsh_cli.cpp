@@ -352,3 +352,23 @@ TEST(GmshCli, ElementIdsRoundTripThroughPatchTableAndVtu) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// The mesh options name what they apply to when given for another format.
+TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
+    const std::string obj = test::example("cube.obj");
+    auto r = run_ffcube("formfactors " + obj + " -q --method raycast --flip a");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--flip reverses groups of a mesh read through Gmsh"), std::string::npos) << r.output;
+    r = run_ffcube("formfactors " + obj + " -q --method raycast --objects-by element");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("apply to meshes read through Gmsh"), std::string::npos) << r.output;
+    r = run_ffcube("formfactors " + (models() / "box_41.msh") + " -q --method raycast --objects-by g");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("apply to OBJ files"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace ffcube
