@@ -13,7 +13,7 @@ packages=(
   libglm-dev libfmt-dev nlohmann-json3-dev libcli11-dev
   libegl-dev libegl-mesa0 libgl-dev libgl1-mesa-dri libosmesa6 libosmesa6-dev
   libopenexr-dev libglfw3-dev libimgui-dev libembree-dev libstb-dev
-  libgtest-dev libbenchmark-dev libassimp-dev
+  libgtest-dev libbenchmark-dev libassimp-dev libgmsh-dev python3-meshio
   xvfb xauth python3 python3-numpy python3-scipy python3-mpmath
   libzstd-dev python3-dev pybind11-dev python3-pybind11 libopenmpi-dev openmpi-bin
 )

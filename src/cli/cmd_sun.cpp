@@ -1,5 +1,6 @@
 // ffcube sun: the sunlit fraction of every patch (or object) for one sun direction, by an
-// orthographic item buffer along the sun (gl/sun.hpp; docs/urban.md, "Sun and shade").
+// orthographic item buffer along the sun (gl/sun.hpp; docs/urban.md, "Sun and shade"); with
+// --sun-series, absorbed shortwave with reflections for every step (cli/sun_series.hpp).
 #include <fmt/format.h>
 
 #include <cerrno>
@@ -13,6 +14,7 @@
 #include "cli/common.hpp"
 #include "cli/expert.hpp"
 #include "cli/mpi_glue.hpp"
+#include "cli/sun_series.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
@@ -29,6 +31,9 @@ struct Options {
     SceneFlags scene;
     std::string direction, angles, out, by, report, backend = "auto";
     SunOptions sun;
+    std::string series, albedo, matrix, sky_patches, sky_out;
+    double reflection_tolerance = 1e-12;
+    std::uint32_t batch = 32;
 };
 
 std::string num(double v) { return fmt::format("{:.10g}", v); }
@@ -85,6 +90,33 @@ int run(const Options& o) {
     check_output_path("--report", o.report);
     if (o.by != "patch" && o.by != "object")
         throw InputError(fmt::format("--by {}: must be patch or object", o.by));
+    if (!(o.sun.tolerance > 0.0 && o.sun.tolerance < 1.0))
+        throw InputError(fmt::format("--tolerance {}: must be in (0, 1)", o.sun.tolerance));
+    if (o.sun.max_pixels < 1) throw InputError("--max-pixels 0: must be at least 1");
+    if (o.sun.tile < 0 || o.sun.tile == 1) throw InputError(fmt::format("--tile {}: must be 0 (automatic) or at least 2", o.sun.tile));
+    if (!o.series.empty()) {
+        if (!o.direction.empty() || !o.angles.empty())
+            throw InputError("--sun-series gives the sun of every step; leave out --sun and --sun-direction");
+        if (mpi_distributed()) throw InputError("ffcube sun runs in one process; run it without mpirun");
+        SunSeriesRequest q;
+        q.scene = o.scene;
+        q.series = o.series;
+        q.albedo = o.albedo;
+        q.matrix = o.matrix;
+        q.sky_patches = o.sky_patches.empty() ? "isotropic" : o.sky_patches;
+        q.sky_out = o.sky_out;
+        q.out = o.out;
+        q.by = o.by;
+        q.report = o.report;
+        q.sun = o.sun;
+        q.sun.backend = parse_backend(o.backend);
+        q.tolerance = o.reflection_tolerance;
+        q.batch = o.batch;
+        return run_sun_series(q);
+    }
+    for (const auto& [option, value] : {std::pair{"--albedo", &o.albedo}, {"--matrix", &o.matrix}, {"--sky-patches", &o.sky_patches},
+                                               {"--sky-patches-out", &o.sky_out}})
+        if (!value->empty()) throw InputError(fmt::format("{} goes with --sun-series (a series of sun positions)", option));
     if (o.direction.empty() == o.angles.empty())
         throw InputError("give the sun as exactly one of --sun-direction X,Y,Z (towards the sun) and --sun AZIMUTH,ELEVATION");
     Vec3 s;
@@ -95,10 +127,6 @@ int run(const Options& o) {
         const std::vector<double> v = parse_numbers(o.angles, 2, "--sun", "AZIMUTH,ELEVATION in degrees");
         s = sun_direction_from_angles(v[0], v[1]);
     }
-    if (!(o.sun.tolerance > 0.0 && o.sun.tolerance < 1.0))
-        throw InputError(fmt::format("--tolerance {}: must be in (0, 1)", o.sun.tolerance));
-    if (o.sun.max_pixels < 1) throw InputError("--max-pixels 0: must be at least 1");
-    if (o.sun.tile < 0 || o.sun.tile == 1) throw InputError(fmt::format("--tile {}: must be 0 (automatic) or at least 2", o.sun.tile));
     if (mpi_distributed()) throw InputError("ffcube sun runs in one process; run it without mpirun");
     SunOptions so = o.sun;
     so.backend = parse_backend(o.backend);
@@ -159,7 +187,18 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--sun", opts->angles,
                     "AZIMUTH,ELEVATION in degrees: azimuth clockwise from north (+y), east (+x) = 90; elevation above "
                     "the horizon (+z up), in [-90, 90]");
-    sub->add_option("-o,--out", opts->out, "write patch,object,area,sunlit_fraction (--by object: object,area,sunlit_fraction)");
+    sub->add_option("--sun-series", opts->series,
+                    "SUN.csv: time,azimuth,elevation (or sun_x,sun_y,sun_z),direct_normal_irradiance,"
+                    "diffuse_horizontal_irradiance; writes absorbed shortwave per step (docs/urban.md)");
+    sub->add_option("--albedo", opts->albedo, "with --sun-series: A.csv object,albedo (every object, albedo in [0, 1))");
+    sub->add_option("--matrix", opts->matrix, "with --sun-series: take F from F.ffm (made for this scene) instead of computing it");
+    sub->add_option("--sky-patches", opts->sky_patches,
+                    "with --sun-series: isotropic (default: sky view factor 1 - row sum of F) or tregenza (145 patches, traced)");
+    sub->add_option("--sky-patches-out", opts->sky_out,
+                    "with --sky-patches tregenza: write patch,object,p0..p144, the view factor of every patch to every sky patch");
+    sub->add_option("-o,--out", opts->out,
+                    "write patch,object,area,sunlit_fraction (--by object: object,area,sunlit_fraction); with --sun-series: "
+                    "time,patch,object,area,albedo,direct,diffuse,reflected,absorbed (W/m^2)");
     sub->add_option("--by", opts->by, "patch (default) or object: area-weighted sunlit fraction per object")->default_val("patch");
     sub->add_option("--report", opts->report, "write a JSON report (pixel size, tiles, clamps, error bound, timings)");
     sub->add_option("--backend", opts->backend, "OpenGL context: auto, egl or osmesa")->default_val("auto");
@@ -168,6 +207,11 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
                ->default_val(1e-3));
     expert(sub->add_option("--max-pixels", opts->sun.max_pixels, "most pixels in all tiles together")
                ->default_val(std::uint64_t{1} << 27));
+    expert(sub->add_option("--reflection-tolerance", opts->reflection_tolerance,
+                           "--sun-series: stop the reflections when a sweep changes them by less than this x the incident power")
+               ->default_val(1e-12));
+    expert(sub->add_option("--batch", opts->batch, "--sun-series: steps computed, solved and written together (memory: 4 x steps x patches doubles)")
+               ->default_val(32));
     expert(sub->add_option("--tile", opts->sun.tile, "tile side in pixels (0: min(4096, GL limits))")->default_val(0));
     sub->callback([opts, &action] {
         action = [opts] {

@@ -30,8 +30,8 @@ CLI::Option* add_word_option(CLI::App& app, const std::string& name, E& target, 
 
 void add_scene_options(CLI::App& app, SceneFlags& o) {
     app.add_option("scene", o.scene.path,
-                   "scene file: OBJ, STL, View3D .vs3, PLY, glTF (.gltf/.glb) or another format assimp reads "
-                   "(default: the built-in Cornell box)");
+                   "scene file: OBJ, STL, View3D .vs3, PLY, glTF (.gltf/.glb) or another format assimp reads, a mesh "
+                   "(.msh, .unv, .bdf, .vtk) or CAD (.step, .iges) through Gmsh (default: the built-in Cornell box)");
     auto* edge =
         app.add_option("--max-patch-edge", o.scene.max_patch_edge, "split faces so that no patch edge exceeds L (scene units)")
             ->check(CLI::PositiveNumber);
@@ -39,8 +39,10 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
                         ->check(CLI::PositiveNumber)
                         ->excludes(edge);
     expert(add_word_option(app, "--format", o.scene.format, parse_scene_format,
-                    {"auto", "obj", "stl", "vs3", "ply", "gltf", "glb", "assimp"},
-                    "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp)", "auto"));
+                    {"auto", "obj", "stl", "vs3", "ply", "gltf", "glb", "assimp", "msh", "unv", "bdf", "nas", "vtk", "step", "stp",
+                     "iges", "igs", "gmsh"},
+                    "scene format: auto (by the extension), obj, stl, vs3, or ply, gltf, glb, assimp (through assimp), or "
+                    "msh, unv, bdf, nas, vtk, step, stp, iges, igs, gmsh (through Gmsh)", "auto"));
     app.add_option("--materials", o.scene.materials,
                    "CSV of Kd and Ke per object (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b) for formats without materials; "
                    "a triple left empty keeps the file's (docs/scene-format.md)")
@@ -56,9 +58,21 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
                     "auto"));
     expert(app.add_flag_function(
         "--no-contact-cuts", [&o](std::int64_t) { o.scene.contact_cuts = ContactCuts::Off; }, "the same as --contact-cuts off"));
-    expert(add_word_option(app, "--objects-by", o.scene.objects_by, +[](std::string_view w) { return parse_objects_by(w); },
-                    {"auto", "o", "g", "material"},
-                    "what names objects in an OBJ: auto (default: o, else g, else the material), o, g or material", "auto"));
+    expert(app.add_option_function<std::string>(
+                  "--objects-by",
+                  [&o](const std::string& w) {
+                      if (w == "group" || w == "entity" || w == "element")
+                          o.scene.fe_objects_by = w == "group" ? FeObjectsBy::group : w == "entity" ? FeObjectsBy::entity : FeObjectsBy::element;
+                      else
+                          o.scene.objects_by = parse_objects_by(w);
+                  },
+                  "what names objects: in an OBJ auto (default: o, else g, else the material), o, g or material; in a "
+                  "mesh read through Gmsh group (default: physical groups), entity or element (docs/fe-meshes.md)")
+               ->check(CLI::IsMember({"auto", "o", "g", "material", "group", "entity", "element"}))
+               ->default_str("auto"));
+    expert(app.add_option("--flip", o.scene.flip,
+                          "reverse the faces of these groups (objects) of a mesh read through Gmsh: --flip a,b (docs/fe-meshes.md)")
+               ->delimiter(','));
     app.add_flag("-q,--quiet", o.quiet, "no progress or summary on stderr (warnings and errors still)");
 }
 

@@ -28,7 +28,11 @@ void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
            "auto (= text), text or binary (Elmer's 'Viewfactor Binary Output')")
         ->check(CLI::IsMember({"auto", "text", "binary"}))
         ->default_str("auto"));
-    app.add_option("--patch-table", o.patch_table, "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz)");
+    app.add_option("--patch-table", o.patch_table,
+                   "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz; element_id for a mesh read through Gmsh)");
+    expert(app.add_option("--fields", o.fields,
+                          "write the meshed scene with per-patch fields (sky view factor, row sum, element id) as a VTK "
+                          ".vtu for ParaView (docs/fe-meshes.md)"));
 }
 
 void check_surface_output_paths(const SurfaceOutputOptions& o) {
@@ -36,6 +40,7 @@ void check_surface_output_paths(const SurfaceOutputOptions& o) {
     check_output_path("--view3d", o.view3d);
     check_output_path("--elmer", o.elmer);
     check_output_path("--patch-table", o.patch_table);
+    check_output_path("--fields", o.fields);
 }
 
 }  // namespace ffcube::cli

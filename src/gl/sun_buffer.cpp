@@ -117,6 +117,14 @@ double pixels_of(double w, double h, double pixel) {
 }  // namespace
 
 SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& opt) {
+    return sunlit_fractions(scene, towards_sun, opt, nullptr);
+}
+
+SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& opt, GlContext& context) {
+    return sunlit_fractions(scene, towards_sun, opt, &context);
+}
+
+SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& opt, GlContext* context) {
     Stopwatch watch;
     validate(opt);
     SunResult r;
@@ -192,7 +200,9 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
 
     std::vector<std::uint64_t> counts(drawn.patches.size() + 1, 0);
     {
-        std::unique_ptr<GlContext> ctx = create_headless_context(opt.backend);
+        std::unique_ptr<GlContext> own;  // made here unless the caller lends one
+        if (!context) own = create_headless_context(opt.backend);
+        GlContext* ctx = context ? context : own.get();
         ctx->make_current();
         r.renderer = ctx->renderer();
         const gl::Api& gl = ctx->api();

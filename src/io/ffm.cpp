@@ -355,4 +355,15 @@ void check_ffm_matches(const FfmFile& file, const Scene& scene) {
                                      file.source, file.matrix.size(), scene.size()));
 }
 
+void check_ffm_matches(const FfmHead& head, const Scene& scene) {
+    if (head.fingerprint != scene.fingerprint)
+        throw InputError(
+            fmt::format("{} was computed for a different scene or meshing (fingerprint {:016x}, scene has {:016x}); "
+                        "recompute it with `ffcube formfactors` and the same meshing options",
+                        head.source, head.fingerprint, scene.fingerprint));
+    if (head.n != scene.size())
+        throw InputError(fmt::format("{} has {} patches but the scene has {} (same fingerprint: a hash collision)",
+                                     head.source, head.n, scene.size()));
+}
+
 }  // namespace ffcube

@@ -202,14 +202,20 @@ void write_patch_table(const std::filesystem::path& path, const Scene& scene, st
     const bool errors = row_error.size() >= scene.size();
     write_file_atomically(path, [&](std::ostream& out) {
         fmt::memory_buffer buf;
-        buf.append(std::string_view(errors ? "patch,object,area,cx,cy,cz,nx,ny,nz,error_estimate\n"
-                                           : "patch,object,area,cx,cy,cz,nx,ny,nz\n"));
+        // A mesh read through Gmsh adds the element each patch comes from (Scene::patch_elements);
+        // a run with the near-field correction adds each row's estimated error.
+        const bool ids = scene.patch_elements.size() == scene.size();
+        buf.append(std::string_view("patch,object,area,cx,cy,cz,nx,ny,nz"));
+        if (ids) buf.append(std::string_view(",element_id"));
+        if (errors) buf.append(std::string_view(",error_estimate"));
+        buf.push_back('\n');
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             const Vec3 c = p.centroid + scene.origin;  // the user's coordinates (Scene::origin)
             fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g}", i,
                            csv_field(scene.objects[p.object]), p.area, c.x, c.y, c.z,
                            p.normal.x, p.normal.y, p.normal.z);
+            if (ids) fmt::format_to(std::back_inserter(buf), ",{}", scene.patch_elements[i]);
             if (errors) {
                 if (std::isnan(row_error[i])) buf.append(std::string_view(","));
                 else fmt::format_to(std::back_inserter(buf), ",{:.3g}", row_error[i]);
@@ -225,11 +231,13 @@ void write_patch_sky_csv(const std::filesystem::path& path, const Scene& scene, 
     FFCUBE_CHECK(svf.size() == scene.size());
     write_file_atomically(path, [&](std::ostream& out) {
         fmt::memory_buffer buf;
-        buf.append(std::string_view("patch,object,area,sky_view_factor\n"));
+        const bool ids = scene.patch_elements.size() == scene.size();
+        buf.append(std::string_view(ids ? "patch,object,area,sky_view_factor,element_id\n" : "patch,object,area,sky_view_factor\n"));
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
-            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g}\n", i, csv_field(scene.objects[p.object]), p.area,
-                           svf[i]);
+            fmt::format_to(std::back_inserter(buf), "{},{},{:.9g},{:.9g}", i, csv_field(scene.objects[p.object]), p.area, svf[i]);
+            if (ids) fmt::format_to(std::back_inserter(buf), ",{}", scene.patch_elements[i]);
+            buf.push_back('\n');
             flush_if_full(out, buf);
         }
         flush_if_full(out, buf, true);

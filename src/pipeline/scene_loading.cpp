@@ -20,7 +20,13 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     validate(o);
     Stopwatch watch;
     ImportedMaterials imported;  // filled by the assimp reader
-    ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, {o.objects_by}, &imported);
+    ObjLoadOptions load;
+    load.objects_by = o.objects_by;
+    load.fe.objects_by = o.fe_objects_by;
+    load.fe.flip = o.flip;
+    load.fe.cad_mesh_size = o.max_patch_edge;
+    load.fe.cad_patches = o.patches;
+    ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, load, &imported);
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
     // Far from its origin the scene is meshed around its own centre (outputs add scene.origin

@@ -11,6 +11,7 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sky.hpp"
+#include "ffcube/io/vtu.hpp"
 #include "ffcube/solver/exchange.hpp"
 
 namespace ffcube {
@@ -147,6 +148,8 @@ namespace {
 // row_error: each row's estimated error (NaN: not computed here), the patch table's last column.
 void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf, const Scene& scene, Report& report,
                          std::span<const double> obstructed, std::span<const float> row_error) {
+    std::vector<double> row_sum(svf.size());
+    for (std::size_t i = 0; i < svf.size(); ++i) row_sum[i] = 1.0 - svf[i];  // before obstructions are taken off
     if (!obstructed.empty()) {
         FFCUBE_CHECK(obstructed.size() == svf.size());
         for (std::size_t i = 0; i < svf.size(); ++i) svf[i] = std::max(0.0, svf[i] - obstructed[i]);
@@ -163,6 +166,10 @@ void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf,
             write_object_sky_csv(o.sky, scene.objects, object_areas(scene), object_means(svf, scene));
     }
     if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene, row_error);
+    if (!o.fields.empty()) {
+        write_fields_vtu(o.fields, scene, {{"sky_view_factor", svf}, {"row_sum", row_sum}});
+        report.set("fields.written", o.fields);
+    }
 }
 
 const char* view3d_format_name(int out) { return out == 2 ? "sparse" : out == 1 ? "binary" : "text"; }

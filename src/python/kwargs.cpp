@@ -207,6 +207,21 @@ void Kwargs::read_solver_options(SolverOptions& o) {
     if (py::object v = take("row_cache_mb"); !v.is_none()) o.row_cache_mb = number("row_cache_mb", v);
 }
 
+std::optional<double> Kwargs::optional_number(const std::string& name) {
+    const py::object v = take(name);
+    if (v.is_none()) return std::nullopt;
+    return number(name, v);
+}
+
+std::string Kwargs::optional_path(const std::string& name) {
+    const py::object v = take(name);
+    if (v.is_none()) return {};
+    if (!is_pathlike(v))
+        throw py::type_error(fmt::format("{}(): {} must be a path (str or os.PathLike), not {}", function_, name,
+                                         std::string(py::str(v.get_type().attr("__name__")))));
+    return fspath(v);
+}
+
 void Kwargs::finish() const {
     for (const auto& item : kwargs_) {
         const std::string name = py::str(item.first);

@@ -8,6 +8,7 @@
 
 #include <pybind11/pybind11.h>
 
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -35,6 +36,12 @@ public:
     bool flag(const std::string& name, bool fallback);
     // TypeError for any keyword none of the reads above took.
     void finish() const;
+    // Any other keyword: its value, or None when absent (recorded as accepted either way).
+    pybind11::object value(const std::string& name) { return take(name); }
+    // A number keyword, or nullopt when absent or None; TypeError naming it otherwise.
+    std::optional<double> optional_number(const std::string& name);
+    // A path keyword (str or os.PathLike), or "" when absent or None; TypeError naming it otherwise.
+    std::string optional_path(const std::string& name);
 
 private:
     // The value of a keyword, or None when absent; records the name as accepted either way.

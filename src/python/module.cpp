@@ -27,96 +27,12 @@
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/solve.hpp"
 #include "kwargs.hpp"
+#include "module.hpp"
 
 namespace py = pybind11;
 
 namespace ffcube::python {
 namespace {
-
-// A meshed scene, shared by the Python object and any computation running on it.
-struct PyScene {
-    std::shared_ptr<const Scene> scene;
-    std::string load_report;  // the JSON of load_and_mesh's figures (scene, patches, meshing.*, time.*)
-};
-
-// set_log_level for the duration of one call (quiet=True: warnings and errors only).
-class LogScope {
-public:
-    explicit LogScope(bool quiet) : saved_(log_level()) {
-        if (quiet) set_log_level(LogLevel::Quiet);
-    }
-    ~LogScope() { set_log_level(saved_); }
-    LogScope(const LogScope&) = delete;
-    LogScope& operator=(const LogScope&) = delete;
-
-private:
-    LogLevel saved_;
-};
-
-py::object json_loads(const std::string& text) { return py::module_::import("json").attr("loads")(text); }
-
-PyScene load(const SceneOptions& options, bool quiet) {
-    PyScene s;
-    py::gil_scoped_release nogil;
-    LogScope log(quiet);
-    Report report;
-    s.scene = std::make_shared<const Scene>(load_and_mesh(options, report));
-    s.load_report = report.dump();
-    return s;
-}
-
-// The scene a computation runs on: a Scene object as it is (mesh options then refused), or a
-// path (str, os.PathLike) or None (the built-in Cornell box) to load with the mesh options.
-struct SceneArgument {
-    std::shared_ptr<const Scene> scene;
-    SceneOptions options;
-};
-
-SceneArgument scene_argument(const py::object& what, Kwargs& kw, const char* function) {
-    if (py::isinstance<PyScene>(what)) {
-        const std::string given = kw.scene_option_given();
-        if (!given.empty())
-            throw py::type_error(fmt::format("{}(): '{}' is a mesh option; pass it to load_scene() instead of a Scene",
-                                             function, given));
-        return {what.cast<const PyScene&>().scene, {}};
-    }
-    SceneArgument a;
-    a.options.path = path_argument(what, function);
-    kw.read_scene_options(a.options);
-    return a;
-}
-
-// The scene, loaded and meshed into the report as the command line does unless it was given
-// loaded (then only its name, size and fingerprint are recorded). Call with the GIL released.
-std::shared_ptr<const Scene> scene_of(const SceneArgument& a, Report& report) {
-    if (!a.scene) return std::make_shared<const Scene>(load_and_mesh(a.options, report));
-    report.set("scene", a.scene->source);
-    report.set("patches", a.scene->size());
-    report.set("objects", a.scene->objects.size());
-    report.set("fingerprint", fmt::format("{:016x}", a.scene->fingerprint));
-    return a.scene;
-}
-
-template <typename T>
-py::array_t<T> vector_array(std::size_t n, auto&& value) {
-    py::array_t<T> a(static_cast<py::ssize_t>(n));
-    auto m = a.template mutable_unchecked<1>();
-    for (std::size_t i = 0; i < n; ++i) m(static_cast<py::ssize_t>(i)) = value(i);
-    return a;
-}
-
-py::array_t<double> vec3_array(std::size_t n, auto&& value) {
-    py::array_t<double> a({static_cast<py::ssize_t>(n), py::ssize_t{3}});
-    auto m = a.mutable_unchecked<2>();
-    for (std::size_t i = 0; i < n; ++i) {
-        const Vec3 v = value(i);
-        const auto r = static_cast<py::ssize_t>(i);
-        m(r, 0) = v.x;
-        m(r, 1) = v.y;
-        m(r, 2) = v.z;
-    }
-    return a;
-}
 
 // F as scipy.sparse.csr_matrix: the stored float32 values (bit for bit what .ffm files hold and
 // what .mtx files print to 9 significant digits), int32 indices while they fit.
@@ -278,6 +194,7 @@ PYBIND11_MODULE(ffcube, m) {
           "options. Options: method, resolution, backend, threads, rotate/no_rotate, seed, rays, correct, near_k, near_min_ff, "
           "far_field, enforce, quiet, and the mesh options when given a path. report=True: (F, report dict) with the "
           "keys of `ffcube formfactors --report`.");
+    add_radiate(m);
     m.def("solve", &solve, py::arg("scene_or_path") = py::none(),
           "solve(scene_or_path=None, **options) -> (radiosity float64 n x 3, report dict), as `ffcube solve`. "
           "Options: those of form_factors (but enforce), and solver, tolerance, max_iterations, overshoot, "

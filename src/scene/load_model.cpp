@@ -9,6 +9,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/input_file.hpp"
 #include "ffcube/scene/assimp_loader.hpp"
+#include "ffcube/scene/gmsh_loader.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 #include "ffcube/scene/stl_loader.hpp"
 #include "ffcube/scene/vs3_loader.hpp"
@@ -21,7 +22,10 @@ SceneFormat parse_scene_format(std::string_view word) {
     if (word == "stl") return SceneFormat::Stl;
     if (word == "vs3") return SceneFormat::View3d;
     if (word == "assimp" || word == "ply" || word == "gltf" || word == "glb") return SceneFormat::Assimp;
-    throw InputError(fmt::format("--format {}: unknown format (auto, obj, stl, vs3, ply, gltf, glb or assimp)", word));
+    if (word == "gmsh" || (word != "gmsh" && gmsh_reads_extension(word))) return SceneFormat::Gmsh;
+    throw InputError(fmt::format("--format {}: unknown format (auto, obj, stl, vs3, ply, gltf, glb, assimp, msh, unv, bdf, nas, "
+                                 "vtk, step, stp, iges, igs or gmsh)",
+                                 word));
 }
 
 std::string_view to_string(SceneFormat f) {
@@ -31,6 +35,7 @@ std::string_view to_string(SceneFormat f) {
     case SceneFormat::Stl: return "stl";
     case SceneFormat::View3d: return "vs3";
     case SceneFormat::Assimp: return "assimp";
+    case SceneFormat::Gmsh: return "gmsh";
     }
     return "?";
 }
@@ -41,6 +46,7 @@ SceneFormat format_for_path(const std::filesystem::path& path) {
     if (ext == ".obj") return SceneFormat::Obj;
     if (ext == ".stl") return SceneFormat::Stl;
     if (ext == ".vs3") return SceneFormat::View3d;
+    if (gmsh_reads_extension(ext)) return SceneFormat::Gmsh;
     if (!ext.empty() && assimp_reads_extension(ext)) return SceneFormat::Assimp;
     // No extension, or one nobody reads: OBJ, as ffcube has always read it (its messages then say
     // "is this an OBJ file?"; --format names another format).
@@ -50,11 +56,24 @@ SceneFormat format_for_path(const std::filesystem::path& path) {
 ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj,
                     ImportedMaterials* materials) {
     if (format == SceneFormat::Auto) format = format_for_path(path);
+    if (format != SceneFormat::Gmsh && !obj.fe.flip.empty())
+        throw InputError(fmt::format("{}: --flip {}: --flip reverses groups of a mesh read through Gmsh (.msh, .unv, .bdf, .nas, "
+                                     ".vtk, .step, .iges); this file is read as {}",
+                                     path.string(), obj.fe.flip.front(), to_string(format)));
+    if (format != SceneFormat::Gmsh && obj.fe.objects_by != FeObjectsBy::group)
+        throw InputError(fmt::format("{}: --objects-by entity and element apply to meshes read through Gmsh; this file is read "
+                                     "as {} (its words: auto, o, g, material)",
+                                     path.string(), to_string(format)));
+    if (format == SceneFormat::Gmsh && obj.objects_by != ObjObjectsBy::automatic)
+        throw InputError(fmt::format("{}: --objects-by o, g and material apply to OBJ files; a mesh read through Gmsh takes "
+                                     "group, entity or element",
+                                     path.string()));
     switch (format) {
     case SceneFormat::Obj: return load_obj(path, obj);
     case SceneFormat::Stl: return load_stl(path);
     case SceneFormat::View3d: return load_vs3(path);
     case SceneFormat::Assimp: return load_with_assimp(path, materials);
+    case SceneFormat::Gmsh: return load_with_gmsh(path, obj.fe);
     case SceneFormat::Auto: break;
     }
     throw InternalError("load_model: no format");

@@ -314,6 +314,7 @@ void emit_quad(Scene& scene, const Piece& piece, const ObjFace& face, double max
             patch.material = face.material;
             fill_patch(scene, patch);
             scene.patches.push_back(patch);
+            if (face.element != 0) scene.patch_elements.push_back(face.element);
         }
     }
 }
@@ -339,6 +340,7 @@ void emit_triangle(Scene& scene, const Piece& piece, const ObjFace& face, double
         patch.material = face.material;
         fill_patch(scene, patch);
         scene.patches.push_back(patch);
+        if (face.element != 0) scene.patch_elements.push_back(face.element);
     };
     scene.grids.push_back(PatchGrid{{p[0], p[1], p[2], p[2]}, 3, k, k, static_cast<std::uint32_t>(scene.patches.size())});
     // Upright triangles (i,j),(i+1,j),(i,j+1) and inverted ones (i+1,j),(i+1,j+1),(i,j+1): all
@@ -501,6 +503,7 @@ Scene build_scene(const ObjModel& model, const MeshOptions& options) {
     scene.stats.max_patch_edge = max_edge;
     scene.stats.how = how + fmt::format(" ({} patches)", scene.patches.size());
     scene.stats.warnings = std::move(d.warnings);
+    if (scene.patch_elements.size() != scene.patches.size()) scene.patch_elements.clear();  // ids only where every face has one
     scene.fingerprint = fingerprint_of(scene);
     if (model.obstruction_objects > 0) return split_obstructions(std::move(scene), model.obstruction_objects);
     return scene;

@@ -89,7 +89,7 @@ std::string encode_imported(const ObjModel& m, const ImportedMaterials& c) {
     for (const ObjFace& f : m.faces) {
         w.size(f.v.size());
         for (std::uint32_t v : f.v) w.pod(v);
-        w.pod(f.object), w.pod(f.material), w.pod(f.line);
+        w.pod(f.object), w.pod(f.material), w.pod(f.line), w.pod(f.element);
     }
     w.size(m.objects.size());
     for (const std::string& o : m.objects) w.text(o);
@@ -115,7 +115,7 @@ ObjModel decode_imported(std::string_view bytes, ImportedMaterials& c) {
     m.source = r.text();
     m.positions.resize(r.count(24));
     for (Vec3& p : m.positions) p = r.vec3();
-    m.faces.resize(r.count(8 + 12));
+    m.faces.resize(r.count(8 + 20));
     for (ObjFace& f : m.faces) {
         f.v.resize(r.count(4));
         for (std::uint32_t& v : f.v) {
@@ -123,6 +123,7 @@ ObjModel decode_imported(std::string_view bytes, ImportedMaterials& c) {
             if (v >= m.positions.size()) Reader::bad("a vertex index out of range");
         }
         f.object = r.pod<std::uint32_t>(), f.material = r.pod<std::uint32_t>(), f.line = r.pod<std::uint32_t>();
+        f.element = r.pod<std::uint64_t>();
     }
     m.objects.resize(r.count(8));
     for (std::string& o : m.objects) o = r.text();

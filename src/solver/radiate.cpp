@@ -9,149 +9,14 @@
 #include <chrono>
 #include <cmath>
 #include <map>
+#include <thread>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/solver/linear.hpp"
+#include "radiate_internal.hpp"
 
 namespace ffcube {
-namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
-
-std::string_view trim(std::string_view s) {
-    while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
-    while (!s.empty() && (s.back() == ' ' || s.back() == '\t' || s.back() == '\r')) s.remove_suffix(1);
-    return s;
-}
-
-// Splits a CSV line at commas outside double quotes; a quoted field loses its quotes ("" → ").
-// InputError (via `where`) for an unterminated quote.
-std::vector<std::string> split_csv(std::string_view line, const std::string& where) {
-    std::vector<std::string> fields(1);
-    bool quoted = false;
-    for (std::size_t k = 0; k < line.size(); ++k) {
-        const char ch = line[k];
-        if (quoted) {
-            if (ch == '"' && k + 1 < line.size() && line[k + 1] == '"') {
-                fields.back() += '"';
-                ++k;
-            } else if (ch == '"') {
-                quoted = false;
-            } else {
-                fields.back() += ch;
-            }
-        } else if (ch == '"' && trim(fields.back()).empty()) {
-            fields.back().clear();
-            quoted = true;
-        } else if (ch == ',') {
-            fields.emplace_back();
-        } else {
-            fields.back() += ch;
-        }
-    }
-    if (quoted) throw InputError(fmt::format("{}: a double quote is not closed", where));
-    for (std::string& f : fields) f = std::string(trim(f));
-    return fields;
-}
-
-// The whole field as a finite number; nullopt when empty. InputError naming the column otherwise.
-std::optional<double> parse_number(const std::string& field, std::string_view column, const std::string& where) {
-    if (field.empty()) return std::nullopt;
-    double v = 0.0;
-    const char* end = field.data() + field.size();
-    const auto [ptr, ec] = std::from_chars(field.data(), end, v);
-    if (ec != std::errc() || ptr != end || !std::isfinite(v))
-        throw InputError(fmt::format("{}: {} '{}' is not a finite number", where, column, field));
-    return v;
-}
-
-void check_emissivity(double e, const std::string& where) {
-    if (!(e > 0.0 && e <= 1.0))
-        throw InputError(fmt::format("{}: emissivity {} must be in (0, 1] (a perfect reflector, 0, neither emits nor "
-                                     "absorbs: leave it out of the scene or give it a small emissivity)",
-                                     where, e));
-}
-void check_temperature(double t, const std::string& where) {
-    if (!(t >= 0.0 && std::isfinite(t))) throw InputError(fmt::format("{}: temperature {} K must be finite and >= 0", where, t));
-}
-
-double emissive_power(double t) {  // σ T⁴
-    const double t2 = t * t;
-    return kStefanBoltzmann * t2 * t2;
-}
-
-// y = x − c ∘ (F x), the operator of both problems (c = 1 − ε for a patch that reflects what it
-// receives on top of a given emission, 1 for a patch whose net flux is given).
-struct ReflectionOperator {
-    const CsrMatrix& F;
-    std::span<const double> c;
-    void gather(std::span<const double> x, std::span<double> g) const {  // g = F x
-        const auto& ptr = F.row_ptr();
-        const auto& col = F.col();
-        const auto& val = F.val();
-        for (std::uint32_t i = 0; i < F.size(); ++i) {
-            double s = 0.0;
-            for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
-            g[i] = s;
-        }
-    }
-    void operator()(std::span<const double> x, std::span<double> y) const {
-        gather(x, y);
-        for (std::size_t i = 0; i < y.size(); ++i) y[i] = x[i] - c[i] * y[i];
-    }
-};
-
-double norm2(std::span<const double> v) {
-    double s = 0.0;
-    for (const double x : v) s += x * x;
-    return std::sqrt(s);
-}
-
-struct SolveOutcome {
-    std::uint64_t iterations = 0;
-    double residual = 0.0;  // relative
-};
-
-// Solves (I − diag(c) F) x = b from x's start value; NotConvergedError naming `what` unless the
-// relative residual reaches options.tolerance.
-SolveOutcome solve_reflections(const ReflectionOperator& op, std::span<const double> b, std::span<double> x,
-                               const RadiateOptions& options, const std::string& what) {
-    const double bnorm = norm2(b);
-    if (bnorm == 0.0) {  // nothing emits and nothing is given: J = 0 exactly
-        std::fill(x.begin(), x.end(), 0.0);
-        return {};
-    }
-    GmresControl control;
-    control.restart = options.restart;
-    control.max_iterations = options.max_iterations;
-    control.tolerance = options.tolerance * bnorm;
-    control.inner_tolerance = 0.5 * control.tolerance;  // so that the true residual passes after the cycle
-    const GmresOutcome out = gmres(op, b, x, control, [](std::span<const double> r) { return norm2(r); });
-    const SolveOutcome result{out.iterations, out.measure / bnorm};
-    if (!out.converged)
-        throw NotConvergedError(fmt::format(
-            "{}: GMRES({}) stopped {} after {} products with the rows at a relative residual of {:.3g} > tolerance {:.3g}; "
-            "nothing was written",
-            what, options.restart, out.stagnated ? "without progress" : "at the iteration limit", out.iterations,
-            result.residual, options.tolerance));
-    return result;
-}
-
-std::vector<double> sky_view_factors(const CsrMatrix& F) {
-    std::vector<double> sky(F.size());
-    for (std::uint32_t i = 0; i < F.size(); ++i) sky[i] = 1.0 - F.row(i).sum();
-    return sky;
-}
-
-void check_sizes(const CsrMatrix& F, std::size_t area, std::size_t other, const char* what) {
-    if (F.rows_filled() != F.size() || area != F.size() || other != F.size())
-        throw InputError(fmt::format("radiation: F has {} rows ({} filled), {} areas and {} {}: one each per patch",
-                                     F.size(), F.rows_filled(), area, other, what));
-}
-
-}  // namespace
+using namespace radiate_detail;
 
 std::vector<NamedSurface> parse_surfaces_csv(std::string_view text, const std::string& source) {
     std::vector<NamedSurface> out;
@@ -256,16 +121,16 @@ void validate(const RadiateOptions& o) {
         throw InputError(fmt::format("open threshold {}: must be in [0, 1)", o.open_threshold));
 }
 
-RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
-                              const RadiateOptions& options) {
-    const auto t0 = std::chrono::steady_clock::now();
+namespace radiate_detail {
+
+double prepare_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                         const RadiateOptions& options, RadiateResult& r) {
     validate(options);
     check_sizes(F, area.size(), spec.size(), "surface specs");
     const std::uint32_t n = F.size();
     const auto name = [&](std::uint32_t i) {
         return options.patch_name ? options.patch_name(i) : fmt::format("patch {}", i);
     };
-    RadiateResult r;
     bool any_temperature = false;
     double total_area = 0.0;
     for (std::uint32_t i = 0; i < n; ++i) {
@@ -298,7 +163,74 @@ RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, 
     if (!any_temperature && !options.sky_temperature)
         throw InputError("every surface has a given heat flux and there is no sky temperature: the temperatures are "
                          "then undetermined; give at least one surface a temperature");
-    const double sky_power = options.sky_temperature ? emissive_power(*options.sky_temperature) : 0.0;
+    return options.sky_temperature ? emissive_power(*options.sky_temperature) : 0.0;
+}
+
+void finish_energy(RadiateResult& r, std::span<const double> area, double sky_power) {
+    const std::size_t n = area.size();
+    double abs_power = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        r.power += area[i] * r.heat_flux[i];
+        abs_power += area[i] * std::abs(r.heat_flux[i]);
+        r.sky += area[i] * r.sky_view[i] * (r.radiosity[i] - sky_power);
+    }
+    r.absolute_power = abs_power;
+    const double scale = abs_power + std::abs(r.sky);
+    r.balance_error = scale > 0.0 ? std::abs(r.power - r.sky) / scale : 0.0;
+}
+
+}  // namespace radiate_detail
+
+void CsrRowProduct::multiply(std::span<const double> x, std::span<double> y) const {
+    const std::uint32_t n = F_.size();
+    const auto& ptr = F_.row_ptr();
+    const auto& col = F_.col();
+    const auto& val = F_.val();
+    const auto rows = [&](std::uint32_t lo, std::uint32_t hi) {
+        for (std::uint32_t i = lo; i < hi; ++i) {
+            double s = 0.0;
+            for (std::uint64_t k = ptr[i]; k < ptr[i + 1]; ++k) s += double(val[k]) * x[col[k]];
+            y[i] = s;
+        }
+    };
+    unsigned t = threads_ ? threads_ : std::max(1u, std::thread::hardware_concurrency());
+    if (t <= 1 || F_.nnz() < 1000000) return rows(0, n);
+    t = std::min(t, 64u);
+    std::vector<std::uint32_t> cut(t + 1, n);
+    cut[0] = 0;
+    for (unsigned k = 1; k < t; ++k)
+        cut[k] = static_cast<std::uint32_t>(std::lower_bound(ptr.begin(), ptr.begin() + n, F_.nnz() * k / t) - ptr.begin());
+    std::vector<std::thread> pool;
+    for (unsigned k = 1; k < t; ++k) pool.emplace_back([&, k] { rows(cut[k], std::max(cut[k], cut[k + 1])); });
+    rows(0, cut[1]);
+    for (std::thread& th : pool) th.join();
+}
+
+std::vector<double> CsrRowProduct::row_sums() const {
+    if (F_.rows_filled() != F_.size())
+        throw InputError(fmt::format("radiation: F has {} of its {} rows filled", F_.rows_filled(), F_.size()));
+    std::vector<double> s(F_.size());
+    for (std::uint32_t i = 0; i < F_.size(); ++i) s[i] = F_.row(i).sum();
+    return s;
+}
+
+RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                              const RadiateOptions& options) {
+    return solve_radiation(CsrRowProduct(F, options.threads), area, spec, options);
+}
+
+ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+                                         std::span<const double> emissivity, std::span<const std::uint32_t> object,
+                                         std::uint32_t objects, const RadiateOptions& options) {
+    return radiative_conductances(CsrRowProduct(F, options.threads), area, emissivity, object, objects, options);
+}
+
+RadiateResult solve_radiation(const RowProduct& F, std::span<const double> area, std::span<const SurfaceSpec> spec,
+                              const RadiateOptions& options) {
+    const auto t0 = std::chrono::steady_clock::now();
+    RadiateResult r;
+    const double sky_power = prepare_radiation(F, area, spec, options, r);
+    const std::uint32_t n = F.size();
 
     // The system A J = b, A = I − diag(c) F (module docs).
     std::vector<double> c(n), b(n), j(n);
@@ -343,25 +275,18 @@ RadiateResult solve_radiation(const CsrMatrix& F, std::span<const double> area, 
                 throw InputError(fmt::format(
                     "{}: the given heat flux {:.6g} W/m^2 leaving would need a temperature below 0 K (it receives "
                     "{:.6g} W/m^2 and can absorb at most emissivity x that, {:.6g} W/m^2)",
-                    name(i), s.value, g, s.emissivity * g));
+                    options.patch_name ? options.patch_name(i) : fmt::format("patch {}", i), s.value, g,
+                    s.emissivity * g));
             e = std::max(e, 0.0);
             r.temperature[i] = std::pow(e / kStefanBoltzmann, 0.25);
         }
     }
-    double abs_power = 0.0;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        r.power += area[i] * r.heat_flux[i];
-        abs_power += area[i] * std::abs(r.heat_flux[i]);
-        r.sky += area[i] * r.sky_view[i] * (r.radiosity[i] - sky_power);
-    }
-    r.absolute_power = abs_power;
-    const double scale = abs_power + std::abs(r.sky);
-    r.balance_error = scale > 0.0 ? std::abs(r.power - r.sky) / scale : 0.0;
+    finish_energy(r, area, sky_power);
     r.seconds = seconds_since(t0);
     return r;
 }
 
-ConductanceResult radiative_conductances(const CsrMatrix& F, std::span<const double> area,
+ConductanceResult radiative_conductances(const RowProduct& F, std::span<const double> area,
                                          std::span<const double> emissivity, std::span<const std::uint32_t> object,
                                          std::uint32_t objects, const RadiateOptions& options) {
     const auto t0 = std::chrono::steady_clock::now();

@@ -196,5 +196,87 @@ TEST_F(RadiateCli, UnconvergedIsExit5WithoutResults) {
     EXPECT_FALSE(nlohmann::json::parse(read_text(dir / "r.json"))["converged"].get<bool>());
 }
 
+// --bands: one band over all wavelengths is the gray run byte for byte; bad bands are refused
+// naming B.csv:LINE (exit 2, nothing written); an outer iteration stopped short is exit 5.
+TEST_F(RadiateCli, BandsOneBandIsGrayAndBadBandsAreRefused) {
+    write_file(dir / "s.csv", "object,emissivity,temperature,heat_flux\ninner,0.4,800,\nouter,0.6,,-100\n");
+    // F once (every run below reads it): each run then costs milliseconds.
+    ASSERT_EQ(run_ffcube("formfactors " + (dir / "box.obj") + " --no-subdivide -q -o " + (dir / "F.ffm")).code, 0);
+    const std::string base = "radiate " + (dir / "box.obj") + " --no-subdivide -q --matrix " + (dir / "F.ffm") +
+                             " --surfaces " + (dir / "s.csv");
+    const std::string h = "object,lambda_min_um,lambda_max_um,emissivity\n";
+    // One band over all wavelengths. 'outer' (a given heat flux) goes through the outer iteration,
+    // stopped here at a flux residual r ≤ 1e-12 × σ(800 K)⁴ = 2.3e-8 W/m². Its σT⁴ then errs by
+    // r / (dq2/de2), dq2/de2 = (A1/A2)/(1/ε1 + (A1/A2)(1/ε2 − 1)) = 0.0246 for the two-surface form
+    // (A1/A2 = 1/16), i.e. ≤ 1e-6 W/m² of σT2⁴ ≈ 1.9e4: T relative ≤ 1.3e-11 (×10 for the form being
+    // the box's approximation), plus the CSV's 10 digits (5e-10).
+    write_file(dir / "b.csv", h + "inner,0,inf,0.4\nouter,0,inf,0.6\n");
+    ASSERT_EQ(run_ffcube(base + " -o " + (dir / "gray.csv")).code, 0);
+    const RunResult one =
+        run_ffcube(base + " --bands " + (dir / "b.csv") + " --set outer-tolerance=1e-12 -o " + (dir / "one.csv"));
+    ASSERT_EQ(one.code, 0) << one.output;
+    const double tg = column(read_text(dir / "gray.csv"), "temperature").at("outer");
+    const double tb = column(read_text(dir / "one.csv"), "temperature").at("outer");
+    EXPECT_NEAR(tb, tg, (1.3e-10 + 1e-9) * tg);
+    // The held inner cube's flux: the same to the CSV's digits and the solves' 1e-10.
+    const double qg = column(read_text(dir / "gray.csv"), "heat_flux").at("inner");
+    EXPECT_NEAR(column(read_text(dir / "one.csv"), "heat_flux").at("inner"), qg, 2e-9 * std::abs(qg));
+    // Temperatures only: byte for byte.
+    write_file(dir / "s2.csv", "object,emissivity,temperature,heat_flux\ninner,0.4,800,\nouter,0.6,300,\n");
+    const std::string base2 = "radiate " + (dir / "box.obj") + " --no-subdivide -q --matrix " + (dir / "F.ffm") +
+                              " --surfaces " + (dir / "s2.csv");
+    ASSERT_EQ(run_ffcube(base2 + " -o " + (dir / "gray2.csv")).code, 0);
+    ASSERT_EQ(run_ffcube(base2 + " --bands " + (dir / "b.csv") + " -o " + (dir / "one2.csv")).code, 0);
+    EXPECT_EQ(read_text(dir / "one2.csv"), read_text(dir / "gray2.csv"));
+
+    struct Bad {
+        std::string csv, says;
+        int code;
+        std::string extra;
+    };
+    for (const Bad& b : {Bad{h + "inner,0,5,0.4\ninner,4,inf,0.3\n", "b.csv:3: band [4, inf] um of 'inner' overlaps", 2, ""},
+                         Bad{h + "inner,6,5,0.4\n", "b.csv:2: band [6, 5] um of 'inner' is inverted", 2, ""},
+                         Bad{h + "inner,0,5,0.4\nlid,0,5,0.4\n", "b.csv:3: the scene has no object 'lid'", 2, ""},
+                         Bad{h + "inner,0,5,1.4\n", "b.csv:2: emissivity 1.4", 2, ""},
+                         Bad{h + "inner,0,5,0.4\n", "--conductances with --bands", 2, " --conductances " + (dir / "g.csv")},
+                         Bad{h + "inner,0,5,0.9\nouter,0,8,0.1\n", "did not converge in 1 outer iterations", 5,
+                             " --set max-outer-iterations=1"}}) {
+        write_file(dir / "b.csv", b.csv);
+        const RunResult r = run_ffcube(base + " --bands " + (dir / "b.csv") + " -o " + (dir / "q.csv") + b.extra);
+        EXPECT_EQ(r.code, b.code) << r.output;
+        EXPECT_NE(r.output.find(b.says), std::string::npos) << r.output;
+        EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+    }
+}
+
+// --stream-matrix: F read block by block at every product gives the same bytes as F in memory
+// (each row summed in the same order), for the fluxes, the patches and the conductances.
+TEST_F(RadiateCli, StreamedMatrixGivesTheSameBytes) {
+    write_file(dir / "s.csv", "object,emissivity,temperature,heat_flux\ninner,0.3,700,\nouter,0.05,,0\n");
+    ASSERT_EQ(run_ffcube("formfactors " + (dir / "box.obj") + " --max-patch-edge 1 -q -o " + (dir / "F.ffm")).code, 0);
+    const std::string base = "radiate " + (dir / "box.obj") + " --max-patch-edge 1 -q --matrix " + (dir / "F.ffm") +
+                             " --sky-temperature 3 --surfaces " + (dir / "s.csv");
+    for (const std::string tag : {"m", "s"}) {
+        const RunResult r = run_ffcube(base + (tag == "s" ? " --set stream-matrix=true" : "") + " -o " + (dir / ("q" + tag)) +
+                                       " --patch-out " + (dir / ("p" + tag)) + " --conductances " + (dir / ("g" + tag)));
+        ASSERT_EQ(r.code, 0) << r.output;
+    }
+    for (const std::string f : {"q", "p", "g"}) EXPECT_EQ(read_text(dir / (f + "s")), read_text(dir / (f + "m"))) << f;
+    const RunResult no_matrix = run_ffcube("radiate " + (dir / "box.obj") + " -q --surfaces " + (dir / "s.csv") +
+                                           " --set stream-matrix=true -o " + (dir / "q.csv"));
+    EXPECT_EQ(no_matrix.code, 2) << no_matrix.output;
+    EXPECT_NE(no_matrix.output.find("--stream-matrix needs --matrix"), std::string::npos) << no_matrix.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+    // A .ffm made for another meshing of the scene: refused, in memory or streamed (exit 2, nothing written).
+    for (const std::string stream : {"", " --set stream-matrix=true"}) {
+        const RunResult other = run_ffcube("radiate " + (dir / "box.obj") + " --max-patch-edge 2 -q --matrix " +
+                                           (dir / "F.ffm") + " --sky-temperature 3 --surfaces " + (dir / "s.csv") + stream +
+                                           " -o " + (dir / "q.csv"));
+        EXPECT_EQ(other.code, 2) << other.output;
+        EXPECT_NE(other.output.find("was computed for a different scene or meshing"), std::string::npos) << other.output;
+        EXPECT_FALSE(std::filesystem::exists(dir / "q.csv"));
+    }
+}
+
 }  // namespace
 }  // namespace ffcube::test

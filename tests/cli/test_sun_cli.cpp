@@ -20,34 +20,6 @@
 namespace ffcube::test {
 namespace {
 
-// The unit box [0,1]³ (roof and four walls, facing out; no floor) on the ground [−5,5]², one
-// object per face (--no-subdivide: one patch each).
-const char* kBoxOnPlane = R"(o ground
-v -5 -5 0
-v 5 -5 0
-v 5 5 0
-v -5 5 0
-f 1 2 3 4
-v 0 0 0
-v 1 0 0
-v 1 1 0
-v 0 1 0
-v 0 0 1
-v 1 0 1
-v 1 1 1
-v 0 1 1
-o roof
-f 9 10 11 12
-o south
-f 5 6 10 9
-o east
-f 6 7 11 10
-o north
-f 7 8 12 11
-o west
-f 8 5 9 12
-)";
-
 // The exact fraction of each face for the sun s (n·s ≤ 1e-9: 0, as gl/sun.hpp).
 std::map<std::string, double> exact(const std::array<double, 3>& s) {
     const auto lit = [&](double nx, double ny, double nz) { return nx * s[0] + ny * s[1] + nz * s[2] > 1e-9 ? 1.0 : 0.0; };

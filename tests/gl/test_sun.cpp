@@ -108,6 +108,24 @@ TEST(SunBuffer, SameInputSameOutput) {
     EXPECT_EQ(a.fraction, b.fraction);
 }
 
+// One context lent for several suns (a series) gives what a context per call gives. (The calls
+// with their own context come first: destroying a context while another is alive can end the EGL
+// display they share, so the series makes no other context while it lends one.)
+TEST(SunBuffer, ALentContextGivesTheSameCounts) {
+    const Scene s = box_on_plane();
+    SunOptions o;
+    o.max_pixels = 1u << 20;
+    const std::vector<Vec3> suns = {Vec3(0.3, -0.5, 0.4), Vec3(-0.7, 0.2, 0.1), Vec3(0.0, 0.0, 1.0)};
+    std::vector<SunResult> own;
+    for (const Vec3& sun : suns) own.push_back(sunlit_fractions(s, sun, o));
+    std::unique_ptr<GlContext> ctx = create_headless_context(o.backend);
+    for (std::size_t k = 0; k < suns.size(); ++k) {
+        const SunResult b = sunlit_fractions(s, suns[k], o, *ctx);
+        EXPECT_EQ(own[k].pixels, b.pixels);
+        EXPECT_EQ(own[k].fraction, b.fraction);
+    }
+}
+
 // A budget far below what the tolerance asks: larger pixels, the bound reported above the
 // tolerance, and still every fraction in [0, 1] (the clamp) and near the closed form.
 TEST(SunBuffer, PixelBudgetCapsAndReportsTheBound) {

@@ -386,5 +386,149 @@ class Errors(unittest.TestCase):
             ffcube.form_factors(42)
 
 
+SIGMA = 5.670374419e-8
+
+
+def dense_radiation(F, area, eps, temperature, heat_flux):
+    """Independent dense solve of the net radiation method (docs/radiate.md) on the float rows:
+    T given: J - (1 - eps) F J = eps sigma T^4; q given: J - F J = q. Returns (q, T, J)."""
+    F = np.asarray(F.todense(), dtype=np.float64)
+    n = len(area)
+    held = ~np.isnan(temperature)
+    c = np.where(held, 1.0 - eps, 1.0)
+    b = np.where(held, eps * SIGMA * np.nan_to_num(temperature) ** 4, np.nan_to_num(heat_flux))
+    J = np.linalg.solve(np.eye(n) - c[:, None] * F, b)
+    G = F @ J
+    q = np.where(held, eps * (SIGMA * np.nan_to_num(temperature) ** 4 - G), heat_flux)
+    T = np.where(held, temperature, ((G + np.nan_to_num(heat_flux) / eps) / SIGMA) ** 0.25)
+    return q, T, J
+
+
+class Radiate(unittest.TestCase):
+    # The cube of examples/cube.obj at 0.25: 96 patches; examples/cube_surfaces.csv holds three walls
+    # and leaves three adiabatic (eps down to 0.05).
+    SURFACES = os.path.join(EXAMPLES, "cube_surfaces.csv")
+
+    def test_radiate_matches_a_dense_solve_and_the_command_line(self):
+        res, report = ffcube.radiate(CUBE, max_patch_edge=0.25, surfaces=self.SURFACES, quiet=True)
+        self.assertEqual(report["command"], "radiate")
+        self.assertTrue(report["converged"])
+        scene = ffcube.load_scene(CUBE, max_patch_edge=0.25, quiet=True)
+        F = ffcube.form_factors(scene, quiet=True)
+        eps_obj = {"x0": 0.9, "x1": 0.8, "y0": 0.5, "y1": 0.5, "z0": 0.05, "z1": 0.9}
+        t_obj = {"x0": 400.0, "x1": 300.0, "z1": 350.0}
+        names = scene.objects
+        eps = np.array([eps_obj[names[o]] for o in scene.patch_object])
+        T = np.array([t_obj.get(names[o], np.nan) for o in scene.patch_object])
+        Q = np.where(np.isnan(T), 0.0, np.nan)
+        q, t, J = dense_radiation(F, scene.areas, eps, T, Q)
+        # GMRES stops at a relative residual 1e-10; J's error <= cond(A) 1e-10 <= (2/eps_min) 1e-10 =
+        # 4e-9 of ||J|| at eps_min = 0.05; q = eps (sigma T^4 - G) carries that of J_max: 4e-9 J_max.
+        jmax = np.abs(J).max()
+        np.testing.assert_allclose(res["heat_flux"], q, rtol=0, atol=4e-9 * jmax)
+        np.testing.assert_allclose(res["radiosity"], J, rtol=0, atol=4e-9 * jmax)
+        # T from sigma T^4 = G + q/eps: dT/T = (1/4) dG/(sigma T^4), G's error 4e-9 J_max, / eps_min.
+        np.testing.assert_allclose(res["temperature"], t, rtol=4e-9 / 0.05, atol=0)
+        # The command line's Q.csv (10 significant digits) for the same inputs.
+        with tempfile.TemporaryDirectory() as d:
+            out = os.path.join(d, "q.csv")
+            r = run_cli("radiate", CUBE, "--max-patch-edge", "0.25", "--surfaces", self.SURFACES, "-o", out, "-q")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(out) as f:
+                rows = [line.split(",") for line in f.read().splitlines()[1:]]
+        for k, row in enumerate(rows):
+            self.assertEqual(row[0], res["objects"][k])
+            self.assertAlmostEqual(float(row[5]), res["object_power"][k], delta=1e-9 * max(1.0, abs(float(row[5]))))
+        # A dict of surfaces is the CSV.
+        surf = {name: {"emissivity": eps_obj[name], "temperature": t_obj[name]} if name in t_obj
+                else {"emissivity": eps_obj[name], "heat_flux": 0.0} for name in names}
+        res2, _ = ffcube.radiate(scene, surfaces=surf, quiet=True)
+        np.testing.assert_array_equal(res2["heat_flux"], res["heat_flux"])
+
+    def test_radiation_solves_again_without_rebuilding(self):
+        scene = ffcube.load_scene(CUBE, max_patch_edge=0.25, quiet=True)
+        F = ffcube.form_factors(scene, quiet=True)
+        eps = {"x0": 0.9, "x1": 0.8, "y0": 0.5, "y1": 0.5, "z0": 0.02, "z1": 0.9}
+        rad = ffcube.Radiation(F, scene, eps)
+        self.assertEqual(rad.objects, scene.objects)
+        e = np.array([eps[scene.objects[o]] for o in scene.patch_object])
+        rng = np.random.default_rng(3)
+        for step in range(5):
+            # Per patch: random temperatures, and the z0 wall adiabatic (NaN: not given).
+            T = rng.uniform(250.0, 900.0, len(scene))
+            z0 = scene.patch_object == scene.objects.index("z0")
+            T[z0] = np.nan
+            q_given = np.where(z0, 0.0, np.nan)
+            res = rad.solve(temperature=T, heat_flux=q_given)
+            q, t, J = dense_radiation(F, scene.areas, e, T, q_given)
+            # As above, at eps_min = 0.02: 1e-8 of J_max.
+            jmax = np.abs(J).max()
+            np.testing.assert_allclose(res["heat_flux"], q, rtol=0, atol=1e-8 * jmax)
+            np.testing.assert_allclose(res["temperature"], t, rtol=1e-8 / 0.02, atol=0)
+            # Energy: closed cube with hemicube rows, balance to the rows' reciprocity (report).
+            self.assertLess(res["balance_error"], 1e-3)
+        # Per-object dicts and a sky temperature for an open scene are accepted the same way.
+        res = rad.solve(temperature={"x0": 400.0, "x1": 300.0, "y0": 350.0, "y1": 350.0, "z1": 350.0},
+                        heat_flux={"z0": 0.0})
+        self.assertEqual(res["heat_flux"].shape, (len(scene),))
+        with self.assertRaises(ValueError) as err:
+            rad.solve(temperature={"x0": 400.0}, heat_flux={"x0": 10.0})
+        self.assertIn("both a temperature and a heat flux", str(err.exception))
+        with self.assertRaises(ValueError) as err:
+            rad.solve(temperature={"lid": 400.0})
+        self.assertIn("no object 'lid'", str(err.exception))
+        with self.assertRaises(ValueError):
+            ffcube.Radiation(F, scene, 1.5)
+
+    def test_command_line_mesh_is_coloured_by_heat_flux(self):
+        # `ffcube radiate --mesh OUT.ply`: one flat colour per patch (faces in patch order, each with its
+        # own vertices), white at 0, red to +qmax, blue to -qmax, fade = round(255 (1 - |q|/qmax)).
+        with tempfile.TemporaryDirectory() as d:
+            ply, patches = os.path.join(d, "heat.ply"), os.path.join(d, "p.csv")
+            r = run_cli("radiate", CUBE, "--max-patch-edge", "0.5", "--surfaces", self.SURFACES, "--mesh", ply,
+                        "--patch-out", patches, "-q")
+            self.assertEqual(r.returncode, 0, r.stderr)
+            with open(patches) as f:
+                q = np.array([float(line.split(",")[4]) for line in f.read().splitlines()[1:]])
+            with open(ply, "rb") as f:
+                data = f.read()
+        head, body = data.split(b"end_header\n", 1)
+        nv = int(head.split(b"element vertex ")[1].split(b"\n")[0])
+        self.assertIn(b"red +", head)
+        vertex = np.frombuffer(body[:nv * 15], dtype=[("p", "<f4", 3), ("c", "u1", 3)])
+        qmax = np.abs(q).max()
+        # Faces: a uchar count then uint32 indices; flat shading gives each patch its own vertices.
+        faces, at = [], nv * 15
+        while at < len(body):
+            k = body[at]
+            faces.append(np.frombuffer(body[at + 1:at + 1 + 4 * k], dtype="<u4"))
+            at += 1 + 4 * k
+        self.assertEqual(len(faces), len(q))
+        for i, face in enumerate(faces):
+            t = q[i] / qmax
+            fade = round(255 * (1 - abs(t)))
+            want = [255, fade, fade] if t >= 0 else [fade, fade, 255]
+            for v in face:
+                # The CSV's 10 digits can move the fade by one step at a .5 boundary.
+                np.testing.assert_allclose(vertex["c"][v], want, atol=1)
+
+    def test_conductances_match_a_dense_gebhart_solve(self):
+        scene = ffcube.load_scene(CUBE, max_patch_edge=0.5, quiet=True)
+        F = ffcube.form_factors(scene, quiet=True)
+        eps = np.where(scene.patch_object % 2 == 0, 0.3, 0.8)
+        GR, sky = ffcube.Radiation(F, scene, eps).conductances()
+        # Gebhart: B = F diag(eps) + F diag(1 - eps) B, so B = (I - F diag(1 - eps))^-1 F diag(eps);
+        # GR_kl = sum_{i in k} eps_i A_i sum_{j in l} B_ij.
+        Fd = np.asarray(F.todense(), dtype=np.float64)
+        n = len(scene)
+        B = np.linalg.solve(np.eye(n) - Fd * (1 - eps)[None, :], Fd * eps[None, :])
+        K = len(scene.objects)
+        M = np.zeros((K, n))
+        M[scene.patch_object, np.arange(n)] = 1.0
+        ref = M @ ((eps * scene.areas)[:, None] * B) @ M.T
+        # One GMRES solve per object to 1e-10, cond <= 2/0.3: 1e-9 of the largest GR.
+        np.testing.assert_allclose(GR, ref, rtol=0, atol=1e-9 * ref.max())
+
+
 if __name__ == "__main__":
     unittest.main()

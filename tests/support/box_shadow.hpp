@@ -76,6 +76,34 @@ inline double box_shadow_on_ground(double sx, double sy, double sz, double g = 5
     return h.size() >= 3 ? shoelace(h) : 0.0;
 }
 
+// The unit box [0,1]³ (roof and four walls, facing out; no floor) on the ground [−5,5]², one
+// object per face (--no-subdivide: one patch each).
+inline const char* kBoxOnPlane = R"(o ground
+v -5 -5 0
+v 5 -5 0
+v 5 5 0
+v -5 5 0
+f 1 2 3 4
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+o roof
+f 9 10 11 12
+o south
+f 5 6 10 9
+o east
+f 6 7 11 10
+o north
+f 7 8 12 11
+o west
+f 8 5 9 12
+)";
+
 // The direction towards a sun at azimuth az (clockwise from north, +y; east +x) and elevation el,
 // in degrees (what `ffcube sun --sun AZ,EL` means).
 inline std::array<double, 3> sun_from_angles(double az_deg, double el_deg) {

@@ -57,5 +57,11 @@ Vec3 normalized_sun_direction(Vec3 towards_sun, const char* option = "--sun-dire
 // unit; InputError when zero or not finite). Makes its own headless context (GlError when none
 // can be made). Deterministic: the same scene and options give the same result.
 SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& options = {});
+// The same in a context the caller made once (create_headless_context) for many sun positions:
+// made current for the call and released after it. The result is the same as above. Make and
+// destroy no other context while it is lent: that can end the EGL display they share.
+SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& options, GlContext& context);
+// nullptr: a context of its own (the first form).
+SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& options, GlContext* context);
 
 }  // namespace ffcube

@@ -142,5 +142,7 @@ FfmFile read_ffm(const std::filesystem::path& path);
 // Throws InputError unless the file was computed for this scene and meshing: same fingerprint,
 // and (as a guard against a fingerprint collision) the same patch count.
 void check_ffm_matches(const FfmFile& file, const Scene& scene);
+// The same from a file's head (FfmReader: the rows are not read).
+void check_ffm_matches(const FfmHead& head, const Scene& scene);
 
 }  // namespace ffcube

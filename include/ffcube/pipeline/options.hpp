@@ -31,6 +31,8 @@ struct SceneOptions {
     double max_patch_edge = 0;   // > 0: split faces so that no patch edge exceeds it
     std::size_t patches = 0;     // > 0: mesh to about this many patches (default of the mesher otherwise)
     ObjObjectsBy objects_by = ObjObjectsBy::automatic;  // OBJ: what names objects (--objects-by)
+    FeObjectsBy fe_objects_by = FeObjectsBy::group;     // meshes read through Gmsh: the same (--objects-by)
+    std::vector<std::string> flip;                      // --flip GROUP: reversed objects of a mesh file
     SceneFormat format = SceneFormat::Auto;  // --format: Auto = by the file's extension
     std::string materials;       // --materials: CSV of Kd and Ke per object (scene/material_map.hpp)
     bool subdivide = true;       // false (--no-subdivide): one patch per input face

@@ -30,6 +30,7 @@ struct SurfaceOutputOptions {
     std::string elmer;                // --elmer ViewFactors.dat (one row per patch)
     FileFormat elmer_format = FileFormat::Auto;   // --elmer-format: auto = text
     std::string patch_table;          // --patch-table P.csv
+    std::string fields;               // --fields OUT.vtu: per-patch sky view factor and row sum on the mesh (io/vtu.hpp)
 };
 
 SkyBy parse_sky_by(std::string_view text);            // patch | object

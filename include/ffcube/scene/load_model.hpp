@@ -15,15 +15,16 @@
 
 namespace ffcube {
 
-enum class SceneFormat { Auto, Obj, Stl, View3d, Assimp };
+enum class SceneFormat { Auto, Obj, Stl, View3d, Assimp, Gmsh };
 
-// "auto", "obj", "stl", "vs3", "assimp" (also "ply", "gltf", "glb": read through assimp).
+// "auto", "obj", "stl", "vs3", "assimp" (also "ply", "gltf", "glb": read through assimp), "gmsh"
+// (also "msh", "unv", "bdf", "nas", "vtk", "step", "stp", "iges", "igs": read through Gmsh).
 // Throws InputError naming --format and the words it accepts.
 SceneFormat parse_scene_format(std::string_view word);
 std::string_view to_string(SceneFormat f);
 
 // The format an extension names (case-insensitive): .stl, .vs3, else assimp when assimp imports
-// that extension; .obj, no extension and unknown extensions are read as OBJ (as before formats).
+// that extension (Gmsh's extensions first: gmsh_loader.hpp); .obj, no extension and unknown extensions are read as OBJ (as before formats).
 SceneFormat format_for_path(const std::filesystem::path& path);
 
 // Loads a scene file in the given format (Auto: by extension).

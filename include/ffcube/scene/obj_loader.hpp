@@ -9,6 +9,7 @@
 #include <string>
 #include <string_view>
 
+#include "ffcube/scene/gmsh_loader.hpp"
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
@@ -29,6 +30,7 @@ ObjObjectsBy parse_objects_by(std::string_view name, std::string_view option = "
 
 struct ObjLoadOptions {
     ObjObjectsBy objects_by = ObjObjectsBy::automatic;
+    FeLoadOptions fe;  // meshes and CAD read through Gmsh (gmsh_loader.hpp)
 };
 
 // Parses OBJ text. 'source' names it in messages.

@@ -27,6 +27,7 @@ struct ObjFace {
     std::uint32_t object = 0;      // index into ObjModel::objects
     std::uint32_t material = 0;    // index into ObjModel::materials
     std::uint32_t line = 0;        // 1-based line of the 'f' statement, for messages
+    std::uint64_t element = 0;     // the mesh element's id (meshes read through Gmsh), 0: none
 };
 
 // What a View3D file's control lines (C) and title (T) ask for, kept for the parts of ffcube that
@@ -139,6 +140,10 @@ struct Scene {
     std::vector<PatchGrid> grids;  // every patch belongs to exactly one grid, in patch order
     std::vector<std::string> objects;
     std::vector<Material> materials;
+    // Per patch, the id of the mesh element it comes from (a mesh read through Gmsh: with
+    // --no-subdivide one patch per element, or per linear piece of a quadratic one); empty when
+    // the faces carry no ids, or when a step after meshing (refinement) made new patches.
+    std::vector<std::uint64_t> patch_elements;
     MeshStats stats;
     View3dControls view3d;  // as loaded (ObjModel::view3d)
     Vec3 bbox_min{0.0}, bbox_max{0.0};

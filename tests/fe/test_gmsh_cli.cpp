@@ -1,0 +1,374 @@
+// FE and CAD meshes through Gmsh (issue 39), through the real binary, on models that Gmsh itself
+// writes at run time (tools/gmsh_models.cpp): a closed box with six named walls in every format
+// gives Howell's closed forms (C-11, C-14), a tetrahedral box with a cavity radiates from its
+// boundary only, quadratic triangles of a cylinder come closer to the curved value than the
+// linear ones, and malformed files end with exit 2, a message naming the file, and no output.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <map>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "cli/cli_util.hpp"
+#include "ffcube/reference/closed_forms.hpp"
+
+namespace ffcube {
+namespace {
+
+using test::read_text;
+using test::run_ffcube;
+using test::TempDir;
+
+constexpr double kBox[3] = {2.0, 1.0, 1.5};  // the box of gmsh_models
+// The patch table prints 9 significant digits: each area is rounded by at most 5e-9 of itself, so
+// a sum of areas by at most 5e-9 of the sum (1e-8 leaves room for the last digit of the nodes).
+constexpr double kAreaPrinted = 1e-8;
+constexpr int kRays = 32768;  // well under 1 s per run on the models' 100 to 200 patches
+
+// The models, written once per process into a temporary directory.
+const TempDir& models() {
+    static TempDir dir;
+    static const int status = std::system((std::string(FFCUBE_GMSH_MODELS) + " " + dir.path().string() + " > /dev/null").c_str());
+    EXPECT_EQ(status, 0);
+    return dir;
+}
+
+std::vector<std::vector<std::string>> csv(const std::string& text) {
+    std::vector<std::vector<std::string>> rows;
+    std::istringstream in(text);
+    std::string line;
+    std::getline(in, line);  // header
+    while (std::getline(in, line)) {
+        std::vector<std::string> cells;
+        std::stringstream ls(line);
+        std::string cell;
+        while (std::getline(ls, cell, ',')) cells.push_back(cell);
+        rows.push_back(cells);
+    }
+    return rows;
+}
+
+struct ObjectShape {
+    double area = 0.0, largest_patch = 0.0;
+    double c[3] = {0, 0, 0}, n[3] = {0, 0, 0};  // area-weighted centroid and normal
+};
+
+std::map<std::string, ObjectShape> shapes(const std::string& patch_table) {
+    std::map<std::string, ObjectShape> out;
+    for (const auto& r : csv(patch_table)) {
+        ObjectShape& s = out[r.at(1)];
+        const double a = std::stod(r.at(2));
+        s.area += a;
+        s.largest_patch = std::max(s.largest_patch, a);
+        for (int k = 0; k < 3; ++k) s.c[k] += a * std::stod(r.at(3 + k)), s.n[k] += a * std::stod(r.at(6 + k));
+    }
+    for (auto& [name, s] : out)
+        for (int k = 0; k < 3; ++k) s.c[k] /= s.area, s.n[k] /= s.area;
+    return out;
+}
+
+// The axis a wall of the box is perpendicular to.
+int axis_of(const ObjectShape& s) {
+    int a = 0;
+    for (int k = 1; k < 3; ++k)
+        if (std::abs(s.n[k]) > std::abs(s.n[a])) a = k;
+    return a;
+}
+
+// Reads the box in `file` with its walls flipped to face into the box and checks every
+// object-to-object factor against Howell's closed forms.
+void check_box(const std::string& file) {
+    const TempDir& m = models();
+    TempDir out;
+    // A first run learns the object names (they differ by format: groups, pid_N, surface_N).
+    auto r = run_ffcube("formfactors " + (m / file) + " --no-subdivide --method raycast -q --patch-table " + (out / "t0.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    std::string names;
+    for (const auto& [name, s] : shapes(read_text(out / "t0.csv"))) names += (names.empty() ? "" : ",") + name;
+    r = run_ffcube("formfactors " + (m / file) + " --no-subdivide --method raycast -q --rays " + std::to_string(kRays) +
+                   " --flip " + names + " --patch-table " + (out / "t.csv") + " --groups " + (out / "g.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto walls = shapes(read_text(out / "t.csv"));
+    ASSERT_EQ(walls.size(), 6u) << names;
+    std::map<std::pair<std::string, std::string>, double> f;
+    for (const auto& row : csv(read_text(out / "g.csv"))) f[{row.at(0), row.at(1)}] = std::stod(row.at(2));
+    double worst = 0.0;
+    for (const auto& [from, a] : walls) {
+        const int ia = axis_of(a);
+        EXPECT_NEAR(std::abs(a.n[ia]), 1.0, 1e-9) << file << " " << from;
+        EXPECT_NEAR(a.area, kBox[(ia + 1) % 3] * kBox[(ia + 2) % 3], kAreaPrinted * a.area) << file << " " << from;
+        // Standard error of a ray-cast object factor: each patch's row is a mean of kRays
+        // Bernoulli draws (variance F(1-F)/kRays <= 1/(4 kRays)), and the object's factor an
+        // area-weighted mean of its patches' rows (weights w_i, sum 1), so its variance is at most
+        // sum w_i^2 / (4 kRays) <= max w_i / (4 kRays). 5 standard errors, plus the float storage
+        // of the factors (1e-6).
+        const double tol = 5.0 * std::sqrt(a.largest_patch / a.area / (4.0 * kRays)) + 1e-6;
+        for (const auto& [to, b] : walls) {
+            if (from == to) continue;
+            const int ib = axis_of(b);
+            double exact;
+            if (ia == ib) {
+                exact = ff_parallel_rectangles(kBox[(ia + 1) % 3], kBox[(ia + 2) % 3], kBox[ia]);  // C-11
+            } else {
+                const int edge = 3 - ia - ib;  // the common edge's axis
+                exact = ff_perpendicular_rectangles_common_edge(kBox[edge], kBox[ib], kBox[ia]);  // C-14
+            }
+            const double got = f.count({from, to}) ? f[{from, to}] : 0.0;
+            EXPECT_NEAR(got, exact, tol) << file << ": " << from << " -> " << to;
+            worst = std::max(worst, std::abs(got - exact));
+        }
+    }
+    std::printf("%s: max |F - closed form| over 30 wall pairs = %.2e\n", file.c_str(), worst);
+}
+
+TEST(GmshCli, BoxMsh41Ascii) { check_box("box_41.msh"); }
+TEST(GmshCli, BoxMsh41Binary) { check_box("box_41b.msh"); }
+TEST(GmshCli, BoxMsh22Ascii) { check_box("box_22.msh"); }
+TEST(GmshCli, BoxMsh22Binary) { check_box("box_22b.msh"); }
+TEST(GmshCli, BoxUnv) { check_box("box.unv"); }
+TEST(GmshCli, BoxNastran) { check_box("box.bdf"); }
+TEST(GmshCli, BoxStepMeshedByGmsh) { check_box("box.step"); }
+
+TEST(GmshCli, GroupNamesAndIdsOfFormats) {
+    const TempDir& m = models();
+    TempDir out;
+    for (const auto& [file, first] : std::vector<std::pair<std::string, std::string>>{
+             {"box_41.msh", "xmin"}, {"box.unv", "xmin"}, {"box.bdf", "pid_1"}, {"box.step", "surface_1"}, {"box.vtk", "surface_1"}}) {
+        const auto r = run_ffcube("formfactors " + (m / file) + " --no-subdivide --method raycast -q --patch-table " + (out / "t.csv"));
+        ASSERT_EQ(r.code, 0) << r.output;
+        EXPECT_EQ(shapes(read_text(out / "t.csv")).count(first), 1u) << file;
+    }
+    // --objects-by element: one object per element.
+    const auto r = run_ffcube("formfactors " + (m / "box_41.msh") + " --no-subdivide --method raycast -q --objects-by element "
+                              "--patch-table " + (out / "t.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto by_element = shapes(read_text(out / "t.csv"));
+    EXPECT_EQ(by_element.size(), csv(read_text(out / "t.csv")).size());
+    // The box's surface area: 2 (2x1 + 2x1.5 + 1x1.5).
+    double area = 0.0;
+    for (const auto& [n, s] : by_element) area += s.area;
+    EXPECT_NEAR(area, 2 * (2 + 3 + 1.5), kAreaPrinted * area);
+}
+
+// The cube [0,3]^3 less [1,2]^3 in tetrahedra: only the outer walls (area 54, facing out, so
+// seeing nothing) and the cavity's walls (area 6, facing into the cavity, which they close)
+// radiate; the internal faces of the tetrahedra (thousands) do not.
+TEST(GmshCli, TetrahedralBoxWithCavityRadiatesFromItsBoundary) {
+    const TempDir& m = models();
+    TempDir out;
+    const auto r = run_ffcube("formfactors " + (m / "cavity.msh") + " --no-subdivide --method raycast -q --patch-table " +
+                              (out / "t.csv") + " --groups " + (out / "g.csv") + " --sky " + (out / "sky.csv"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto objects = shapes(read_text(out / "t.csv"));
+    ASSERT_EQ(objects.size(), 2u);
+    EXPECT_NEAR(objects.at("outer").area, 54.0, kAreaPrinted * 54.0);
+    EXPECT_NEAR(objects.at("cavity").area, 6.0, kAreaPrinted * 6.0);
+    // Facing out of the material: the outer walls' normals point away from the centre (1.5,1.5,1.5),
+    // the cavity's towards it.
+    for (const auto& row : csv(read_text(out / "t.csv"))) {
+        double d = 0.0;
+        for (int k = 0; k < 3; ++k) d += (std::stod(row.at(3 + k)) - 1.5) * std::stod(row.at(6 + k));
+        EXPECT_EQ(d > 0, row.at(1) == "outer") << "patch " << row.at(0);
+    }
+    // The cavity is closed: its rows sum to 1 (rays cannot escape a closed box; float storage 1e-6);
+    // the outer walls see nothing of the convex solid: their rows are 0 exactly.
+    for (const auto& row : csv(read_text(out / "sky.csv"))) {
+        const double sky = std::stod(row.at(3));  // patch,object,area,sky_view_factor,element_id
+        if (row.at(1) == "cavity")
+            EXPECT_NEAR(sky, 0.0, 1e-6) << "patch " << row.at(0);
+        else
+            EXPECT_EQ(sky, 1.0) << "patch " << row.at(0);
+    }
+    const auto g = csv(read_text(out / "g.csv"));
+    ASSERT_EQ(g.size(), 1u);
+    EXPECT_EQ(g[0].at(0), "cavity");
+    EXPECT_NEAR(std::stod(g[0].at(2)), 1.0, 1e-6);
+}
+
+// The closed cylinder (radius 1, height 2) faced inwards: F(side -> side) = 1 - 2 F(side -> top),
+// F(side -> top) = (A_top / A_side) (1 - F(top -> bottom)) = (1 - C-41(1, 1, 2)) / 4. The linear
+// mesh is a prism inside the cylinder; its 6-node version puts the mid-side nodes on the cylinder,
+// split into 4 triangles each, which halves the chords' sagitta: closer to the curved value.
+TEST(GmshCli, QuadraticCylinderComesCloserToTheCurvedValue) {
+    const TempDir& m = models();
+    TempDir out;
+    const double exact = 1.0 - 2.0 * (1.0 - ff_coaxial_disks(1.0, 1.0, 2.0)) / 4.0;
+    double err[2], noise[2];
+    std::size_t patches[2];
+    for (int order = 1; order <= 2; ++order) {
+        const std::string file = m / ("cylinder_o" + std::to_string(order) + ".msh");
+        const auto r = run_ffcube("formfactors " + file + " --no-subdivide --method raycast -q --rays " + std::to_string(kRays) +
+                                  " --flip side,top,bottom --patch-table " + (out / "t.csv") + " --groups " + (out / "g.csv"));
+        ASSERT_EQ(r.code, 0) << r.output;
+        double f = 0.0;
+        for (const auto& row : csv(read_text(out / "g.csv")))
+            if (row.at(0) == "side" && row.at(1) == "side") f = std::stod(row.at(2));
+        err[order - 1] = std::abs(f - exact);
+        patches[order - 1] = csv(read_text(out / "t.csv")).size();
+        const ObjectShape side = shapes(read_text(out / "t.csv")).at("side");
+        noise[order - 1] = 5.0 * std::sqrt(side.largest_patch / side.area / (4.0 * kRays));  // as in check_box
+    }
+    std::printf("cylinder F(side->side): exact %.6f, |error| linear %.2e (%zu patches), quadratic %.2e (%zu patches)\n", exact,
+                err[0], patches[0], err[1], patches[1]);
+    EXPECT_EQ(patches[1], 4 * patches[0]);  // each 6-node triangle in 4
+    // Each estimate is within its 5-standard-error bound of the mesh's own value (see check_box),
+    // so the linear mesh's error exceeds the quadratic one's by more than both bounds together
+    // only when its geometry is truly farther from the cylinder.
+    std::printf("noise bounds: linear %.2e, quadratic %.2e\n", noise[0], noise[1]);
+    EXPECT_LT(err[1] + noise[0] + noise[1], err[0]);
+}
+
+// A malformed file: exit 2, a message naming the file and what is wrong, no output file.
+void expect_refused(const std::string& path, const std::string& words) {
+    TempDir out;
+    const auto r = run_ffcube("formfactors " + path + " -q --method raycast -o " + (out / "F.ffm"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(path), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(words), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(out / "F.ffm"));
+}
+
+TEST(GmshCli, MalformedFilesAreRefused) {
+    const TempDir& m = models();
+    TempDir dir;
+    const std::string ascii = read_text(m / "box_22.msh");
+    const std::string binary = read_text(m / "box_41b.msh");
+    const auto write = [&](const std::string& name, const std::string& text) {
+        test::write_file(dir / name, text);
+        return dir / name;
+    };
+    expect_refused(write("cut.msh", ascii.substr(0, ascii.size() / 3)), "Gmsh cannot read it");
+    expect_refused(write("cutb.msh", binary.substr(0, binary.size() * 2 / 3)), "Gmsh cannot read it");
+    expect_refused(write("garbage.msh", std::string("\x13\x7f garbage \x01\x02 ]]]\n", 17)), "Gmsh cannot read it");
+    // The first element's type (2: triangle) replaced by an unknown one, and its last node by a missing one.
+    const std::size_t elements = ascii.find("$Elements\n");
+    ASSERT_NE(elements, std::string::npos);
+    const std::size_t first = ascii.find('\n', ascii.find('\n', elements) + 1) + 1;  // the line after the count
+    const std::size_t end = ascii.find('\n', first);
+    std::istringstream words(ascii.substr(first, end - first));
+    std::vector<std::string> w;
+    for (std::string s; words >> s;) w.push_back(s);
+    const auto line = [&](std::size_t k, const std::string& v) {
+        std::string s;
+        for (std::size_t i = 0; i < w.size(); ++i) s += (i ? " " : "") + (i == k ? v : w[i]);
+        return ascii.substr(0, first) + s + ascii.substr(end);
+    };
+    expect_refused(write("type.msh", line(1, "150")), "element 1 is of type 150, which Gmsh does not know");
+    expect_refused(write("node.msh", line(w.size() - 1, "99999")), "node");
+    std::string twice = ascii;
+    twice.replace(twice.find("\"ymin\""), 6, "\"xmin\"");
+    expect_refused(write("twice.msh", twice), "the physical group name \"xmin\" is used twice");
+    std::string bdf = read_text(m / "box.bdf");
+    bdf.insert(bdf.find("GRID"), "CORD2R  9       0       0.      0.      0.      0.      0.      1.\n");
+    expect_refused(write("card.bdf", bdf), "card 'CORD2R' is not read");
+    expect_refused(write("stl.step", "solid x\nendsolid x\n"), "not a STEP file");
+    expect_refused(write("bad.step", "ISO-10303-21;\nHEADER;\nnonsense\n"), "Gmsh cannot read it");
+}
+
+}  // namespace
+}  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Element ids come back: with --no-subdivide each triangle of the .msh is one patch, and the
+// patch table, the per-patch sky file and the .vtu of --fields (read back by meshio, an
+// independent reader) carry its id. The .msh is parsed here (version 2.2 ASCII: "id x y z" node
+// lines, "id type ntags tags... nodes" element lines) for each element's centroid.
+TEST(GmshCli, ElementIdsRoundTripThroughPatchTableAndVtu) {
+    const TempDir& m = models();
+    TempDir out;
+    const std::string msh = read_text(m / "box_22.msh");
+    std::map<long, std::array<double, 3>> nodes;
+    std::map<long, std::array<double, 3>> centroid;  // triangle id -> centroid
+    {
+        std::istringstream in(msh.substr(msh.find("$Nodes\n") + 7));
+        std::size_t n = 0;
+        in >> n;
+        for (std::size_t i = 0; i < n; ++i) {
+            long id;
+            std::array<double, 3> p;
+            in >> id >> p[0] >> p[1] >> p[2];
+            nodes[id] = p;
+        }
+        std::istringstream el(msh.substr(msh.find("$Elements\n") + 10));
+        el >> n;
+        std::string line;
+        std::getline(el, line);
+        for (std::size_t i = 0; i < n && std::getline(el, line);) {
+            std::istringstream ls(line);
+            long id, type, ntags, v;
+            ls >> id >> type >> ntags;
+            for (long t = 0; t < ntags; ++t) ls >> v;
+            ++i;
+            if (type != 2) continue;
+            std::array<double, 3> c{0, 0, 0};
+            for (int k = 0; k < 3; ++k) {
+                ls >> v;
+                for (int a = 0; a < 3; ++a) c[a] += nodes.at(v)[a] / 3.0;
+            }
+            centroid[id] = c;
+        }
+    }
+    ASSERT_GT(centroid.size(), 50u);
+    const auto r = run_ffcube("formfactors " + (m / "box_22.msh") + " --no-subdivide --method raycast -q --flip " +
+                              "xmin,xmax,ymin,ymax,zmin,zmax --patch-table " + (out / "t.csv") + " --sky " + (out / "s.csv") +
+                              " --fields " + (out / "f.vtu"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const auto table = csv(read_text(out / "t.csv"));
+    ASSERT_EQ(table.size(), centroid.size());
+    std::map<long, double> sky;
+    for (const auto& row : table) {
+        ASSERT_EQ(row.size(), 10u);
+        const long id = std::stol(row.at(9));
+        ASSERT_EQ(centroid.count(id), 1u) << "element " << id;
+        // The table prints 9 significant digits of coordinates at most 2: 5e-9 each.
+        for (int a = 0; a < 3; ++a) EXPECT_NEAR(std::stod(row.at(3 + a)), centroid[id][a], 1e-8) << "element " << id;
+        centroid.erase(id);  // each element once
+    }
+    for (const auto& row : csv(read_text(out / "s.csv"))) sky[std::stol(row.at(4))] = std::stod(row.at(3));
+    EXPECT_EQ(sky.size(), table.size());
+    // meshio reads the .vtu: element ids and sky view factors per cell.
+    const std::string script = "import meshio,sys\nm=meshio.read(sys.argv[1])\nd=m.cell_data\n"
+                               "for i,s in zip(d['element_id'][0],d['sky_view_factor'][0]): print(int(i),repr(float(s)))\n";
+    test::write_file(out / "read.py", script);
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + (out / "read.py") + " " + (out / "f.vtu") + " > " + (out / "v.txt")).c_str()), 0);
+    std::istringstream v(read_text(out / "v.txt"));
+    std::size_t cells = 0;
+    for (long id; v >> id;) {
+        double s;
+        v >> s;
+        ++cells;
+        ASSERT_EQ(sky.count(id), 1u) << "element " << id;
+        EXPECT_NEAR(s, sky[id], 5e-9) << "element " << id;  // the CSV's 9 digits of a value <= 1
+    }
+    EXPECT_EQ(cells, table.size());
+}
+
+}  // namespace
+}  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// The mesh options name what they apply to when given for another format.
+TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
+    const std::string obj = test::example("cube.obj");
+    auto r = run_ffcube("formfactors " + obj + " -q --method raycast --flip a");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("--flip reverses groups of a mesh read through Gmsh"), std::string::npos) << r.output;
+    r = run_ffcube("formfactors " + obj + " -q --method raycast --objects-by element");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("apply to meshes read through Gmsh"), std::string::npos) << r.output;
+    r = run_ffcube("formfactors " + (models() / "box_41.msh") + " -q --method raycast --objects-by g");
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find("apply to OBJ files"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace ffcube

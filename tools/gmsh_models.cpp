@@ -1,0 +1,148 @@
+// Test and example models written the way a modelling tool writes them: by Gmsh itself, through
+// its C++ API (Debian's libgmsh-dev; its Python API is not installed by tools/setup.sh).
+//
+//   gmsh_models OUTDIR
+//
+// writes into OUTDIR:
+//   box_41.msh box_41b.msh box_22.msh box_22b.msh box.unv box.bdf box.vtk box.step
+//       the box [0,2]x[0,1]x[0,1.5] from OpenCASCADE, its six walls named physical surfaces
+//       xmin, xmax, ymin, ymax, zmin, zmax (normals out of the box, as OpenCASCADE orients them),
+//       meshed in triangles of edge at most 0.75; .msh 4.1 and 2.2, ASCII and binary (b), I-DEAS
+//       universal, Nastran bulk data, legacy VTK (no groups) and the STEP of the solid;
+//   cavity.msh
+//       the cube [0,3]^3 less the cube [1,2]^3, meshed in tetrahedra (volume group "solid"),
+//       with the physical surfaces "outer" (the six outer walls) and "cavity" (the six inner);
+//   cylinder_o1.msh cylinder_o2.msh
+//       the closed cylinder of radius 1 and height 2 (surfaces "side", "top", "bottom"), meshed
+//       coarsely (edge 1.2) in linear triangles, and the same mesh raised to order 2 (6-node
+//       triangles whose mid-side nodes lie on the cylinder).
+#include <gmsh.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+namespace {
+
+std::string out;
+
+void write(const std::string& name, double version, bool binary) {
+    gmsh::option::setNumber("Mesh.MshFileVersion", version);
+    gmsh::option::setNumber("Mesh.Binary", binary ? 1 : 0);
+    gmsh::write(out + "/" + name);
+    gmsh::option::setNumber("Mesh.Binary", 0);
+    gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
+}
+
+// The physical surface named `name` of the surfaces whose centre of mass lies within `eps` of the
+// plane `axis` = `value`.
+void name_wall(const gmsh::vectorpair& surfaces, int axis, double value, const std::string& name) {
+    std::vector<int> tags;
+    for (const auto& [dim, tag] : surfaces) {
+        double c[3];
+        gmsh::model::occ::getCenterOfMass(dim, tag, c[0], c[1], c[2]);
+        if (std::abs(c[axis] - value) < 1e-9) tags.push_back(tag);
+    }
+    const int g = gmsh::model::addPhysicalGroup(2, tags);
+    gmsh::model::setPhysicalName(2, g, name);
+}
+
+void box() {
+    gmsh::model::add("box");
+    gmsh::model::occ::addBox(0, 0, 0, 2, 1, 1.5);
+    gmsh::model::occ::synchronize();
+    gmsh::vectorpair s;
+    gmsh::model::getEntities(s, 2);
+    const double hi[3] = {2, 1, 1.5};
+    const char* axes = "xyz";
+    for (int a = 0; a < 3; ++a) {
+        name_wall(s, a, 0.0, std::string(1, axes[a]) + "min");
+        name_wall(s, a, hi[a], std::string(1, axes[a]) + "max");
+    }
+    gmsh::option::setNumber("Mesh.MeshSizeMax", 0.75);
+    gmsh::model::mesh::generate(2);
+    write("box_41.msh", 4.1, false);
+    write("box_41b.msh", 4.1, true);
+    write("box_22.msh", 2.2, false);
+    write("box_22b.msh", 2.2, true);
+    gmsh::write(out + "/box.unv");
+    gmsh::write(out + "/box.bdf");
+    gmsh::write(out + "/box.vtk");
+    gmsh::write(out + "/box.step");
+    gmsh::model::remove();
+}
+
+void cavity() {
+    gmsh::model::add("cavity");
+    const int outer = gmsh::model::occ::addBox(0, 0, 0, 3, 3, 3);
+    const int inner = gmsh::model::occ::addBox(1, 1, 1, 1, 1, 1);
+    gmsh::vectorpair result;
+    std::vector<gmsh::vectorpair> map;
+    gmsh::model::occ::cut({{3, outer}}, {{3, inner}}, result, map);
+    gmsh::model::occ::synchronize();
+    gmsh::vectorpair s;
+    gmsh::model::getEntities(s, 2);
+    std::vector<int> outer_tags, cavity_tags;
+    for (const auto& [dim, tag] : s) {
+        double x, y, z;
+        gmsh::model::occ::getCenterOfMass(dim, tag, x, y, z);
+        const bool inside = x > 0.5 && x < 2.5 && y > 0.5 && y < 2.5 && z > 0.5 && z < 2.5;
+        (inside ? cavity_tags : outer_tags).push_back(tag);
+    }
+    gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, outer_tags), "outer");
+    gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, cavity_tags), "cavity");
+    gmsh::model::setPhysicalName(3, gmsh::model::addPhysicalGroup(3, {result[0].second}), "solid");
+    gmsh::option::setNumber("Mesh.MeshSizeMax", 1.0);
+    gmsh::model::mesh::generate(3);
+    write("cavity.msh", 4.1, false);
+    gmsh::model::remove();
+}
+
+void cylinder() {
+    gmsh::model::add("cylinder");
+    gmsh::model::occ::addCylinder(0, 0, 0, 0, 0, 2, 1);
+    gmsh::model::occ::synchronize();
+    gmsh::vectorpair s;
+    gmsh::model::getEntities(s, 2);
+    for (const auto& [dim, tag] : s) {
+        double x, y, z;
+        gmsh::model::occ::getCenterOfMass(dim, tag, x, y, z);
+        const char* name = std::abs(z) < 1e-9 ? "bottom" : std::abs(z - 2) < 1e-9 ? "top" : "side";
+        gmsh::model::setPhysicalName(2, gmsh::model::addPhysicalGroup(2, {tag}), name);
+    }
+    gmsh::option::setNumber("Mesh.MeshSizeMax", 1.2);
+    gmsh::model::mesh::generate(2);
+    write("cylinder_o1.msh", 4.1, false);
+    gmsh::model::mesh::setOrder(2);
+    write("cylinder_o2.msh", 4.1, false);
+    gmsh::model::remove();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (argc != 2) {
+        std::fprintf(stderr, "usage: gmsh_models OUTDIR\n");
+        return 2;
+    }
+    out = argv[1];
+    try {
+        gmsh::initialize(0, nullptr, false);
+        gmsh::option::setNumber("General.Terminal", 0);
+        gmsh::option::setNumber("General.NumThreads", 1);
+        // The size of the points OpenCASCADE makes would override Mesh.MeshSizeMax.
+        gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
+        box();
+        cavity();
+        cylinder();
+        gmsh::finalize();
+    } catch (const std::string& e) {
+        std::fprintf(stderr, "gmsh_models: %s\n", e.c_str());
+        return 1;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "gmsh_models: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}
