@@ -194,7 +194,10 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         }
         return std::span<const std::pair<std::uint32_t, double>>(a.exact);
     };
-    stages.measured = [&](std::size_t k, std::uint32_t, double error) { analyses_[k].measured_error = error; };
+    stages.measured = [&](std::size_t k, std::uint32_t, double error, double rays) {
+        analyses_[k].measured_error = error;
+        analyses_[k].measured_rays = rays;
+    };
     stages.finish = [&](std::size_t k, std::uint32_t i, SparseRow& row) {
         Stopwatch watch;
         NearAnalysis& a = analyses_[k];

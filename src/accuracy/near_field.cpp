@@ -514,7 +514,8 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
                                 b.quadrature_weights);
     stats.quadrature += merge_row(row, exact, rule, error, b.merged, estimate);
     if (im.options.keep_closed_rows) {
-        const ClosedTest test{analysis->skipped, inner_sum, analysis->far_error};
+        ClosedTest test{analysis->skipped, inner_sum, analysis->far_error};
+        if (analysis->measured_rays > 0) test.measured_tolerance = 2.0 / analysis->measured_rays;
         const Rebalance r = rebalance_row(b.merged.row.val, b.merged.is_exact, test);
         if (r.applied) {
             ++(r.closed ? stats.rows_closed : stats.rows_capped);

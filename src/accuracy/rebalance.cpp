@@ -19,7 +19,7 @@ Rebalance rebalance_row(std::span<double> values, std::span<const std::uint8_t> 
     for (std::size_t e = 0; e < values.size(); ++e) (is_exact[e] ? fixed : rest) += values[e];
     Rebalance r;
     r.closed = test.analytic ? std::abs(fixed + rest - 1.0) <= std::max(kClosedRowTolerance, 2 * test.analytic_error)
-                             : std::abs(test.inner_sum - 1.0) <= kClosedRowTolerance;
+                             : std::abs(test.inner_sum - 1.0) <= std::max(kClosedRowTolerance, test.measured_tolerance);
     if (!(r.closed || fixed + rest > 1.0)) return r;
     // Normally the non-exact entries take the whole change. Where they are too few for that
     // (the far field made nearly all of the row exact: a factor beyond 1 ± 0.1 would be pixel

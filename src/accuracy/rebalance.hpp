@@ -21,6 +21,11 @@ struct ClosedTest {
     bool analytic = false;
     double inner_sum = 0;       // for a measured row
     double analytic_error = 0;  // for an analytic row: NearAnalysis::far_error
+    // For a measured row: what its measure may leave open in a closed scene, beyond
+    // kClosedRowTolerance. A row of R rays refined to a tolerance: 2/R, two rays that float
+    // rounding lost at a seam (a closed cube's rows lose about 1e-5 of their rays so); R ≥ 3/E,
+    // so closing such a row moves it by less than the target (and the move joins its estimate).
+    double measured_tolerance = 0;
 };
 
 struct Rebalance {

@@ -595,7 +595,7 @@ void RaycastRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows
         im.row(i, out, scratch[w], exact, &figures);
         if (refine) {
             im.note(figures);
-            if (stages.measured) stages.measured(k, i, figures.noise);
+            if (stages.measured) stages.measured(k, i, figures.noise, static_cast<double>(figures.rays));
         }
         if (stages.finish) stages.finish(k, i, out);
     };

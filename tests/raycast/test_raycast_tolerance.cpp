@@ -47,7 +47,7 @@ Checked check_rows(const Scene& scene, double E) {
     std::vector<double> estimate(n, -1);
     std::vector<SparseRow> got(n);
     RowProvider::RowStages stages;
-    stages.measured = [&](std::size_t, std::uint32_t i, double e) { estimate[i] = e; };
+    stages.measured = [&](std::size_t, std::uint32_t i, double e, double) { estimate[i] = e; };
     provider.compute_rows_staged(rows, stages, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
     Checked c;
     for (std::uint32_t i = 0; i < n; ++i) {

@@ -239,6 +239,7 @@ struct NearAnalysis {
     // The inner provider's own estimate of its measuring error on the row (a ray caster refining
     // to a tolerance: RowProvider::RowStages::measured), −1 when it gave none.
     double measured_error = -1;
+    double measured_rays = 0;  // and its rays (0: none given)
     bool done = false;
 };
 

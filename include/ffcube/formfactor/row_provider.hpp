@@ -61,9 +61,10 @@ public:
         // For a provider that refines each row to a tolerance (the ray caster, accuracy by
         // target). exact_entries: before row i is measured, the entries finish will replace by
         // exact values, (j, F_ij) with j increasing, valid until finish; their measuring error
-        // does not count. measured: the row's estimated measuring error, before finish.
+        // does not count. measured: the row's estimated measuring error and the rays it took
+        // (each ray's weight is 1/rays), before finish.
         std::function<std::span<const std::pair<std::uint32_t, double>>(std::size_t k, std::uint32_t i)> exact_entries;
-        std::function<void(std::size_t k, std::uint32_t i, double error)> measured;
+        std::function<void(std::size_t k, std::uint32_t i, double error, double rays)> measured;
     };
     virtual void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                                      const RowSink& sink);
