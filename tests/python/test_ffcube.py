@@ -134,6 +134,20 @@ class FormFactors(unittest.TestCase):
         F0 = ffcube.form_factors(SQUARES, max_patch_edge=0.5, method="raycast", rays=256, quiet=True)
         self.assertNotEqual((F != F0).nnz, 0)
 
+    def test_tolerance_is_the_command_lines(self):
+        # Ray rows refined to a target (docs/accuracy.md, "Accuracy by target"): the module's
+        # tolerance= reaches the rows (2e-3 gives other rows than 1e-2, bit for bit the command
+        # line's), and a target double precision cannot honour is refused as on the command line.
+        # (Without the correction, which makes every pair of these squares exact.)
+        F = self.assert_same_as_cli(SQUARES, ["--max-patch-edge", 0.5, "--method", "raycast", "--correct", "none",
+                                              "--tolerance", 2e-3],
+                                    max_patch_edge=0.5, method="raycast", correct="none", tolerance=2e-3)
+        F0 = ffcube.form_factors(SQUARES, max_patch_edge=0.5, method="raycast", correct="none", tolerance=1e-2, quiet=True)
+        self.assertNotEqual((F != F0).nnz, 0)
+        for bad in (0.0, 1e-12, 1.0, float("nan")):
+            with self.assertRaisesRegex(ValueError, "tolerance"):
+                ffcube.form_factors(SQUARES, method="raycast", tolerance=bad, quiet=True)
+
     def test_exact_visibility_is_the_command_lines(self):
         # --exact-visibility changes F on the unsubdivided L-room (its refused near pairs get the
         # exact factor past their occluders, tests/cli/test_view3d_l_room_cli.cpp), so a dropped
