@@ -8,7 +8,7 @@ estimate, the largest ratio true/estimate (issue 40: at least 95% within, none a
 errors (mean |error| and max) and the CPU time of the checked run.
 
   python3 tools/tolerance_honesty.py city.stl --tolerance 1e-3 [--reference-rays 4194304]
-      [--ffcube build/ffcube] [--keep DIR] [-- extra ffcube options]
+      [--ffcube build/ffcube] [--keep DIR] [-- more ffcube options, e.g. --no-subdivide]
 
 The reference is about (R / R_checked)^0.63 times more accurate (the ray caster's rate on a city,
 docs/accuracy.md); give --reference-rays large enough for the rows checked.
@@ -40,8 +40,8 @@ def main():
     ap.add_argument("--reference-rays", type=int, default=4194304)
     ap.add_argument("--ffcube", default=os.path.join(os.path.dirname(__file__), "..", "build", "ffcube"))
     ap.add_argument("--keep", help="directory for the matrices (reused: an existing reference.mtx is not recomputed)")
-    ap.add_argument("extra", nargs="*", help="more ffcube options (after --), e.g. --no-subdivide")
-    a = ap.parse_args()
+    a, extra = ap.parse_known_args()  # the rest: more ffcube options, e.g. --no-subdivide
+    a.extra = [x for x in extra if x != "--"]
     d = a.keep or tempfile.mkdtemp()
     os.makedirs(d, exist_ok=True)
     ref_path = os.path.join(d, "reference.mtx")

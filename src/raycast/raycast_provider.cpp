@@ -556,7 +556,7 @@ RayBudget tolerance_rays(double tolerance) {
     };
     RayBudget b;
     b.least = std::max<std::uint64_t>(4096, pow2_at_least(3.0 / tolerance));
-    b.most = std::max(b.least, std::min<std::uint64_t>(std::uint64_t{1} << 24, pow2_at_least(256.0 / tolerance)));
+    b.most = std::max(b.least, std::min<std::uint64_t>(std::uint64_t{1} << 24, pow2_at_least(64.0 / tolerance)));
     return b;
 }
 unsigned RaycastRowProvider::threads() const { return impl_->threads; }

@@ -7,9 +7,9 @@
 // error, the quantity the estimate bounds.
 //
 // What is asserted is issue 40's honesty rule: at least 95% of the rows have a true error at or
-// below their estimate and none more than 3 times it; and that refining works: every row's
-// estimate meets the target within its budget (these rows are easy: at most a few hundred
-// thousand rays each), with at least tolerance_rays(E).least rays. The rows are fixed by the seed,
+// below their estimate and none more than 3 times it; and that refining works: a row stops as
+// soon as its estimate meets the target, with at least tolerance_rays(E).least rays, and a row
+// whose estimate is still above it has spent its whole budget and is counted. The rows are fixed by the seed,
 // so the test is deterministic; it fails if the estimate is made optimistic (a smaller t, fewer
 // replicates treated as independent, a missing rule-of-three floor).
 #include <gtest/gtest.h>
@@ -31,7 +31,7 @@ namespace {
 using test::NamedPolygon;
 
 struct Checked {
-    std::size_t rows = 0, covered = 0;
+    std::size_t rows = 0, covered = 0, above = 0;
     double worst_ratio = 0, largest_estimate = 0;
 };
 
@@ -44,10 +44,10 @@ Checked check_rows(const Scene& scene, double E) {
     const std::uint32_t n = provider.size();
     std::vector<std::uint32_t> rows(n);
     for (std::uint32_t i = 0; i < n; ++i) rows[i] = i;
-    std::vector<double> estimate(n, -1);
+    std::vector<double> estimate(n, -1), rays(n, 0);
     std::vector<SparseRow> got(n);
     RowProvider::RowStages stages;
-    stages.measured = [&](std::size_t, std::uint32_t i, double e, double) { estimate[i] = e; };
+    stages.measured = [&](std::size_t, std::uint32_t i, double e, double r) { estimate[i] = e, rays[i] = r; };
     provider.compute_rows_staged(rows, stages, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
     Checked c;
     for (std::uint32_t i = 0; i < n; ++i) {
@@ -68,10 +68,15 @@ Checked check_rows(const Scene& scene, double E) {
         c.covered += truth <= estimate[i];
         c.worst_ratio = std::max(c.worst_ratio, truth / estimate[i]);
         c.largest_estimate = std::max(c.largest_estimate, estimate[i]);
+        const RayBudget b = tolerance_rays(E);
+        EXPECT_GE(rays[i], static_cast<double>(b.least)) << "row " << i;
+        if (estimate[i] > E) {
+            ++c.above;
+            EXPECT_EQ(rays[i], static_cast<double>(b.most)) << "row " << i << " stopped above the target";
+        }
     }
     EXPECT_EQ(provider.refined_rows(), n);
-    EXPECT_GE(provider.rays_traced(), n * tolerance_rays(E).least);
-    EXPECT_EQ(provider.rows_at_budget(), 0u);
+    EXPECT_EQ(provider.rows_at_budget(), c.above);
     return c;
 }
 
@@ -90,17 +95,22 @@ TEST(RaycastTolerance, EstimatesCoverTheTrueErrorOfExactRows) {
     Checked all;
     for (const Scene& s : scenes) {
         const Checked c = check_rows(s, E);
-        all.rows += c.rows, all.covered += c.covered;
+        all.rows += c.rows, all.covered += c.covered, all.above += c.above;
         all.worst_ratio = std::max(all.worst_ratio, c.worst_ratio);
         all.largest_estimate = std::max(all.largest_estimate, c.largest_estimate);
     }
     ASSERT_GE(all.rows, 80u);
-    std::printf("%zu of %zu rows within their estimate, largest true/estimate %.2f, largest estimate %.3g\n", all.covered,
-                all.rows, all.worst_ratio, all.largest_estimate);
+    std::printf("%zu of %zu rows within their estimate, largest true/estimate %.2f, largest estimate %.3g, %zu above "
+                "the target at their budget\n",
+                all.covered, all.rows, all.worst_ratio, all.largest_estimate, all.above);
     EXPECT_GE(static_cast<double>(all.covered), 0.95 * static_cast<double>(all.rows))
         << all.covered << " of " << all.rows << " rows within their estimate";
     EXPECT_LE(all.worst_ratio, 3.0);
-    EXPECT_LE(all.largest_estimate, E);  // every row met the target
+    // Most rows meet the target within the budget of 64/E rays: 26 of 112 did not when this was
+    // written (rows of the touching pair, whose largest entries are large); a third or more would
+    // mean the estimate or the doubling had gone wrong. Each was checked above to have spent its
+    // whole budget.
+    EXPECT_LT(static_cast<double>(all.above), static_cast<double>(all.rows) / 3.0);
 }
 
 TEST(RaycastTolerance, RowsAreTheSameForAnyThreadCount) {
@@ -123,11 +133,11 @@ TEST(RaycastTolerance, RowsAreTheSameForAnyThreadCount) {
 }
 
 TEST(RaycastTolerance, TheBudgetFollowsTheTarget) {
-    // At least 3/E rays (the rule of three) and 4,096; at most 256/E and 2^24; powers of two.
+    // At least 3/E rays (the rule of three) and 4,096; at most 64/E and 2^24; powers of two.
     EXPECT_EQ(tolerance_rays(1e-3).least, 4096u);
-    EXPECT_EQ(tolerance_rays(1e-3).most, 262144u);
+    EXPECT_EQ(tolerance_rays(1e-3).most, 65536u);
     EXPECT_EQ(tolerance_rays(1e-4).least, 32768u);
-    EXPECT_EQ(tolerance_rays(1e-4).most, 4194304u);
+    EXPECT_EQ(tolerance_rays(1e-4).most, 1048576u);
     EXPECT_EQ(tolerance_rays(1e-6).most, std::uint64_t{1} << 24);
     RaycastOptions o;
     o.tolerance = -1;

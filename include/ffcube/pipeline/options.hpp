@@ -50,8 +50,8 @@ enum class EnforceRequest { None, Reciprocity, Closure, Both };
 constexpr std::size_t kMaxExactVisibilityOccluders = 64;
 
 // --tolerance's default. Issue 40 asks for View3D's default eps, 1e-4; ray-cast rows refined to
-// 1e-4 cost about 30 times today's on a city (docs/accuracy.md, "Accuracy by target": measured),
-// so the default is 1e-3 until hemicube rows and a cheaper sky share are refined too.
+// 1e-4 cost about 18 times the old fixed count on a city (docs/accuracy.md, "Accuracy by target":
+// measured), so the default is 1e-3 until a cheaper estimate and hemicube refinement exist.
 constexpr double kDefaultTolerance = 1e-3;
 
 struct RowOptions {
