@@ -149,6 +149,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     // run one after the other on one thread.
     analyses_.assign(rows.size(), NearAnalysis{});
     if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
+    if (row_tolerance_.size() != inner_.size()) row_tolerance_.assign(inner_.size(), NAN);
     if (row_measure_.size() != inner_.size()) row_measure_.assign(inner_.size(), RowMeasure::not_computed);
     // The stages below write row_error_[i] and row_measure_[i] from the inner provider's worker
     // threads without a lock: that needs each row listed once. Checked always (O(rows), a mark
@@ -216,7 +217,17 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         const double cast_rays = sampled && a.occluder == 2 ? static_cast<double>(cast_fine_rays) : 0.0;
         SparseRow& inner = scratch->buffers().inner;
         inner = row;  // the row as measured (the buffer's capacity is reused)
-        corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled, cast_rays);
+        RowNoise noise;
+        corrector_.correct(i, row, local, *scratch, &estimate, &a, sampled, cast_rays, &noise);
+        // The tolerance's estimate: the correction's own terms (systematic: far field,
+        // quadrature residual, rebalancing), plus the measuring error as the provider measured it
+        // or, where it did not, as modelled: the largest entry's noise or the sum's, whichever
+        // is larger. The sum's: its outline against the sky, and the entries replaced by exact
+        // values, whose measured errors no longer cancel their neighbours' (RowNoise).
+        double tolerance_estimate =
+            a.measured_error >= 0 ? estimate + a.measured_error
+                                  : estimate - noise.l1 +
+                                        kNoiseDeviations * std::max(noise.max, std::sqrt(noise.sky * noise.sky + noise.replaced_sum_sq));
         if (a.measured_error >= 0) estimate += a.measured_error;
         // The last check before the row leaves the layer: a corrected row out of range (an entry
         // below 0 or above 1, not finite, or a sum above 1 beyond its tolerance) is replaced by
@@ -236,6 +247,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
                 else moved += std::abs(row.val[p++] - inner.val[q++]);
             }
             estimate = std::isfinite(moved) ? estimate + moved : moved;
+            tolerance_estimate = std::isfinite(moved) ? tolerance_estimate + moved : moved;
             std::swap(row, inner);
             ++local.rows_recomputed_out_of_range;
             pools_->note_out_of_range(i);
@@ -243,6 +255,7 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         pools_->give_back(std::move(scratch));
         // One writer per row (i is listed once); both are sized before the stages start.
         row_error_[i] = static_cast<float>(estimate);
+        row_tolerance_[i] = static_cast<float>(std::max(tolerance_estimate, 0.0));
         row_measure_[i] = a.skipped ? RowMeasure::analytic
                           : !sampled ? RowMeasure::centre
                           : a.occluder == 2 ? RowMeasure::sampled_touching

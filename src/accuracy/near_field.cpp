@@ -469,7 +469,7 @@ void count_small_receivers(const SparseRow& row, double pixel_delta_ff, NearFiel
 // closed-row rebalancing, and the estimate.
 void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, NearFieldScratch& scratch,
                                  double* error_estimate, const NearAnalysis* analysis, bool sampled_row,
-                                 double cast_rays) const {
+                                 double cast_rays, RowNoise* noise) const {
     const Impl& im = *impl_;
     NearFieldScratch::Buffers& b = scratch.buffers();
     ++stats.rows;
@@ -495,13 +495,20 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     const RowErrorModel error{im.patches.scene, im.patches.scene.patches[i], pixel_delta_ff,
                               cast ? cast_rays : im.options.rays, sampled_row && !cast, quadrature};
     count_small_receivers(row, pixel_delta_ff, stats);
+    // The sum's noise: pixels (or rays) moved between two receivers leave the sum as it is; only
+    // the outline against the sky moves it, modelled as a receiver of the sky's share (none for a
+    // row not measured: the analysis is the row).
+    if (noise) noise->sky = analysis->skipped ? 0.0 : error.noise(std::max(0.0, 1.0 - inner_sum));
     const auto& exact = analysis->exact;  // (j, exact F_ij), j increasing
     double estimate = analysis->far_error;
     if (exact.empty() && !quadrature_needed) {
         ++stats.rows_untouched;
         if (error_estimate) {
-            for (std::size_t a = 0; a < row.nnz(); ++a)
-                estimate += error.midpoint(row.col[a], row.val[a]) + error.noise(row.val[a]);
+            for (std::size_t a = 0; a < row.nnz(); ++a) {
+                const double sigma = error.noise(row.val[a]);
+                estimate += error.midpoint(row.col[a], row.val[a]) + sigma;
+                if (noise) noise->add(sigma);
+            }
             *error_estimate = estimate;
         }
         stats.quadrature_seconds += quadrature_watch.seconds();
@@ -512,7 +519,7 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     stats.replaced += exact.size();
     const SenderQuadrature rule(im.patches, im.options, i, error, quadrature_needed, b.quadrature_points,
                                 b.quadrature_weights);
-    stats.quadrature += merge_row(row, exact, rule, error, b.merged, estimate);
+    stats.quadrature += merge_row(row, exact, rule, error, b.merged, estimate, noise);
     if (im.options.keep_closed_rows) {
         ClosedTest test{analysis->skipped, inner_sum, analysis->far_error};
         if (analysis->measured_rays > 0) test.measured_tolerance = 2.0 / analysis->measured_rays;

@@ -5,7 +5,7 @@ namespace ffcube::accuracy {
 
 std::uint64_t merge_row(const SparseRow& inner, std::span<const std::pair<std::uint32_t, double>> exact,
                         const SenderQuadrature& quadrature, const RowErrorModel& error, MergedRow& out,
-                        double& estimate) {
+                        double& estimate, RowNoise* noise) {
     out.clear();
     out.row.col.reserve(inner.nnz() + exact.size());
     out.row.val.reserve(inner.nnz() + exact.size());
@@ -19,6 +19,7 @@ std::uint64_t merge_row(const SparseRow& inner, std::span<const std::pair<std::u
             const SenderQuadrature::Entry e = quadrature.rescale(inner.col[a], inner.val[a]);
             rescaled += e.rescaled;
             estimate += e.systematic + out.noise[a];
+            if (noise) noise->add(out.noise[a]);
             if (e.value > 0) {
                 out.row.col.push_back(inner.col[a]);
                 out.row.val.push_back(e.value);
@@ -27,7 +28,10 @@ std::uint64_t merge_row(const SparseRow& inner, std::span<const std::pair<std::u
             ++a;
             continue;
         }
-        if (a < inner.nnz() && inner.col[a] == exact[b].first) ++a;
+        if (a < inner.nnz() && inner.col[a] == exact[b].first) {
+            if (noise) noise->replaced_sum_sq += out.noise[a] * out.noise[a];
+            ++a;
+        }
         if (exact[b].second > 0) {
             out.row.col.push_back(exact[b].first);
             out.row.val.push_back(exact[b].second);

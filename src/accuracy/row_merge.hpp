@@ -10,6 +10,7 @@
 
 #include "accuracy/row_error.hpp"
 #include "accuracy/sender_quadrature.hpp"
+#include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 
 namespace ffcube::accuracy {
@@ -25,10 +26,10 @@ struct MergedRow {
 };
 
 // Replaces out (its buffers reused). Adds to estimate, entry by entry in column order, each
-// inner entry's systematic error and noise; returns the number of entries the quadrature
+// inner entry's systematic error and noise (the noise also to *noise when given); returns the number of entries the quadrature
 // ratio rescaled.
 std::uint64_t merge_row(const SparseRow& inner, std::span<const std::pair<std::uint32_t, double>> exact,
                         const SenderQuadrature& quadrature, const RowErrorModel& error, MergedRow& out,
-                        double& estimate);
+                        double& estimate, RowNoise* noise = nullptr);
 
 }  // namespace ffcube::accuracy

@@ -67,9 +67,10 @@ std::span<const double> obstructed_shares(const Scene& scene, const RowSource& r
     return rows.obstructed();
 }
 
-// Each row's estimated error, for the patch table (none without the correction).
+// Each row's estimate as the tolerance holds it (largest entry, sum), for the patch table (none
+// without the correction).
 std::span<const float> row_errors(const RowSource& rows) {
-    return rows.corrected() ? std::span<const float>(rows.corrected()->row_error_estimates()) : std::span<const float>{};
+    return rows.corrected() ? std::span<const float>(rows.corrected()->row_tolerance_estimates()) : std::span<const float>{};
 }
 
 // Rows straight to the outputs as they come (.ffm, .mtx, Elmer's file: MatrixSink), statistics

@@ -269,7 +269,8 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("row_error_estimate.mean", counted ? sum / static_cast<double>(counted) : 0.0);
     r.set("row_error_estimate.worst_row", worst);
     r.set_array("row_error_estimate.rows", values);
-    report_tolerance(r, corrected, options, est);
+    report_tolerance(r, corrected, options,
+                     std::span<const float>(corrected.row_tolerance_estimates()).first(std::min(rows, corrected.row_tolerance_estimates().size())));
     // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
     // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
     // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs

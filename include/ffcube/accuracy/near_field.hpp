@@ -208,6 +208,20 @@ struct NearFieldStats {
 };
 
 // The near pairs of one row (NearFieldCorrector::analyse).
+// The measuring noise of a row's entries, as RowErrorModel::noise gives each (about one standard
+// deviation of the entry's error): of the entries the correction kept, their sum (what the L1
+// estimate counts) and their largest; the noise of the row's sky share (1 − its measured sum),
+// modelled as that of a receiver of that value; and the sum of the squares of the noise of the
+// entries replaced by exact values. The tolerance's estimate (largest entry, row sum) is made from
+// these (CorrectedRowProvider::row_tolerance_estimates).
+struct RowNoise {
+    double l1 = 0, max = 0, sky = 0, replaced_sum_sq = 0;
+    void add(double sigma) {
+        l1 += sigma;
+        max = sigma > max ? sigma : max;
+    }
+};
+
 struct NearAnalysis {
     std::vector<std::pair<std::uint32_t, double>> exact;  // (j, exact F_ij), j increasing
     std::uint64_t near_pairs = 0;                         // near, facing pairs examined
@@ -292,7 +306,7 @@ public:
     // The same with the caller's scratch space: no heap allocation in the steady state.
     void correct(std::uint32_t i, SparseRow& row, NearFieldStats& stats, NearFieldScratch& scratch,
                  double* error_estimate = nullptr, const NearAnalysis* analysis = nullptr,
-                 bool sampled_row = false, double cast_rays = 0) const;
+                 bool sampled_row = false, double cast_rays = 0, RowNoise* noise = nullptr) const;
     // True when no patch other than i and j can block any segment from i to j (see above).
     bool provably_unoccluded(std::uint32_t i, std::uint32_t j) const;
     // The far field's visibility proof, O(1) per pair for scenes of few planes: no plane that
@@ -327,6 +341,14 @@ public:
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }
+    // Per row, the estimate the tolerance is held to (docs/accuracy.md, "Accuracy by target"): of
+    // the larger of the row's largest entry error and its sum error. A row whose inner provider
+    // measured its own error (rays refined to a tolerance) has that plus the correction's terms;
+    // any other has the correction's terms plus kNoiseDeviations × the larger of its largest
+    // entry's modelled noise and the root sum of squares of all of them (NaN for rows not
+    // computed; empty before the first row).
+    const std::vector<float>& row_tolerance_estimates() const { return row_tolerance_; }
+    static constexpr double kNoiseDeviations = 3.0;
     // Per row, how it was measured (RowMeasure; empty before the first row).
     enum RowMeasure : std::int8_t {
         not_computed = -1,
@@ -359,6 +381,7 @@ private:
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
     std::vector<float> row_error_;
+    std::vector<float> row_tolerance_;
     std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
