@@ -13,8 +13,16 @@
 namespace ffcube {
 namespace {
 
-// A field as a message quotes it: control and non-ASCII bytes as '?', at most 40 characters.
-std::string shown(std::string_view field) {
+std::string quoted_headers(std::span<const CsvHeader> headers) {
+    std::string out;
+    for (std::size_t h = 0; h < headers.size(); ++h)
+        out += fmt::format("{}'{}'", h ? " or " : "", fmt::join(headers[h], ","));
+    return out;
+}
+
+}  // namespace
+
+std::string quoted_for_message(std::string_view field) {
     constexpr std::size_t kShown = 40;
     std::string out;
     for (const char c : field.substr(0, kShown)) {
@@ -24,14 +32,18 @@ std::string shown(std::string_view field) {
     return field.size() <= kShown ? fmt::format("'{}'", out) : fmt::format("'{}...'", out);
 }
 
-std::string quoted_headers(std::span<const CsvHeader> headers) {
-    std::string out;
-    for (std::size_t h = 0; h < headers.size(); ++h)
-        out += fmt::format("{}'{}'", h ? " or " : "", fmt::join(headers[h], ","));
-    return out;
+ObjectIndex::ObjectIndex(std::span<const std::string> objects) : objects_(objects) {
+    for (std::size_t k = 0; k < objects.size(); ++k) index_.emplace(objects[k], k);
 }
 
-}  // namespace
+std::size_t ObjectIndex::at(std::string_view name, std::string_view where) const {
+    if (const auto it = index_.find(name); it != index_.end()) return it->second;
+    constexpr std::size_t kListed = 12;
+    std::string names;
+    for (std::size_t k = 0; k < objects_.size() && k < kListed; ++k) names += (k ? ", " : "") + objects_[k];
+    if (objects_.size() > kListed) names += ", ...";
+    throw InputError(fmt::format("{}: the scene has no object '{}' (its objects: {})", where, name, names));
+}
 
 std::string_view trim(std::string_view s) {
     while (!s.empty() && (s.front() == ' ' || s.front() == '\t')) s.remove_prefix(1);
@@ -71,7 +83,7 @@ std::optional<double> parse_csv_number(std::string_view field, std::string_view 
                                        std::string_view hint) {
     if (field.empty()) return std::nullopt;
     const auto refuse = [&] {
-        throw InputError(fmt::format("{}: {} {} is not a finite number{}", where, column, shown(field),
+        throw InputError(fmt::format("{}: {} {} is not a finite number{}", where, column, quoted_for_message(field),
                                      hint.empty() ? std::string() : fmt::format(" ({})", hint)));
     };
     // from_chars takes no '+'; one before a digit or a point is the number's sign.

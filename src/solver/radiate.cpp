@@ -65,19 +65,9 @@ SurfaceSpec parse_default_surface(std::string_view text) {
 std::vector<SurfaceSpec> surfaces_for_objects(std::span<const std::string> objects,
                                               std::span<const NamedSurface> lines, const std::string& source,
                                               const std::optional<SurfaceSpec>& fallback) {
-    std::map<std::string_view, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    const ObjectIndex index(objects);
     std::vector<std::optional<SurfaceSpec>> given(objects.size());
-    for (const NamedSurface& s : lines) {
-        const auto it = index.find(s.object);
-        if (it == index.end()) {
-            std::string names;
-            for (std::size_t k = 0; k < objects.size() && k < 12; ++k) names += (k ? ", " : "") + objects[k];
-            if (objects.size() > 12) names += ", ...";
-            throw InputError(fmt::format("{}:{}: the scene has no object '{}' (its objects: {})", source, s.line, s.object, names));
-        }
-        given[it->second] = s.spec;
-    }
+    for (const NamedSurface& s : lines) given[index.at(s.object, fmt::format("{}:{}", source, s.line))] = s.spec;
     std::vector<SurfaceSpec> out(objects.size());
     for (std::size_t k = 0; k < objects.size(); ++k) {
         if (given[k]) {

@@ -149,20 +149,12 @@ BandModel bands_for_objects(std::span<const std::string> objects, std::span<cons
                             const std::string& source, std::span<const double> gray) {
     if (gray.size() != objects.size())
         throw InputError(fmt::format("bands: {} gray emissivities for {} objects", gray.size(), objects.size()));
-    std::map<std::string_view, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    const ObjectIndex index(objects);
     std::vector<std::vector<const NamedBand*>> of(objects.size());
     BandModel m;
     m.edges = {0.0, kInf};
     for (const NamedBand& b : lines) {
-        const auto it = index.find(b.object);
-        if (it == index.end()) {
-            std::string names;
-            for (std::size_t k = 0; k < objects.size() && k < 12; ++k) names += (k ? ", " : "") + objects[k];
-            if (objects.size() > 12) names += ", ...";
-            throw InputError(fmt::format("{}:{}: the scene has no object '{}' (its objects: {})", source, b.line, b.object, names));
-        }
-        of[it->second].push_back(&b);
+        of[index.at(b.object, fmt::format("{}:{}", source, b.line))].push_back(&b);
         m.edges.push_back(b.lambda_min);
         m.edges.push_back(b.lambda_max);
     }

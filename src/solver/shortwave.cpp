@@ -294,24 +294,21 @@ std::vector<SunStep> parse_sun_series(std::string_view text, const std::string& 
 
 std::vector<double> parse_albedo_csv(std::string_view text, const std::string& source, const std::vector<std::string>& objects) {
     static const CsvHeader kHeader = {"object", "albedo"};
-    std::map<std::string, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    const ObjectIndex index(objects);
     std::vector<double> albedo(objects.size(), -1.0);
     std::vector<std::size_t> where_line(objects.size(), 0);
     for (const CsvRow& row : parse_csv(text, source, std::span(&kHeader, 1)).rows) {
         const std::string& object = row.fields[0];
-        const auto it = index.find(object);
-        if (it == index.end()) row.fail(fmt::format("the scene has no object '{}'", object));
-        if (where_line[it->second] != 0)
-            row.fail(fmt::format("object '{}' is listed again (first on line {})", object, where_line[it->second]));
+        const std::size_t k = index.at(object, row.where);
+        if (where_line[k] != 0) row.fail(fmt::format("object '{}' is listed again (first on line {})", object, where_line[k]));
         const std::optional<double> a = row.number(1);
         if (!a) row.fail(fmt::format("the albedo of '{}' is missing", object));
         if (!(*a >= 0.0 && *a < 1.0))
             row.fail(fmt::format("albedo {} of '{}' must be in [0, 1) (a perfect reflector, 1, would keep reflecting in a "
                                  "closed street canyon)",
                                  *a, object));
-        albedo[it->second] = *a;
-        where_line[it->second] = row.line;
+        albedo[k] = *a;
+        where_line[k] = row.line;
     }
     std::vector<std::string> missing;
     for (std::size_t k = 0; k < objects.size(); ++k)

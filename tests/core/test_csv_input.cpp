@@ -5,27 +5,20 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <functional>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
+#include "support/temp_files.hpp"
 
 namespace ffcube {
 namespace {
 
 const std::vector<CsvHeader> kOne = {{"object", "value"}};
 
-std::string message_of(const std::function<void()>& f) {
-    try {
-        f();
-    } catch (const InputError& e) {
-        return e.what();
-    }
-    return "(no InputError)";
-}
+const auto message_of = test::input_error_of;
 
 TEST(CsvInput, ReadsBomCrlfCommentsBlanksAndQuotes) {
     // Line 1: BOM + header (CRLF); 2: comment; 3: blank; 4: a quoted name with a comma and a
@@ -112,6 +105,20 @@ TEST(CsvInput, NumbersAreWholeFiniteFields) {
               "m.csv:1: kd_r 'x?' is not a finite number (Kd within [0,1))");
     EXPECT_EQ(message_of([&] { num(std::string(50, 'a')); }),
               fmt::format("a.csv:2: value '{}...' is not a finite number", std::string(40, 'a')));
+}
+
+TEST(CsvInput, ObjectIndexFindsNamesAndListsTheSceneInItsRefusal) {
+    std::vector<std::string> many;
+    for (int k = 0; k < 14; ++k) many.push_back(fmt::format("o{}", k));
+    const ObjectIndex index(many);
+    EXPECT_EQ(index.at("o0", "x.csv:2"), 0u);
+    EXPECT_EQ(index.at("o13", "x.csv:2"), 13u);
+    EXPECT_EQ(message_of([&] { index.at("q", "x.csv:2"); }),
+              "x.csv:2: the scene has no object 'q' (its objects: o0, o1, o2, o3, o4, o5, o6, o7, o8, o9, o10, o11, ...)");
+    const std::vector<std::string> two = {"wall, south", "roof"};
+    EXPECT_EQ(ObjectIndex(two).at("roof", "a.csv:3"), 1u);
+    EXPECT_EQ(message_of([&] { ObjectIndex(two).at("Roof", "a.csv:3"); }),
+              "a.csv:3: the scene has no object 'Roof' (its objects: wall, south, roof)");
 }
 
 // Mangled files: each is read (every row has the header's field count) or refused with an

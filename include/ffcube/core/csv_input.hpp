@@ -17,6 +17,8 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <span>
@@ -28,6 +30,10 @@ namespace ffcube {
 
 // Blanks, tabs and a trailing '\r' off both ends.
 std::string_view trim(std::string_view s);
+
+// A field or token as a message quotes it: in single quotes, control and non-ASCII bytes as '?',
+// cut at 40 characters ("'...'" then).
+std::string quoted_for_message(std::string_view field);
 
 // Splits a CSV line at commas outside double quotes; a quoted field loses its quotes ("" → ") and
 // every field is trimmed. InputError "WHERE: a double quote is not closed" for an unterminated quote.
@@ -55,6 +61,19 @@ struct CsvRow {
     double required(std::size_t k) const;
     // InputError "WHERE: RULE".
     [[noreturn]] void fail(std::string_view rule) const;
+};
+
+// The scene's objects by name, for the rows that name one (S.csv, B.csv, A.csv).
+class ObjectIndex {
+public:
+    explicit ObjectIndex(std::span<const std::string> objects);
+    // The index of `name`. InputError "WHERE: the scene has no object 'NAME' (its objects: a, b,
+    // ...)" (the first 12 listed) when the scene has none.
+    std::size_t at(std::string_view name, std::string_view where) const;
+
+private:
+    std::span<const std::string> objects_;
+    std::map<std::string, std::size_t, std::less<>> index_;
 };
 
 struct CsvTable {
