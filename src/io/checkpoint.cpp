@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/checksum.hpp"
 
@@ -36,12 +37,6 @@ double now_seconds() {
 
 std::uint64_t record_bytes(std::uint32_t nnz, std::uint32_t flags) {
     return kHeader + 8 * std::uint64_t(nnz) + ((flags & kFlagObstructed) ? 8 : 0) + kTrailer;
-}
-
-std::uint32_t get_u32(const unsigned char* p) {
-    std::uint32_t v;
-    std::memcpy(&v, p, 4);
-    return v;
 }
 
 // The manifest as ordered key/value lines; a value never holds a newline.
@@ -87,22 +82,19 @@ void pread_all(int fd, void* data, std::size_t size, std::uint64_t offset, const
 // what is wrong, or an empty string.
 std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint32_t n, std::uint32_t flags) {
     const std::size_t body = record_bytes(nnz, flags) - kTrailer;
-    std::uint64_t stored;
-    std::memcpy(&stored, buf + body, 8);
+    const auto stored = load_le<std::uint64_t>(buf + body);
     if (checksum64(buf, body) != stored) return "checksum mismatch";
-    if (get_u32(buf + 12) != flags) return fmt::format("flags {} where the checkpoint's records have {}", get_u32(buf + 12), flags);
+    if (load_le<std::uint32_t>(buf + 12) != flags) return fmt::format("flags {} where the checkpoint's records have {}", load_le<std::uint32_t>(buf + 12), flags);
     if (flags & kFlagObstructed) {
-        double o;
-        std::memcpy(&o, buf + kHeader + 8 * std::size_t(nnz), 8);
+        const auto o = load_le<double>(buf + kHeader + 8 * std::size_t(nnz));
         if (!std::isfinite(o) || o < 0.0 || o > kMaxValue) return fmt::format("obstructed share {} out of range", o);
     }
     const unsigned char* cols = buf + kHeader;
     const unsigned char* vals = cols + 4 * std::size_t(nnz);
     for (std::uint32_t k = 0; k < nnz; ++k) {
-        const std::uint32_t c = get_u32(cols + 4 * k);
-        if (c >= n || (k > 0 && c <= get_u32(cols + 4 * (k - 1)))) return fmt::format("column {} out of order or range", c);
-        float v;
-        std::memcpy(&v, vals + 4 * k, 4);
+        const std::uint32_t c = load_le<std::uint32_t>(cols + 4 * k);
+        if (c >= n || (k > 0 && c <= load_le<std::uint32_t>(cols + 4 * (k - 1)))) return fmt::format("column {} out of order or range", c);
+        const auto v = load_le<float>(vals + 4 * k);
         if (!std::isfinite(v) || v < 0.0f || v > kMaxValue) return fmt::format("value {} out of range", v);
     }
     return {};
@@ -223,8 +215,8 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
             break;
         }
         pread_all(c.fd_, header, kHeader, pos, lpath);
-        const std::uint32_t magic = get_u32(header), row = get_u32(header + 4), nnz = get_u32(header + 8);
-        if (magic != kMagic || row >= n || nnz > n || get_u32(header + 12) != c.flags_) {
+        const std::uint32_t magic = load_le<std::uint32_t>(header), row = load_le<std::uint32_t>(header + 4), nnz = load_le<std::uint32_t>(header + 8);
+        if (magic != kMagic || row >= n || nnz > n || load_le<std::uint32_t>(header + 12) != c.flags_) {
             c.warnings_.push_back(fmt::format("{}: corrupted record at offset {} (bad header); it and the {} bytes after "
                                               "it are dropped and their rows computed again",
                                               lpath.string(), pos, file_size - pos));
@@ -247,7 +239,7 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
         }
         if (c.offsets_[row] == kMissing) {
             c.offsets_[row] = pos;
-            if (c.flags_ & kFlagObstructed) std::memcpy(&c.obstructed_[row], c.buffer_.data() + kHeader + 8 * std::size_t(nnz), 8);
+            if (c.flags_ & kFlagObstructed) c.obstructed_[row] = load_le<double>(c.buffer_.data() + kHeader + 8 * std::size_t(nnz));
             ++c.stored_;
         }
         pos += rsize;
@@ -284,11 +276,11 @@ void RowCheckpoint::append(std::uint32_t i, const SparseRow& row, double obstruc
     std::memcpy(p + kHeader, row.col.data(), 4 * std::size_t(nnz));
     for (std::uint32_t k = 0; k < nnz; ++k) {
         const float v = static_cast<float>(row.val[k]);  // exactly what CsrMatrix::append_row stores
-        std::memcpy(p + kHeader + 4 * std::size_t(nnz) + 4 * k, &v, 4);
+        store_le(p + kHeader + 4 * std::size_t(nnz) + 4 * k, v);
     }
-    if (flags_ & kFlagObstructed) std::memcpy(p + kHeader + 8 * std::size_t(nnz), &obstructed, 8);
+    if (flags_ & kFlagObstructed) store_le(p + kHeader + 8 * std::size_t(nnz), obstructed);
     const std::uint64_t sum = checksum64(p, rsize - kTrailer);
-    std::memcpy(p + rsize - kTrailer, &sum, 8);
+    store_le(p + rsize - kTrailer, sum);
     std::size_t done = 0;
     while (done < rsize) {
         const ssize_t w = ::write(fd_, p + done, rsize - done);
@@ -327,8 +319,8 @@ CsrMatrix RowCheckpoint::assemble() const {
     };
     for (std::uint32_t i = 0; i < n; ++i) {
         pread_all(fd_, header, kHeader, offsets_[i], lpath);
-        const std::uint32_t nnz = get_u32(header + 8);
-        if (get_u32(header) != kMagic || get_u32(header + 4) != i || nnz > n) throw changed(i, "bad header");
+        const std::uint32_t nnz = load_le<std::uint32_t>(header + 8);
+        if (load_le<std::uint32_t>(header) != kMagic || load_le<std::uint32_t>(header + 4) != i || nnz > n) throw changed(i, "bad header");
         row_ptr[i + 1] = row_ptr[i] + nnz;
     }
     std::vector<std::uint32_t> col(row_ptr[n]);
@@ -355,11 +347,11 @@ void RowCheckpoint::for_each_row(const std::function<void(std::uint32_t, RowView
     std::vector<float> val;
     for (std::uint32_t i = 0; i < n; ++i) {
         pread_all(fd_, header, kHeader, offsets_[i], lpath);
-        const std::uint32_t nnz = get_u32(header + 8);
-        if (get_u32(header) != kMagic || get_u32(header + 4) != i || nnz > n) throw changed(i, "bad header");
+        const std::uint32_t nnz = load_le<std::uint32_t>(header + 8);
+        if (load_le<std::uint32_t>(header) != kMagic || load_le<std::uint32_t>(header + 4) != i || nnz > n) throw changed(i, "bad header");
         buf.resize(record_size(nnz));
         pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
-        if (get_u32(buf.data() + 8) != nnz) throw changed(i, "length");
+        if (load_le<std::uint32_t>(buf.data() + 8) != nnz) throw changed(i, "length");
         const std::string wrong = check_record(buf.data(), nnz, n, flags_);
         if (!wrong.empty()) throw changed(i, wrong);
         col.resize(nnz);
@@ -383,8 +375,8 @@ void RowCheckpoint::read_rows(std::uint32_t first, std::uint32_t last, std::vect
                                           lpath.string(), i, offsets_[i], what));
         };
         pread_all(fd_, buf.data(), kHeader, offsets_[i], lpath);
-        const std::uint32_t count = get_u32(buf.data() + 8);
-        if (get_u32(buf.data()) != kMagic || get_u32(buf.data() + 4) != i || count > n) throw changed("bad header");
+        const std::uint32_t count = load_le<std::uint32_t>(buf.data() + 8);
+        if (load_le<std::uint32_t>(buf.data()) != kMagic || load_le<std::uint32_t>(buf.data() + 4) != i || count > n) throw changed("bad header");
         buf.resize(record_size(count));
         pread_all(fd_, buf.data(), buf.size(), offsets_[i], lpath);
         const std::string wrong = check_record(buf.data(), count, n, flags_);

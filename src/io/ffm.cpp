@@ -97,7 +97,7 @@ void parse_head(const std::string& text, const Header& h, FfmHead& f) {
     f.object_names.reserve(std::min<std::size_t>(h.object_count, h.names_len / 4));
     for (std::uint32_t k = 0; k < h.object_count; ++k) {
         if (names_end - pos < 4) throw bad(fmt::format("object name block ends before name {}", k));
-        const std::uint32_t len = get<std::uint32_t>(reinterpret_cast<const unsigned char*>(text.data() + pos));
+        const std::uint32_t len = load_le<std::uint32_t>(reinterpret_cast<const unsigned char*>(text.data() + pos));
         pos += 4;
         if (names_end - pos < len) throw bad(fmt::format("object name {} runs past the name block", k));
         f.object_names.push_back(take(len));

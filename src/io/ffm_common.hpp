@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -48,47 +49,36 @@ struct Header {
     }
 };
 
-template <typename T>
-void put(unsigned char* p, T v) {
-    std::memcpy(p, &v, sizeof v);
-}
-template <typename T>
-T get(const unsigned char* p) {
-    T v;
-    std::memcpy(&v, p, sizeof v);
-    return v;
-}
-
 inline std::array<unsigned char, kHeaderSize> encode(const Header& h) {
     std::array<unsigned char, kHeaderSize> b{};
     std::memcpy(b.data(), kMagic.data(), kMagic.size());
-    put(b.data() + 8, h.version);
-    put(b.data() + 12, h.n);
-    put(b.data() + 16, h.object_count);
-    put(b.data() + 20, h.resolution);
-    put(b.data() + 24, h.nnz);
-    put(b.data() + 32, h.fingerprint);
-    put(b.data() + 40, h.max_patch_edge);
-    put(b.data() + 48, h.method_len);
-    put(b.data() + 52, h.meshing_len);
-    put(b.data() + 56, h.settings_len);
-    put(b.data() + 60, h.names_len);
+    store_le(b.data() + 8, h.version);
+    store_le(b.data() + 12, h.n);
+    store_le(b.data() + 16, h.object_count);
+    store_le(b.data() + 20, h.resolution);
+    store_le(b.data() + 24, h.nnz);
+    store_le(b.data() + 32, h.fingerprint);
+    store_le(b.data() + 40, h.max_patch_edge);
+    store_le(b.data() + 48, h.method_len);
+    store_le(b.data() + 52, h.meshing_len);
+    store_le(b.data() + 56, h.settings_len);
+    store_le(b.data() + 60, h.names_len);
     return b;
 }
 
 inline Header decode(const unsigned char* b) {
     Header h;
-    h.version = get<std::uint32_t>(b + 8);
-    h.n = get<std::uint32_t>(b + 12);
-    h.object_count = get<std::uint32_t>(b + 16);
-    h.resolution = get<std::uint32_t>(b + 20);
-    h.nnz = get<std::uint64_t>(b + 24);
-    h.fingerprint = get<std::uint64_t>(b + 32);
-    h.max_patch_edge = get<double>(b + 40);
-    h.method_len = get<std::uint32_t>(b + 48);
-    h.meshing_len = get<std::uint32_t>(b + 52);
-    h.settings_len = get<std::uint32_t>(b + 56);
-    h.names_len = get<std::uint32_t>(b + 60);
+    h.version = load_le<std::uint32_t>(b + 8);
+    h.n = load_le<std::uint32_t>(b + 12);
+    h.object_count = load_le<std::uint32_t>(b + 16);
+    h.resolution = load_le<std::uint32_t>(b + 20);
+    h.nnz = load_le<std::uint64_t>(b + 24);
+    h.fingerprint = load_le<std::uint64_t>(b + 32);
+    h.max_patch_edge = load_le<double>(b + 40);
+    h.method_len = load_le<std::uint32_t>(b + 48);
+    h.meshing_len = load_le<std::uint32_t>(b + 52);
+    h.settings_len = load_le<std::uint32_t>(b + 56);
+    h.names_len = load_le<std::uint32_t>(b + 60);
     return h;
 }
 

@@ -126,13 +126,13 @@ struct FfmWriter::Impl {
             payload_size = z;
         }
         unsigned char h[kBlockHeader] = {};
-        put(h, kBlockMagic);
-        put(h + 4, codec);
-        put(h + 8, block_first);
-        put(h + 12, rows - block_first);
-        put(h + 16, block_nnz);
-        put(h + 24, std::uint64_t(raw.size()));
-        put(h + 32, std::uint64_t(payload_size));
+        store_le(h, kBlockMagic);
+        store_le(h + 4, codec);
+        store_le(h + 8, block_first);
+        store_le(h + 12, rows - block_first);
+        store_le(h + 16, block_nnz);
+        store_le(h + 24, std::uint64_t(raw.size()));
+        store_le(h + 32, std::uint64_t(payload_size));
         static constexpr unsigned char zeros[8] = {};
         const std::size_t pad = pad8(payload_size) - payload_size;
         Checksum64 sum;
@@ -140,7 +140,7 @@ struct FfmWriter::Impl {
         sum.update(payload, payload_size);
         sum.update(zeros, pad);
         const std::uint64_t c = sum.value();
-        put(h + 40, c);
+        store_le(h + 40, c);
         chain.update(&c, 8);
         write(h, kBlockHeader);
         write(payload, payload_size);
@@ -228,10 +228,10 @@ void FfmWriter::finish() {
     FFCUBE_CHECK_MSG(m.rows == m.n, fmt::format("FfmWriter::finish after {} of {} rows", m.rows, m.n));
     m.flush_block();
     unsigned char t[kTrailer] = {};
-    put(t, m.nnz);
-    put(t + 8, m.blocks);
+    store_le(t, m.nnz);
+    store_le(t + 8, m.blocks);
     m.chain.update(t, 16);
-    put(t + 16, m.chain.value());
+    store_le(t + 16, m.chain.value());
     std::memcpy(t + 24, kEndMagic.data(), 8);
     m.write(t, kTrailer);
     m.file.commit();
@@ -315,7 +315,7 @@ FfmReader::FfmReader(const std::filesystem::path& path) : impl_(std::make_unique
     m.blocks_begin = head_bytes(h);
     std::vector<unsigned char> bytes(m.blocks_begin);
     m.read_at(bytes.data(), bytes.size(), 0);
-    const std::uint64_t stored = get<std::uint64_t>(bytes.data() + bytes.size() - 8);
+    const std::uint64_t stored = load_le<std::uint64_t>(bytes.data() + bytes.size() - 8);
     m.head_sum = checksum64(bytes.data(), bytes.size() - 8);
     if (stored != m.head_sum)
         throw InputError(fmt::format("{}: checksum mismatch in the head (scene data): the file is corrupted", name));
@@ -343,9 +343,9 @@ FfmReader::FfmReader(const std::filesystem::path& path) : impl_(std::make_unique
     if (std::memcmp(t + 24, kEndMagic.data(), 8) != 0)
         throw InputError(fmt::format("{}: truncated or damaged: no end marker (the last {} bytes are not the trailer)",
                                      name, kTrailer));
-    m.trailer_nnz = get<std::uint64_t>(t);
-    m.trailer_blocks = get<std::uint64_t>(t + 8);
-    m.trailer_sum = get<std::uint64_t>(t + 16);
+    m.trailer_nnz = load_le<std::uint64_t>(t);
+    m.trailer_blocks = load_le<std::uint64_t>(t + 8);
+    m.trailer_sum = load_le<std::uint64_t>(t + 16);
     m.zstd = ZSTD_createDCtx();
     FFCUBE_CHECK_MSG(m.zstd != nullptr, "cannot create a zstd context");
     m.start();
@@ -376,8 +376,8 @@ bool FfmReader::Impl::next(FfmBlock& out) {
                                          "in {}",
                                          name(), trailer_nnz, trailer_blocks, nnz, block));
         unsigned char t[16];
-        put(t, nnz);
-        put(t + 8, block);
+        store_le(t, nnz);
+        store_le(t + 8, block);
         chain.update(t, 16);
         if (chain.value() != trailer_sum)
             throw InputError(fmt::format("{}: checksum mismatch in the trailer: the file is corrupted", name()));
@@ -390,15 +390,15 @@ bool FfmReader::Impl::next(FfmBlock& out) {
         throw InputError(fmt::format("{}: truncated or damaged: no room for its header", where0));
     unsigned char h[kBlockHeader];
     read_at(h, kBlockHeader, pos);
-    const std::uint64_t stored_bytes = get<std::uint64_t>(h + 32);
-    if (get<std::uint32_t>(h) != kBlockMagic)
+    const std::uint64_t stored_bytes = load_le<std::uint64_t>(h + 32);
+    if (load_le<std::uint32_t>(h) != kBlockMagic)
         throw InputError(fmt::format("{}: bad block marker: the file is corrupted", where0));
     if (stored_bytes > blocks_end - pos - kBlockHeader || pad8(stored_bytes) > blocks_end - pos - kBlockHeader)
         throw InputError(fmt::format("{}: truncated or damaged: {} stored bytes, {} left in the file", where0,
                                      stored_bytes, blocks_end - pos - kBlockHeader));
-    const std::uint32_t codec = get<std::uint32_t>(h + 4), first = get<std::uint32_t>(h + 8),
-                        rows = get<std::uint32_t>(h + 12);
-    const std::uint64_t bnnz = get<std::uint64_t>(h + 16), raw_bytes = get<std::uint64_t>(h + 24);
+    const std::uint32_t codec = load_le<std::uint32_t>(h + 4), first = load_le<std::uint32_t>(h + 8),
+                        rows = load_le<std::uint32_t>(h + 12);
+    const std::uint64_t bnnz = load_le<std::uint64_t>(h + 16), raw_bytes = load_le<std::uint64_t>(h + 24);
     // The block's rows as its header gives them, when they are plausible.
     const std::string where = first == row && rows >= 1 && rows <= n - row
                                   ? fmt::format("{}: block {} (rows {}..{})", name(), block, first, first + rows - 1)
@@ -409,7 +409,7 @@ bool FfmReader::Impl::next(FfmBlock& out) {
     sum.update(h, 40);
     sum.update(stored.data(), stored.size());
     const std::uint64_t c = sum.value();
-    if (c != get<std::uint64_t>(h + 40)) throw InputError(fmt::format("{}: checksum mismatch", where));
+    if (c != load_le<std::uint64_t>(h + 40)) throw InputError(fmt::format("{}: checksum mismatch", where));
     auto bad = [&](const std::string& what) { return InputError(fmt::format("{}: invalid: {}", where, what)); };
     if (first != row) throw bad(fmt::format("starts at row {}, expected {}", first, row));
     if (rows < 1 || rows > n - row) throw bad(fmt::format("{} rows (1 .. {} left)", rows, n - row));

@@ -1,26 +1,13 @@
 #include "ffcube/io/ply.hpp"
 
-#include <bit>
-#include <cstring>
 #include <ostream>
 #include <string>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 #include "ffcube/io/atomic_file.hpp"
 
 namespace ffcube {
-namespace {
-
-static_assert(std::endian::native == std::endian::little, "the PLY writer assumes a little-endian host");
-
-template <typename T>
-void put(std::string& out, T v) {
-    char bytes[sizeof(T)];
-    std::memcpy(bytes, &v, sizeof(T));
-    out.append(bytes, sizeof(T));
-}
-
-}  // namespace
 
 void write_ply(const std::filesystem::path& path, const PlyMesh& mesh, const std::string& comment) {
     const std::size_t n = mesh.positions.size();
@@ -57,16 +44,16 @@ void write_ply(const std::filesystem::path& path, const PlyMesh& mesh, const std
             buf.clear();
         };
         for (std::size_t i = 0; i < n; ++i) {
-            for (int k = 0; k < 3; ++k) put(buf, static_cast<float>(mesh.positions[i][k]));
-            for (int k = 0; k < 3; ++k) put(buf, mesh.colors[i][static_cast<std::size_t>(k)]);
+            for (int k = 0; k < 3; ++k) append_le(buf, static_cast<float>(mesh.positions[i][k]));
+            for (int k = 0; k < 3; ++k) append_le(buf, mesh.colors[i][static_cast<std::size_t>(k)]);
             if (!mesh.values.empty())
-                for (int k = 0; k < 3; ++k) put(buf, static_cast<float>(mesh.values[i][k]));
+                for (int k = 0; k < 3; ++k) append_le(buf, static_cast<float>(mesh.values[i][k]));
             if (buf.size() > (1 << 16) - 64) flush();
         }
         std::size_t at = 0;
         for (std::uint8_t s : mesh.face_sizes) {
-            put(buf, s);
-            for (std::uint8_t k = 0; k < s; ++k) put(buf, mesh.face_indices[at++]);
+            append_le(buf, s);
+            for (std::uint8_t k = 0; k < s; ++k) append_le(buf, mesh.face_indices[at++]);
             if (buf.size() > (1 << 16) - 64) flush();
         }
         flush();

@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 
 namespace ffcube {
 namespace {
@@ -18,8 +19,7 @@ public:
     template <class T>
         requires std::is_trivially_copyable_v<T>
     void put(const T& v) {
-        const auto* p = reinterpret_cast<const std::uint8_t*>(&v);
-        out.insert(out.end(), p, p + sizeof(T));
+        append_le(out, v);
     }
     void put(const std::string& s) {
         put<std::uint64_t>(s.size());
@@ -45,8 +45,7 @@ public:
         requires std::is_trivially_copyable_v<T>
     T get() {
         need(sizeof(T), "a number");
-        T v;
-        std::memcpy(&v, bytes.data() + at, sizeof(T));
+        const T v = load_le<T>(bytes.data() + at);
         at += sizeof(T);
         return v;
     }

@@ -8,20 +8,12 @@
 #include <cstring>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 #include "ffcube/io/atomic_file.hpp"
 #include "ffcube/io/csv.hpp"
 
 namespace ffcube {
 namespace {
-
-static_assert(std::endian::native == std::endian::little, "binary outputs are written little-endian");
-
-template <typename T>
-void put(std::ostream& out, T value) {
-    char bytes[sizeof(T)];
-    std::memcpy(bytes, &value, sizeof(T));
-    out.write(bytes, sizeof(T));
-}
 
 constexpr std::size_t kFlushBytes = 1 << 20;
 
@@ -48,10 +40,10 @@ void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool 
         const std::string header = view3d_header(binary ? 1 : 0, t.encl, t.emit, n);
         if (binary) {
             out.write(header.data(), static_cast<std::streamsize>(header.size()));
-            for (const double a : t.area) put(out, static_cast<float>(a));
+            for (const double a : t.area) append_le(out, static_cast<float>(a));
             for (const auto& row : t.F)
-                for (const double f : row) put(out, static_cast<float>(f));
-            for (const double e : t.emissivity) put(out, static_cast<float>(e));
+                for (const double f : row) append_le(out, static_cast<float>(f));
+            for (const double e : t.emissivity) append_le(out, static_cast<float>(e));
             return;
         }
         fmt::memory_buffer buf;
@@ -71,14 +63,6 @@ void write_view3d(const std::filesystem::path& path, const View3dTable& t, bool 
         line(t.emissivity, [&](double e) { fmt::format_to(std::back_inserter(buf), "{:.3f}", static_cast<float>(e)); });
         flush_if_full(out, buf, true);
     });
-}
-
-// put() into a memory buffer: the binary file is written in 1 MiB pieces like the text.
-template <typename T>
-void put(fmt::memory_buffer& buf, T value) {
-    char bytes[sizeof(T)];
-    std::memcpy(bytes, &value, sizeof(T));
-    buf.append(bytes, bytes + sizeof(T));
 }
 
 struct View3dSparseWriter::Impl {
@@ -149,7 +133,7 @@ struct ElmerViewFactorsWriter::Impl {
 
 ElmerViewFactorsWriter::ElmerViewFactorsWriter(const std::filesystem::path& path, std::uint32_t n, bool binary)
     : impl_(std::make_unique<Impl>(path, n, binary)) {
-    if (binary) put(impl_->buf, static_cast<std::int32_t>(n));
+    if (binary) append_le(impl_->buf, static_cast<std::int32_t>(n));
 }
 
 ElmerViewFactorsWriter::~ElmerViewFactorsWriter() = default;
@@ -161,11 +145,11 @@ void ElmerViewFactorsWriter::append_row(RowView r) {
     std::int32_t k = 0;
     for (const float v : r.val) k += v > 0.0f ? 1 : 0;
     if (m.binary) {
-        put(m.buf, k);
+        append_le(m.buf, k);
         for (std::size_t e = 0; e < r.col.size(); ++e)
             if (r.val[e] > 0.0f) {
-                put(m.buf, static_cast<std::int32_t>(r.col[e] + 1));
-                put(m.buf, static_cast<double>(r.val[e]));
+                append_le(m.buf, static_cast<std::int32_t>(r.col[e] + 1));
+                append_le(m.buf, static_cast<double>(r.val[e]));
             }
     } else {
         fmt::format_to(std::back_inserter(m.buf), "{}\n", k);

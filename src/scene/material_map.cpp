@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/scene/load_model.hpp"
 #include "text_number.hpp"
@@ -22,27 +23,29 @@ constexpr std::uint32_t kNone = std::uint32_t(-1);
 
 // One line's Kd (fields 1..3) or Ke (fields 4..6): three numbers, or three empty fields (nullopt:
 // keep the file's).
-std::optional<Vec3> read_triple(const std::vector<std::string_view>& field, bool kd, const std::string& source,
-                                std::uint32_t line) {
+std::optional<Vec3> read_triple(const CsvRow& row, bool kd) {
     const char* what = kd ? "Kd" : "Ke";
     const std::size_t first = kd ? 1 : 4;
-    const auto empty = std::count_if(field.begin() + first, field.begin() + first + 3, [](std::string_view f) { return f.empty(); });
+    const auto empty = std::count_if(row.fields.begin() + first, row.fields.begin() + first + 3,
+                                     [](const std::string& f) { return f.empty(); });
     if (empty == 3) return std::nullopt;
     if (empty > 0)
-        detail::fail_at(source, line, fmt::format("{} has {} of its 3 fields empty: give all three, or leave all three empty "
-                                                  "to keep the scene file's {}", what, empty, what));
+        row.fail(fmt::format("{} has {} of its 3 fields empty: give all three, or leave all three empty to keep the scene "
+                             "file's {}",
+                             what, empty, what));
     Vec3 v(0.0);
     for (int c = 0; c < 3; ++c) {
-        v[c] = detail::parse_number(field[first + c], source, line,
-                                    kd ? "Kd: diffuse reflectance within [0,1]" : "Ke: emitted radiosity >= 0");
+        v[c] = *row.number(first + c, kd ? "Kd: diffuse reflectance within [0,1]" : "Ke: emitted radiosity >= 0");
         // Below 1, not at most 1: a surface that reflects all it receives has no steady state, and
         // every solve refuses it (solver.cpp) — here the message can name this line.
         if (kd && !(v[c] >= 0.0 && v[c] < 1.0))
-            detail::fail_at(source, line, fmt::format("Kd {} must be within [0,1) (diffuse reflectance per channel; a "
-                                                      "surface that reflects everything it receives has no steady state)",
-                                                      v[c]));
-        if (!kd && !(v[c] >= 0.0))
-            detail::fail_at(source, line, fmt::format("Ke {} must be >= 0 (emitted radiosity per channel)", v[c]));
+            row.fail(fmt::format("Kd {} must be within [0,1) (diffuse reflectance per channel; a surface that reflects "
+                                 "everything it receives has no steady state)",
+                                 v[c]));
+        if (!kd && !(v[c] >= 0.0)) row.fail(fmt::format("Ke {} must be >= 0 (emitted radiosity per channel)", v[c]));
+        // The scene formats' bound on every number (text_number.hpp), which keeps emitted powers far from overflow.
+        if (!kd && v[c] > detail::kMaxCoordinate)
+            row.fail(fmt::format("Ke {} is too large (numbers must have magnitude at most 1e15)", v[c]));
     }
     return v;
 }
@@ -54,36 +57,15 @@ struct Override {
     std::uint32_t whole = kNone;  // both given: the object's one material
 };
 
-// The lines of the CSV, split at commas; blank, comment and header lines left out.
+// The lines of the CSV (core/csv_input.hpp's rules; the header is optional).
 std::vector<Override> read_overrides(std::string_view csv, const std::string& source, std::vector<std::uint32_t>& lines) {
+    static const CsvHeader kHeader = {"object", "kd_r", "kd_g", "kd_b", "ke_r", "ke_g", "ke_b"};
     std::vector<Override> out;
-    std::uint32_t number = 0;
-    for (bool done = false; !done;) {
-        const std::size_t eol = csv.find('\n');
-        std::string_view line = csv.substr(0, eol);
-        if (eol == std::string_view::npos)
-            done = true;
-        else
-            csv.remove_prefix(eol + 1);
-        ++number;
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        if (number == 1 && line.substr(0, 3) == "\xEF\xBB\xBF") line.remove_prefix(3);
-        if (line.find('\0') != std::string_view::npos) detail::fail_at(source, number, "not a CSV file (a NUL byte)");
-        if (line.empty() || line.front() == '#') continue;
-        if (number == 1 && line.substr(0, 7) == "object,") continue;  // header
-        std::vector<std::string_view> field;
-        for (std::size_t start = 0;;) {
-            const std::size_t comma = line.find(',', start);
-            field.push_back(line.substr(start, comma == std::string_view::npos ? std::string_view::npos : comma - start));
-            if (comma == std::string_view::npos) break;
-            start = comma + 1;
-        }
-        if (field.size() != 7)
-            detail::fail_at(source, number, fmt::format("expected 7 fields (object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b), found {}", field.size()));
-        if (field[0].empty()) detail::fail_at(source, number, "the object name is empty");
-        std::optional<Vec3> kd = read_triple(field, true, source, number);
-        out.push_back(Override{std::string(field[0]), kd, read_triple(field, false, source, number)});
-        lines.push_back(number);
+    for (const CsvRow& row : parse_csv(csv, source, std::span(&kHeader, 1), /*header_optional=*/true).rows) {
+        if (row.fields[0].empty()) row.fail("the object name is empty");
+        std::optional<Vec3> kd = read_triple(row, true);
+        out.push_back(Override{row.fields[0], kd, read_triple(row, false)});
+        lines.push_back(static_cast<std::uint32_t>(row.line));
     }
     return out;
 }

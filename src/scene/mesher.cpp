@@ -288,70 +288,29 @@ void fill_patch(Scene& scene, Patch& patch) {
     patch.size = polygon_max_edge(poly);
 }
 
+// The patches of a face's piece: its object and material, and its element (Gmsh) when it has one.
+Patch patch_of(const ObjFace& face) {
+    Patch like;
+    like.object = face.object;
+    like.material = face.material;
+    return like;
+}
+void add_elements(Scene& scene, const ObjFace& face, std::size_t cells) {
+    if (face.element != 0) scene.patch_elements.insert(scene.patch_elements.end(), cells, face.element);
+}
+
 void emit_quad(Scene& scene, const Piece& piece, const ObjFace& face, double max_edge) {
     const auto nu = static_cast<std::uint32_t>(divisions(piece.eu, max_edge));
     const auto nv = static_cast<std::uint32_t>(divisions(piece.ev, max_edge));
-    const auto base = static_cast<std::uint32_t>(scene.positions.size());
-    const auto& p = piece.p;
-    // Bilinear weights are exactly 0 or 1 at the corners, so corners stay bit-exact. Every grid
-    // edge along u at parameter t is ((1−t)(p1−p0) + t(p2−p3))/nu, no longer than eu/nu ≤ L.
-    for (std::uint32_t j = 0; j <= nv; ++j) {
-        const double t = static_cast<double>(j) / nv;
-        for (std::uint32_t i = 0; i <= nu; ++i) {
-            const double s = static_cast<double>(i) / nu;
-            scene.positions.push_back((1 - s) * (1 - t) * p[0] + s * (1 - t) * p[1] + s * t * p[2] + (1 - s) * t * p[3]);
-        }
-    }
-    scene.grids.push_back(PatchGrid{{p[0], p[1], p[2], p[3]}, 4, nu, nv, static_cast<std::uint32_t>(scene.patches.size())});
-    const std::uint32_t row = nu + 1;
-    for (std::uint32_t j = 0; j < nv; ++j) {
-        for (std::uint32_t i = 0; i < nu; ++i) {
-            Patch patch;
-            const std::uint32_t a = base + j * row + i;
-            patch.v = {a, a + 1, a + row + 1, a + row};
-            patch.count = 4;
-            patch.object = face.object;
-            patch.material = face.material;
-            fill_patch(scene, patch);
-            scene.patches.push_back(patch);
-            if (face.element != 0) scene.patch_elements.push_back(face.element);
-        }
-    }
+    // Every grid edge along u at parameter t is ((1−t)(p1−p0) + t(p2−p3))/nu, no longer than eu/nu ≤ L.
+    append_quad_grid(scene, piece.p, nu, nv, patch_of(face));
+    add_elements(scene, face, std::size_t(nu) * nv);
 }
 
 void emit_triangle(Scene& scene, const Piece& piece, const ObjFace& face, double max_edge) {
     const auto k = static_cast<std::uint32_t>(divisions(piece.eu, max_edge));
-    const auto base = static_cast<std::uint32_t>(scene.positions.size());
-    const auto& p = piece.p;
-    // Vertex (i, j) = p0 + i/k (p1 − p0) + j/k (p2 − p0), i + j ≤ k, stored row by row (j).
-    for (std::uint32_t j = 0; j <= k; ++j) {
-        for (std::uint32_t i = 0; i + j <= k; ++i) {
-            const double b = static_cast<double>(i) / k, c = static_cast<double>(j) / k;
-            const double a = static_cast<double>(k - i - j) / k;
-            scene.positions.push_back(a * p[0] + b * p[1] + c * p[2]);
-        }
-    }
-    const auto at = [&](std::uint32_t i, std::uint32_t j) { return base + j * (k + 1) - j * (j - 1) / 2 + i; };
-    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
-        Patch patch;
-        patch.v = {a, b, c, c};
-        patch.count = 3;
-        patch.object = face.object;
-        patch.material = face.material;
-        fill_patch(scene, patch);
-        scene.patches.push_back(patch);
-        if (face.element != 0) scene.patch_elements.push_back(face.element);
-    };
-    scene.grids.push_back(PatchGrid{{p[0], p[1], p[2], p[2]}, 3, k, k, static_cast<std::uint32_t>(scene.patches.size())});
-    // Upright triangles (i,j),(i+1,j),(i,j+1) and inverted ones (i+1,j),(i+1,j+1),(i,j+1): all
-    // similar to the piece, all with its orientation. Row j holds 2(k − j) − 1 of them, so the
-    // upright cell (i, j) is patch j(2k − j) + 2i of the piece, as PatchGrid documents.
-    for (std::uint32_t j = 0; j < k; ++j) {
-        for (std::uint32_t i = 0; i + j < k; ++i) {
-            add(at(i, j), at(i + 1, j), at(i, j + 1));
-            if (i + j + 1 < k) add(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-        }
-    }
+    append_triangle_grid(scene, piece.p, k, patch_of(face));
+    add_elements(scene, face, std::size_t(k) * k);
 }
 
 std::uint64_t fingerprint_of(const Scene& scene) {
@@ -413,6 +372,59 @@ void check_max_edge(double max_edge) {
 std::uint64_t scene_fingerprint(const Scene& scene) { return fingerprint_of(scene); }
 
 void fill_patch_geometry(Scene& scene, Patch& patch) { fill_patch(scene, patch); }
+
+void append_quad_grid(Scene& scene, const std::array<Vec3, 4>& c, std::uint32_t nu, std::uint32_t nv, const Patch& like) {
+    const auto base = static_cast<std::uint32_t>(scene.positions.size());
+    // Bilinear weights are exactly 0 or 1 at the corners, so corners stay bit-exact.
+    for (std::uint32_t j = 0; j <= nv; ++j) {
+        const double t = static_cast<double>(j) / nv;
+        for (std::uint32_t i = 0; i <= nu; ++i) {
+            const double s = static_cast<double>(i) / nu;
+            scene.positions.push_back((1 - s) * (1 - t) * c[0] + s * (1 - t) * c[1] + s * t * c[2] + (1 - s) * t * c[3]);
+        }
+    }
+    scene.grids.push_back(PatchGrid{c, 4, nu, nv, static_cast<std::uint32_t>(scene.patches.size())});
+    const std::uint32_t row = nu + 1;
+    for (std::uint32_t j = 0; j < nv; ++j)
+        for (std::uint32_t i = 0; i < nu; ++i) {
+            Patch patch = like;
+            const std::uint32_t a = base + j * row + i;
+            patch.v = {a, a + 1, a + row + 1, a + row};
+            patch.count = 4;
+            fill_patch(scene, patch);
+            scene.patches.push_back(patch);
+        }
+}
+
+void append_triangle_grid(Scene& scene, const std::array<Vec3, 4>& c, std::uint32_t k, const Patch& like) {
+    const auto base = static_cast<std::uint32_t>(scene.positions.size());
+    // Vertex (i, j) = c0 + i/k (c1 − c0) + j/k (c2 − c0), i + j ≤ k, stored row by row (j).
+    for (std::uint32_t j = 0; j <= k; ++j) {
+        for (std::uint32_t i = 0; i + j <= k; ++i) {
+            const double b = static_cast<double>(i) / k, cc = static_cast<double>(j) / k;
+            const double a = static_cast<double>(k - i - j) / k;
+            scene.positions.push_back(a * c[0] + b * c[1] + cc * c[2]);
+        }
+    }
+    const auto at = [&](std::uint32_t i, std::uint32_t j) { return base + j * (k + 1) - j * (j - 1) / 2 + i; };
+    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t cc) {
+        Patch patch = like;
+        patch.v = {a, b, cc, cc};
+        patch.count = 3;
+        fill_patch(scene, patch);
+        scene.patches.push_back(patch);
+    };
+    scene.grids.push_back(PatchGrid{{c[0], c[1], c[2], c[2]}, 3, k, k, static_cast<std::uint32_t>(scene.patches.size())});
+    // Upright triangles (i,j),(i+1,j),(i,j+1) and inverted ones (i+1,j),(i+1,j+1),(i,j+1): all
+    // similar to the piece, all with its orientation. Row j holds 2(k − j) − 1 of them, so the
+    // upright cell (i, j) is patch j(2k − j) + 2i of the piece, as PatchGrid documents.
+    for (std::uint32_t j = 0; j < k; ++j) {
+        for (std::uint32_t i = 0; i + j < k; ++i) {
+            add(at(i, j), at(i + 1, j), at(i, j + 1));
+            if (i + j + 1 < k) add(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+        }
+    }
+}
 
 std::size_t count_patches(const ObjModel& model, double max_patch_edge) {
     check_max_edge(max_patch_edge);

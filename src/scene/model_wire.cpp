@@ -7,6 +7,7 @@
 #include <type_traits>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/le_bytes.hpp"
 
 namespace ffcube::detail {
 namespace {
@@ -17,8 +18,7 @@ class Writer {
 public:
     template <typename T>
     void pod(const T& v) {
-        static_assert(std::is_trivially_copyable_v<T>);
-        out_.append(reinterpret_cast<const char*>(&v), sizeof v);
+        append_le(out_, v);
     }
     void size(std::size_t n) { pod(static_cast<std::uint64_t>(n)); }
     void text(const std::string& s) {
@@ -39,10 +39,8 @@ public:
     explicit Reader(std::string_view in) : in_(in) {}
     template <typename T>
     T pod() {
-        static_assert(std::is_trivially_copyable_v<T>);
         need(sizeof(T));
-        T v;
-        std::memcpy(&v, in_.data() + at_, sizeof v);
+        const T v = load_le<T>(in_.data() + at_);
         at_ += sizeof v;
         return v;
     }

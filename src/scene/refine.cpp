@@ -13,52 +13,6 @@
 namespace ffcube {
 namespace {
 
-// The mesher's layouts (scene.hpp, PatchGrid), so that a renderer finds an element from its
-// position in the grid exactly as it finds a patch.
-void split_quad(Scene& out, const Patch& p, const std::array<Vec3, 4>& c, std::uint32_t s) {
-    const auto base = static_cast<std::uint32_t>(out.positions.size());
-    for (std::uint32_t j = 0; j <= s; ++j) {
-        const double t = static_cast<double>(j) / s;
-        for (std::uint32_t i = 0; i <= s; ++i) {
-            const double u = static_cast<double>(i) / s;
-            out.positions.push_back((1 - u) * (1 - t) * c[0] + u * (1 - t) * c[1] + u * t * c[2] + (1 - u) * t * c[3]);
-        }
-    }
-    out.grids.push_back(PatchGrid{c, 4, s, s, static_cast<std::uint32_t>(out.patches.size())});
-    const std::uint32_t row = s + 1;
-    for (std::uint32_t j = 0; j < s; ++j)
-        for (std::uint32_t i = 0; i < s; ++i) {
-            Patch e = p;
-            const std::uint32_t a = base + j * row + i;
-            e.v = {a, a + 1, a + row + 1, a + row};
-            fill_patch_geometry(out, e);
-            out.patches.push_back(e);
-        }
-}
-
-void split_triangle(Scene& out, const Patch& p, const std::array<Vec3, 4>& c, std::uint32_t k) {
-    const auto base = static_cast<std::uint32_t>(out.positions.size());
-    for (std::uint32_t j = 0; j <= k; ++j)
-        for (std::uint32_t i = 0; i + j <= k; ++i) {
-            const double b = static_cast<double>(i) / k, cc = static_cast<double>(j) / k;
-            const double a = static_cast<double>(k - i - j) / k;
-            out.positions.push_back(a * c[0] + b * c[1] + cc * c[2]);
-        }
-    const auto at = [&](std::uint32_t i, std::uint32_t j) { return base + j * (k + 1) - j * (j - 1) / 2 + i; };
-    const auto add = [&](std::uint32_t a, std::uint32_t b, std::uint32_t cc) {
-        Patch e = p;
-        e.v = {a, b, cc, cc};
-        fill_patch_geometry(out, e);
-        out.patches.push_back(e);
-    };
-    out.grids.push_back(PatchGrid{{c[0], c[1], c[2], c[2]}, 3, k, k, static_cast<std::uint32_t>(out.patches.size())});
-    for (std::uint32_t j = 0; j < k; ++j)
-        for (std::uint32_t i = 0; i + j < k; ++i) {
-            add(at(i, j), at(i + 1, j), at(i, j + 1));
-            if (i + j + 1 < k) add(at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-        }
-}
-
 std::uint32_t grid_cells(const PatchGrid& g) { return g.count == 4 ? g.nu * g.nv : g.nu * g.nu; }
 
 }  // namespace
@@ -98,10 +52,12 @@ RefinedScene refine_patches(const Scene& scene, std::span<const std::uint32_t> s
             const Patch& p = scene.patches[i];
             const std::array<Vec3, 4> corners = scene.patch_vertices(i);
             const std::size_t before = out.patches.size();
+            // The mesher's layouts (scene.hpp, PatchGrid), so that a renderer finds an element from
+            // its position in the grid exactly as it finds a patch.
             if (p.count == 4)
-                split_quad(out, p, corners, split[i]);
+                append_quad_grid(out, corners, split[i], split[i], p);
             else
-                split_triangle(out, p, corners, split[i]);
+                append_triangle_grid(out, corners, split[i], p);
             r.parent.insert(r.parent.end(), out.patches.size() - before, i);
         }
     }

@@ -12,6 +12,7 @@
 #include <string>
 #include <string_view>
 
+#include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
 
 namespace ffcube::detail {
@@ -22,15 +23,7 @@ constexpr double kMaxCoordinate = 1e15;
     throw InputError(fmt::format("{}:{}: {}", source, line, rule));
 }
 
-inline std::string shown(std::string_view token) {
-    constexpr std::size_t kShown = 40;
-    std::string out;
-    for (const char c : token.substr(0, kShown)) {
-        const auto u = static_cast<unsigned char>(c);
-        out += (u < 0x20 || u >= 0x7F) ? '?' : c;
-    }
-    return token.size() <= kShown ? fmt::format("'{}'", out) : fmt::format("'{}...'", out);
-}
+inline std::string shown(std::string_view token) { return quoted_for_message(token); }
 
 inline double parse_number(std::string_view token, const std::string& source, std::uint64_t line, const char* what) {
     std::string_view digits = token;

@@ -11,6 +11,7 @@
 #include <map>
 #include <thread>
 
+#include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/solver/linear.hpp"
 #include "radiate_internal.hpp"
@@ -19,52 +20,33 @@ namespace ffcube {
 using namespace radiate_detail;
 
 std::vector<NamedSurface> parse_surfaces_csv(std::string_view text, const std::string& source) {
+    static const CsvHeader kHeader = {"object", "emissivity", "temperature", "heat_flux"};
     std::vector<NamedSurface> out;
     std::map<std::string, std::size_t> seen;  // object → line
-    bool header = false;
-    std::size_t line_no = 0;
-    while (!text.empty()) {
-        const std::size_t nl = text.find('\n');
-        const std::string_view raw = text.substr(0, nl);
-        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
-        ++line_no;
-        const std::string_view line = trim(raw);
-        if (line.empty() || line.front() == '#') continue;
-        const std::string where = fmt::format("{}:{}", source, line_no);
-        const std::vector<std::string> f = split_csv(line, where);
-        if (!header) {
-            if (f != std::vector<std::string>{"object", "emissivity", "temperature", "heat_flux"})
-                throw InputError(fmt::format("{}: the first line must be the header 'object,emissivity,temperature,heat_flux'",
-                                             where));
-            header = true;
-            continue;
-        }
-        if (f.size() != 4)
-            throw InputError(fmt::format("{}: {} fields; each line is object,emissivity,temperature,heat_flux (4 fields)",
-                                         where, f.size()));
-        if (f[0].empty()) throw InputError(fmt::format("{}: the object name is empty", where));
-        if (const auto it = seen.find(f[0]); it != seen.end())
-            throw InputError(fmt::format("{}: object '{}' is listed again (first on line {})", where, f[0], it->second));
-        const std::optional<double> eps = parse_number(f[1], "emissivity", where);
-        if (!eps) throw InputError(fmt::format("{}: the emissivity of '{}' is missing", where, f[0]));
-        check_emissivity(*eps, where);
-        const std::optional<double> t = parse_number(f[2], "temperature", where);
-        const std::optional<double> q = parse_number(f[3], "heat_flux", where);
+    for (const CsvRow& row : parse_csv(text, source, std::span(&kHeader, 1)).rows) {
+        const std::string& object = row.fields[0];
+        if (object.empty()) row.fail("the object name is empty");
+        if (const auto it = seen.find(object); it != seen.end())
+            row.fail(fmt::format("object '{}' is listed again (first on line {})", object, it->second));
+        const std::optional<double> eps = row.number(1);
+        if (!eps) row.fail(fmt::format("the emissivity of '{}' is missing", object));
+        check_emissivity(*eps, row.where);
+        const std::optional<double> t = row.number(2);
+        const std::optional<double> q = row.number(3);
         if (t.has_value() == q.has_value())
-            throw InputError(fmt::format("{}: '{}' gives {}; give exactly one of temperature (K) and heat_flux (W/m^2, "
-                                         "adiabatic = 0) and leave the other empty",
-                                         where, f[0], t ? "both a temperature and a heat flux" : "neither a temperature nor a heat flux"));
-        if (t) check_temperature(*t, where);
+            row.fail(fmt::format("'{}' gives {}; give exactly one of temperature (K) and heat_flux (W/m^2, adiabatic = 0) "
+                                 "and leave the other empty",
+                                 object, t ? "both a temperature and a heat flux" : "neither a temperature nor a heat flux"));
+        if (t) check_temperature(*t, row.where);
         NamedSurface s;
-        s.object = f[0];
+        s.object = object;
         s.spec.emissivity = *eps;
         s.spec.condition = t ? SurfaceCondition::Temperature : SurfaceCondition::HeatFlux;
         s.spec.value = t ? *t : *q;
-        s.line = line_no;
-        seen.emplace(s.object, line_no);
+        s.line = row.line;
+        seen.emplace(s.object, row.line);
         out.push_back(std::move(s));
     }
-    if (!header) throw InputError(fmt::format("{}: empty; expected the header 'object,emissivity,temperature,heat_flux'", source));
     return out;
 }
 
@@ -72,8 +54,8 @@ SurfaceSpec parse_default_surface(std::string_view text) {
     const std::string where = fmt::format("--default-surface {}", text);
     const std::vector<std::string> f = split_csv(text, where);
     if (f.size() != 2) throw InputError(fmt::format("{}: expected EMISSIVITY,TEMPERATURE (two numbers)", where));
-    const std::optional<double> eps = parse_number(f[0], "emissivity", where);
-    const std::optional<double> t = parse_number(f[1], "temperature", where);
+    const std::optional<double> eps = parse_csv_number(f[0], "emissivity", where);
+    const std::optional<double> t = parse_csv_number(f[1], "temperature", where);
     if (!eps || !t) throw InputError(fmt::format("{}: expected EMISSIVITY,TEMPERATURE (two numbers)", where));
     check_emissivity(*eps, where);
     check_temperature(*t, where);
@@ -83,19 +65,9 @@ SurfaceSpec parse_default_surface(std::string_view text) {
 std::vector<SurfaceSpec> surfaces_for_objects(std::span<const std::string> objects,
                                               std::span<const NamedSurface> lines, const std::string& source,
                                               const std::optional<SurfaceSpec>& fallback) {
-    std::map<std::string_view, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    const ObjectIndex index(objects);
     std::vector<std::optional<SurfaceSpec>> given(objects.size());
-    for (const NamedSurface& s : lines) {
-        const auto it = index.find(s.object);
-        if (it == index.end()) {
-            std::string names;
-            for (std::size_t k = 0; k < objects.size() && k < 12; ++k) names += (k ? ", " : "") + objects[k];
-            if (objects.size() > 12) names += ", ...";
-            throw InputError(fmt::format("{}:{}: the scene has no object '{}' (its objects: {})", source, s.line, s.object, names));
-        }
-        given[it->second] = s.spec;
-    }
+    for (const NamedSurface& s : lines) given[index.at(s.object, fmt::format("{}:{}", source, s.line))] = s.spec;
     std::vector<SurfaceSpec> out(objects.size());
     for (std::size_t k = 0; k < objects.size(); ++k) {
         if (given[k]) {

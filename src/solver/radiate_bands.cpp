@@ -8,6 +8,7 @@
 #include <limits>
 #include <map>
 
+#include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/solver/radiate.hpp"
 #include "radiate_internal.hpp"
@@ -96,55 +97,32 @@ double blackbody_fraction_slope(double x) {
 }
 
 std::vector<NamedBand> parse_bands_csv(std::string_view text, const std::string& source) {
+    static const CsvHeader kHeader = {"object", "lambda_min_um", "lambda_max_um", "emissivity"};
     std::vector<NamedBand> out;
-    bool header = false;
-    std::size_t line_no = 0;
-    while (!text.empty()) {
-        const std::size_t nl = text.find('\n');
-        const std::string_view raw = text.substr(0, nl);
-        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
-        ++line_no;
-        const std::string_view line = trim(raw);
-        if (line.empty() || line.front() == '#') continue;
-        const std::string where = fmt::format("{}:{}", source, line_no);
-        const std::vector<std::string> f = split_csv(line, where);
-        if (!header) {
-            if (f != std::vector<std::string>{"object", "lambda_min_um", "lambda_max_um", "emissivity"})
-                throw InputError(fmt::format(
-                    "{}: the first line must be the header 'object,lambda_min_um,lambda_max_um,emissivity'", where));
-            header = true;
-            continue;
-        }
-        if (f.size() != 4)
-            throw InputError(fmt::format(
-                "{}: {} fields; each line is object,lambda_min_um,lambda_max_um,emissivity (4 fields)", where, f.size()));
-        if (f[0].empty()) throw InputError(fmt::format("{}: the object name is empty", where));
+    for (const CsvRow& row : parse_csv(text, source, std::span(&kHeader, 1)).rows) {
+        const std::vector<std::string>& f = row.fields;
+        if (f[0].empty()) row.fail("the object name is empty");
         NamedBand b;
         b.object = f[0];
-        b.line = line_no;
-        const std::optional<double> lo = parse_number(f[1], "lambda_min_um", where);
+        b.line = row.line;
+        const std::optional<double> lo = row.number(1);
         std::optional<double> hi;
         if (f[2] == "inf" || f[2] == "Inf" || f[2] == "infinity")
             hi = kInf;
         else
-            hi = parse_number(f[2], "lambda_max_um", where);
-        const std::optional<double> eps = parse_number(f[3], "emissivity", where);
-        if (!lo || !hi || !eps)
-            throw InputError(fmt::format("{}: '{}': every field is required (lambda_max_um may be 'inf')", where, b.object));
-        check_emissivity(*eps, where);
-        if (*lo < 0.0) throw InputError(fmt::format("{}: lambda_min_um {} must be >= 0", where, *lo));
+            hi = row.number(2);
+        const std::optional<double> eps = row.number(3);
+        if (!lo || !hi || !eps) row.fail(fmt::format("'{}': every field is required (lambda_max_um may be 'inf')", b.object));
+        check_emissivity(*eps, row.where);
+        if (*lo < 0.0) row.fail(fmt::format("lambda_min_um {} must be >= 0", *lo));
         if (!(*lo < *hi))
-            throw InputError(fmt::format("{}: band [{}, {}] um of '{}' is inverted or empty: lambda_min_um must be below "
-                                         "lambda_max_um",
-                                         where, *lo, *hi, b.object));
+            row.fail(fmt::format("band [{}, {}] um of '{}' is inverted or empty: lambda_min_um must be below lambda_max_um",
+                                 *lo, *hi, b.object));
         b.lambda_min = *lo;
         b.lambda_max = *hi;
         b.emissivity = *eps;
         out.push_back(std::move(b));
     }
-    if (!header)
-        throw InputError(
-            fmt::format("{}: empty; expected the header 'object,lambda_min_um,lambda_max_um,emissivity'", source));
     // Overlaps, object by object (touching bands, max = next min, are fine).
     std::map<std::string, std::vector<const NamedBand*>> by_object;
     for (const NamedBand& b : out) by_object[b.object].push_back(&b);
@@ -171,20 +149,12 @@ BandModel bands_for_objects(std::span<const std::string> objects, std::span<cons
                             const std::string& source, std::span<const double> gray) {
     if (gray.size() != objects.size())
         throw InputError(fmt::format("bands: {} gray emissivities for {} objects", gray.size(), objects.size()));
-    std::map<std::string_view, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    const ObjectIndex index(objects);
     std::vector<std::vector<const NamedBand*>> of(objects.size());
     BandModel m;
     m.edges = {0.0, kInf};
     for (const NamedBand& b : lines) {
-        const auto it = index.find(b.object);
-        if (it == index.end()) {
-            std::string names;
-            for (std::size_t k = 0; k < objects.size() && k < 12; ++k) names += (k ? ", " : "") + objects[k];
-            if (objects.size() > 12) names += ", ...";
-            throw InputError(fmt::format("{}:{}: the scene has no object '{}' (its objects: {})", source, b.line, b.object, names));
-        }
-        of[it->second].push_back(&b);
+        of[index.at(b.object, fmt::format("{}:{}", source, b.line))].push_back(&b);
         m.edges.push_back(b.lambda_min);
         m.edges.push_back(b.lambda_max);
     }

@@ -1,5 +1,4 @@
-// Shared by radiate.cpp (gray) and radiate_bands.cpp (spectral bands): the CSV field helpers,
-// the checks of emissivities and temperatures, and the reflection operator with its GMRES solve.
+// Shared by radiate.cpp (gray) and radiate_bands.cpp (spectral bands): the checks of emissivities and temperatures, and the reflection operator with its GMRES solve.
 #pragma once
 
 #include <fmt/format.h>
@@ -15,7 +14,6 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
-#include "ffcube/solver/csv_fields.hpp"
 #include "ffcube/solver/linear.hpp"
 #include "ffcube/solver/radiate.hpp"
 
@@ -25,12 +23,6 @@ namespace ffcube::radiate_detail {
 inline double seconds_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
-
-// The CSV field helpers (trim, split_csv, parse_number) are solver/csv_fields.hpp's, shared with
-// the sun series' readers.
-using ffcube::parse_number;
-using ffcube::split_csv;
-using ffcube::trim;
 
 inline void check_emissivity(double e, const std::string& where) {
     if (!(e > 0.0 && e <= 1.0))

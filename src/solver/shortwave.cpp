@@ -32,8 +32,8 @@
 #include <map>
 #include <thread>
 
+#include "ffcube/core/csv_input.hpp"
 #include "ffcube/core/error.hpp"
-#include "ffcube/solver/csv_fields.hpp"
 
 namespace ffcube {
 namespace {
@@ -248,52 +248,25 @@ ShortwaveSolution solve_shortwave(const ShortwaveSystem& s, std::span<const doub
 }
 
 std::vector<SunStep> parse_sun_series(std::string_view text, const std::string& source) {
-    static const std::vector<std::string> kAngles = {"time", "azimuth", "elevation", "direct_normal_irradiance",
-                                                      "diffuse_horizontal_irradiance"};
-    static const std::vector<std::string> kVector = {"time", "sun_x", "sun_y", "sun_z", "direct_normal_irradiance",
-                                                      "diffuse_horizontal_irradiance"};
+    static const std::vector<CsvHeader> kHeaders = {
+        {"time", "azimuth", "elevation", "direct_normal_irradiance", "diffuse_horizontal_irradiance"},
+        {"time", "sun_x", "sun_y", "sun_z", "direct_normal_irradiance", "diffuse_horizontal_irradiance"}};
+    const CsvTable table = parse_csv(text, source, kHeaders);
+    const bool angles = table.header_index == 0;
     std::vector<SunStep> out;
     std::map<std::string, std::size_t> seen;
-    const std::vector<std::string>* header = nullptr;
-    std::size_t line_no = 0;
-    if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
-    while (!text.empty()) {
-        const std::size_t nl = text.find('\n');
-        const std::string_view line = trim(text.substr(0, nl));
-        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
-        ++line_no;
-        if (line.empty() || line.front() == '#') continue;
-        const std::string where = fmt::format("{}:{}", source, line_no);
-        const std::vector<std::string> f = split_csv(line, where);
-        if (!header) {
-            if (f == kAngles)
-                header = &kAngles;
-            else if (f == kVector)
-                header = &kVector;
-            else
-                throw InputError(fmt::format("{}: the first line must be the header "
-                                             "'time,azimuth,elevation,direct_normal_irradiance,diffuse_horizontal_irradiance' "
-                                             "or 'time,sun_x,sun_y,sun_z,direct_normal_irradiance,diffuse_horizontal_irradiance'",
-                                             where));
-            continue;
-        }
-        if (f.size() != header->size())
-            throw InputError(fmt::format("{}: {} fields; each line has the header's {}", where, f.size(), header->size()));
+    for (const CsvRow& row : table.rows) {
         SunStep s;
-        s.line = line_no;
-        s.time = f[0];
-        if (s.time.empty()) throw InputError(fmt::format("{}: the time is empty", where));
+        s.line = row.line;
+        s.time = row.fields[0];
+        if (s.time.empty()) row.fail("the time is empty");
         if (const auto it = seen.find(s.time); it != seen.end())
-            throw InputError(fmt::format("{}: time '{}' is listed again (first on line {})", where, s.time, it->second));
+            row.fail(fmt::format("time '{}' is listed again (first on line {})", s.time, it->second));
         std::vector<double> v;
-        for (std::size_t c = 1; c < f.size(); ++c) {
-            const std::optional<double> x = parse_number(f[c], (*header)[c], where);
-            if (!x) throw InputError(fmt::format("{}: {} is missing", where, (*header)[c]));
-            v.push_back(*x);
-        }
-        if (header == &kAngles) {
+        for (std::size_t c = 1; c < row.fields.size(); ++c) v.push_back(row.required(c));
+        if (angles) {
             const double az = v[0], el = v[1];
-            if (el < -90.0 || el > 90.0) throw InputError(fmt::format("{}: elevation {} must be in [-90, 90] degrees", where, el));
+            if (el < -90.0 || el > 90.0) row.fail(fmt::format("elevation {} must be in [-90, 90] degrees", el));
             const double a = az * M_PI / 180.0, e = el * M_PI / 180.0;
             s.x = std::sin(a) * std::cos(e);
             s.y = std::cos(a) * std::cos(e);
@@ -301,8 +274,7 @@ std::vector<SunStep> parse_sun_series(std::string_view text, const std::string& 
             v.erase(v.begin(), v.begin() + 2);
         } else {
             const double len = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-            if (!(len > 0.0) || !std::isfinite(len))
-                throw InputError(fmt::format("{}: the direction towards the sun must not be zero", where));
+            if (!(len > 0.0) || !std::isfinite(len)) row.fail("the direction towards the sun must not be zero");
             s.x = v[0] / len, s.y = v[1] / len, s.z = v[2] / len;
             v.erase(v.begin(), v.begin() + 3);
         }
@@ -312,56 +284,32 @@ std::vector<SunStep> parse_sun_series(std::string_view text, const std::string& 
         // every power of a city far from overflow.
         for (const auto& [value, name] : {std::pair{s.dni, "direct_normal_irradiance"}, {s.dhi, "diffuse_horizontal_irradiance"}})
             if (!(value >= 0.0 && value <= kMaxIrradiance))
-                throw InputError(fmt::format("{}: {} {} must be in [0, {:g}] W/m^2", where, name, value, kMaxIrradiance));
-        seen.emplace(s.time, line_no);
+                row.fail(fmt::format("{} {} must be in [0, {:g}] W/m^2", name, value, kMaxIrradiance));
+        seen.emplace(s.time, row.line);
         out.push_back(std::move(s));
     }
-    if (!header)
-        throw InputError(fmt::format("{}: empty; expected the header "
-                                     "'time,azimuth,elevation,direct_normal_irradiance,diffuse_horizontal_irradiance'",
-                                     source));
     if (out.empty()) throw InputError(fmt::format("{}: no steps after the header", source));
     return out;
 }
 
 std::vector<double> parse_albedo_csv(std::string_view text, const std::string& source, const std::vector<std::string>& objects) {
-    std::map<std::string, std::size_t> index;
-    for (std::size_t k = 0; k < objects.size(); ++k) index.emplace(objects[k], k);
+    static const CsvHeader kHeader = {"object", "albedo"};
+    const ObjectIndex index(objects);
     std::vector<double> albedo(objects.size(), -1.0);
     std::vector<std::size_t> where_line(objects.size(), 0);
-    bool header = false;
-    std::size_t line_no = 0;
-    if (text.substr(0, 3) == "\xEF\xBB\xBF") text.remove_prefix(3);
-    while (!text.empty()) {
-        const std::size_t nl = text.find('\n');
-        const std::string_view line = trim(text.substr(0, nl));
-        text = nl == std::string_view::npos ? std::string_view{} : text.substr(nl + 1);
-        ++line_no;
-        if (line.empty() || line.front() == '#') continue;
-        const std::string where = fmt::format("{}:{}", source, line_no);
-        const std::vector<std::string> f = split_csv(line, where);
-        if (!header) {
-            if (f != std::vector<std::string>{"object", "albedo"})
-                throw InputError(fmt::format("{}: the first line must be the header 'object,albedo'", where));
-            header = true;
-            continue;
-        }
-        if (f.size() != 2) throw InputError(fmt::format("{}: {} fields; each line is object,albedo (2 fields)", where, f.size()));
-        const auto it = index.find(f[0]);
-        if (it == index.end()) throw InputError(fmt::format("{}: the scene has no object '{}'", where, f[0]));
-        if (where_line[it->second] != 0)
-            throw InputError(
-                fmt::format("{}: object '{}' is listed again (first on line {})", where, f[0], where_line[it->second]));
-        const std::optional<double> a = parse_number(f[1], "albedo", where);
-        if (!a) throw InputError(fmt::format("{}: the albedo of '{}' is missing", where, f[0]));
+    for (const CsvRow& row : parse_csv(text, source, std::span(&kHeader, 1)).rows) {
+        const std::string& object = row.fields[0];
+        const std::size_t k = index.at(object, row.where);
+        if (where_line[k] != 0) row.fail(fmt::format("object '{}' is listed again (first on line {})", object, where_line[k]));
+        const std::optional<double> a = row.number(1);
+        if (!a) row.fail(fmt::format("the albedo of '{}' is missing", object));
         if (!(*a >= 0.0 && *a < 1.0))
-            throw InputError(fmt::format("{}: albedo {} of '{}' must be in [0, 1) (a perfect reflector, 1, would keep "
-                                         "reflecting in a closed street canyon)",
-                                         where, *a, f[0]));
-        albedo[it->second] = *a;
-        where_line[it->second] = line_no;
+            row.fail(fmt::format("albedo {} of '{}' must be in [0, 1) (a perfect reflector, 1, would keep reflecting in a "
+                                 "closed street canyon)",
+                                 *a, object));
+        albedo[k] = *a;
+        where_line[k] = row.line;
     }
-    if (!header) throw InputError(fmt::format("{}: empty; expected the header 'object,albedo'", source));
     std::vector<std::string> missing;
     for (std::size_t k = 0; k < objects.size(); ++k)
         if (where_line[k] == 0) missing.push_back(objects[k]);

@@ -428,7 +428,7 @@ TEST(MaterialMap, SetsKdAndKePerObject) {
     EXPECT_CONTAINS(m.warnings.back(), "m.csv:4: the scene has no object 'ghost'");
     EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,1.5,0,0,0,0,0\n", "m.csv"); }), "m.csv:1: Kd 1.5 must be within [0,1)");
     EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0,0,-1,0,0\n", "m.csv"); }), "m.csv:1: Ke -1 must be >= 0");
-    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0\n", "m.csv"); }), "m.csv:1: expected 7 fields");
+    EXPECT_CONTAINS(error_of([&] { apply_material_map(m, "upper,0,0\n", "m.csv"); }), "m.csv:1: 3 fields; each line is object,kd_r,kd_g,kd_b,ke_r,ke_g,ke_b (7 fields)");
 }
 
 TEST(MaterialMap, AnEmptyTripleKeepsTheFilesKdOrKe) {

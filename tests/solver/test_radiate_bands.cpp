@@ -14,6 +14,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/solver/radiate.hpp"
+#include "support/rows.hpp"
 
 namespace ffcube {
 namespace {
@@ -22,20 +23,7 @@ constexpr double kSigma = 5.670374419e-8;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr double kPi = 3.14159265358979323846;
 
-CsrMatrix dense_to_csr(const std::vector<std::vector<double>>& f) {
-    CsrMatrix m(static_cast<std::uint32_t>(f.size()));
-    for (const auto& row : f) {
-        std::vector<std::uint32_t> col;
-        std::vector<float> val;
-        for (std::uint32_t j = 0; j < row.size(); ++j)
-            if (row[j] != 0.0) {
-                col.push_back(j);
-                val.push_back(static_cast<float>(row[j]));
-            }
-        m.append_row(col, val);
-    }
-    return m;
-}
+using test::dense_to_csr;
 
 SurfaceSpec temp(double eps, double t) { return {eps, SurfaceCondition::Temperature, t}; }
 SurfaceSpec flux(double eps, double q) { return {eps, SurfaceCondition::HeatFlux, q}; }

@@ -5,6 +5,7 @@
 // piece. Elements keep the patch's object and material.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -27,5 +28,13 @@ std::uint64_t scene_fingerprint(const Scene& scene);
 
 // A patch's area, normal, centroid and size from its vertices, as the mesher fills them (mesher.cpp).
 void fill_patch_geometry(Scene& scene, Patch& patch);
+
+// The mesher's grids (scene.hpp, PatchGrid), for the mesher and refine_patches alike: append to
+// `scene` the vertices, the PatchGrid and the patches of a quad c[0..3] split nu × nv along its
+// bilinear map, or of a triangle c[0..2] split into k² similar triangles (upright and inverted, in
+// PatchGrid's order). Each patch is a copy of `like` (object, material) with its vertices, count
+// and geometry (fill_patch_geometry) set.
+void append_quad_grid(Scene& scene, const std::array<Vec3, 4>& c, std::uint32_t nu, std::uint32_t nv, const Patch& like);
+void append_triangle_grid(Scene& scene, const std::array<Vec3, 4>& c, std::uint32_t k, const Patch& like);
 
 }  // namespace ffcube
