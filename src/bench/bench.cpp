@@ -73,6 +73,9 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     for (int r : options.resolutions) check_row_resolution(r, "--resolutions");
     for (std::uint64_t r : options.rays)
         if (r == 0) throw InputError("--rays 0: each ray count must be at least 1");
+    for (double e : options.tolerances)
+        if (!(e >= kMinTolerance && e < 1.0))
+            throw InputError(fmt::format("--tolerances {}: each target must be a number from {} to below 1", e, kMinTolerance));
 
     std::vector<const BenchCase*> selected;
     for (const BenchCase& c : cases)
@@ -81,7 +84,7 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     for (const BenchCase* c : selected) scenes.push_back(build_bench_scene(*c));
 
     const std::size_t hemicube_runs = options.resolutions.size() * (options.corrected ? 2 : 1);
-    const std::size_t per_case = hemicube_runs + options.rays.size();
+    const std::size_t per_case = hemicube_runs + options.rays.size() + options.tolerances.size();
     const std::size_t total = selected.size() * per_case;
     std::vector<BenchResult> results(total);
     std::size_t done = 0;
@@ -105,11 +108,16 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     base.backend = options.backend;
     base.seed = options.seed;
     base.near_k = options.near_k;
+    double estimate = 0;  // the last run's largest row estimate (rows of a corrected source)
     auto run = [&](std::size_t k, const RowOptions& ro) {
         RowSource rows = make_row_source(scenes[k], ro);
         Stopwatch watch;
         CsrMatrix F = compute_all_rows(rows.provider());
-        return std::pair{std::move(F), watch.seconds()};
+        const double seconds = watch.seconds();
+        estimate = 0;
+        if (rows.corrected())
+            for (float e : rows.corrected()->row_tolerance_estimates()) estimate = std::max(estimate, static_cast<double>(e));
+        return std::pair{std::move(F), seconds};
     };
     // Hemicubes first (see the header: worker processes need a single-threaded process).
     for (std::size_t k = 0; k < selected.size(); ++k)
@@ -139,17 +147,31 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays), static_cast<double>(ro.rays), F,
                    seconds);
         }
+    // Accuracy by target: the rows refined to E as the command line makes them (the default
+    // correction on), each run's promise (its largest row estimate) beside its true errors.
+    for (std::size_t k = 0; k < selected.size(); ++k)
+        for (std::size_t s = 0; s < options.tolerances.size(); ++s) {
+            RowOptions ro = base;
+            ro.method = RowMethod::Raycast;
+            ro.tolerance = options.tolerances[s];
+            ro.correct = Correction::Near;
+            const auto [F, seconds] = run(k, ro);
+            const std::size_t slot = hemicube_runs + options.rays.size() + s;
+            results[k * per_case + slot].estimate = estimate;
+            record(k, slot, "raycast@tolerance", fmt::format("E={:g}", ro.tolerance), ro.tolerance, F, seconds);
+        }
     return results;
 }
 
 void write_bench_csv(const std::filesystem::path& path, const std::vector<BenchResult>& results) {
     write_file_atomically(path, [&](std::ostream& os) {
         os << "case,group,method,setting,seconds,max_abs_error,mean_abs_error,max_rel_error,row_sum_dev,"
-              "reciprocity_dev,patches\n";
+              "reciprocity_dev,patches,estimate\n";
         for (const BenchResult& r : results)
-            os << fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{}\n", r.case_name, r.group,
+            os << fmt::format("{},{},{},{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{},{}\n", r.case_name, r.group,
                               r.method, r.setting, r.seconds, r.errors.max_abs_error, r.errors.mean_abs_error,
-                              r.errors.max_rel_error, r.errors.row_sum_dev, r.errors.reciprocity_dev, r.patches);
+                              r.errors.max_rel_error, r.errors.row_sum_dev, r.errors.reciprocity_dev, r.patches,
+                              std::isnan(r.estimate) ? std::string() : fmt::format("{:.6g}", r.estimate));
     });
 }
 
@@ -160,6 +182,7 @@ void write_bench_json(const std::filesystem::path& path, const std::vector<Bench
     j["quick"] = options.quick;
     j["resolutions"] = options.resolutions;
     j["rays"] = options.rays;
+    j["tolerances"] = options.tolerances;
     j["threads"] = options.threads;
     j["seed"] = options.seed;
     j["results"] = nlohmann::ordered_json::array();
@@ -177,6 +200,7 @@ void write_bench_json(const std::filesystem::path& path, const std::vector<Bench
         o["max_rel_error"] = r.errors.max_rel_error;
         o["row_sum_dev"] = r.errors.row_sum_dev;
         o["reciprocity_dev"] = r.errors.reciprocity_dev;
+        if (!std::isnan(r.estimate)) o["estimate"] = r.estimate;
         j["results"].push_back(std::move(o));
     }
     const std::string text = j.dump(2) + "\n";

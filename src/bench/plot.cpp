@@ -57,6 +57,7 @@ struct Curve {
     std::string method, group;
     std::vector<std::pair<double, double>> points;  // (seconds, error), in setting order
     std::vector<std::string> labels;                // the setting value, e.g. "256"
+    std::vector<double> estimates;                  // raycast@tolerance: the largest row estimate (else empty)
 };
 
 // Errors and times are clamped to these floors so that a zero stays on a log axis.
@@ -64,21 +65,24 @@ constexpr double kMinError = 1e-8, kMinSeconds = 1e-4;
 
 std::vector<Curve> make_curves(const std::vector<BenchResult>& results) {
     std::vector<Curve> curves;
-    for (const char* method : {"hemicube", "hemicube+near", "raycast"})
+    for (const char* method : {"hemicube", "hemicube+near", "raycast", "raycast@tolerance"})
         for (const std::string& group : bench_groups()) {
-            // setting value → (Σ seconds, max error)
+            // setting value → (Σ seconds, max error), and the largest estimate
             std::map<double, std::pair<double, double>> by_setting;
+            std::map<double, double> estimate;
             for (const BenchResult& r : results) {
                 if (r.method != method || r.group != group) continue;
                 auto& [s, e] = by_setting[r.value];
                 s += r.seconds;
                 e = std::max(e, r.errors.max_abs_error);
+                if (!std::isnan(r.estimate)) estimate[r.value] = std::max(estimate[r.value], r.estimate);
             }
             if (by_setting.empty()) continue;
-            Curve c{method, group, {}, {}};
+            Curve c{method, group, {}, {}, {}};
             for (const auto& [v, se] : by_setting) {
                 c.points.emplace_back(std::max(se.first, kMinSeconds), std::max(se.second, kMinError));
                 c.labels.push_back(fmt::format("{}", v));
+                if (const auto it = estimate.find(v); it != estimate.end()) c.estimates.push_back(std::max(it->second, kMinError));
             }
             curves.push_back(std::move(c));
         }
@@ -88,11 +92,13 @@ std::vector<Curve> make_curves(const std::vector<BenchResult>& results) {
 void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     const std::vector<Curve> curves = make_curves(results);
     double xmin = std::numeric_limits<double>::infinity(), xmax = 0, ymin = xmin, ymax = 0;
-    for (const Curve& c : curves)
+    for (const Curve& c : curves) {
         for (const auto& [x, y] : c.points) {
             xmin = std::min(xmin, x), xmax = std::max(xmax, x);
             ymin = std::min(ymin, y), ymax = std::max(ymax, y);
         }
+        for (double e : c.estimates) ymin = std::min(ymin, e), ymax = std::max(ymax, e);
+    }
     if (curves.empty()) xmin = 1e-3, xmax = 1, ymin = 1e-4, ymax = 1;
     // Whole decades around the data.
     const int dx0 = static_cast<int>(std::floor(std::log10(xmin))), dx1 = static_cast<int>(std::ceil(std::log10(xmax)));
@@ -122,8 +128,9 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
 
     for (const Curve& c : curves) {
         const Rgb col = group_color(c.group);
-        const bool ray = c.method == "raycast";
-        const double width = c.method == "hemicube+near" ? 4 : 2;  // corrected: the thick solid line
+        const bool ray = c.method == "raycast" || c.method == "raycast@tolerance";
+        // corrected: the thick solid line; rows refined to a target: the thick dashed one
+        const double width = c.method == "hemicube+near" || c.method == "raycast@tolerance" ? 4 : 2;
         for (std::size_t k = 0; k + 1 < c.points.size(); ++k)
             cv.line(X(c.points[k].first), Y(c.points[k].second), X(c.points[k + 1].first), Y(c.points[k + 1].second), col,
                     width, ray);
@@ -131,6 +138,13 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
             cv.marker(X(c.points[k].first), Y(c.points[k].second), ray, col);
             cv.text(X(c.points[k].first) + 6, Y(c.points[k].second) - 6, c.labels[k], 10, Anchor::Start);
         }
+        // Each run's estimate beside its true error: a bar at the estimate, joined to the point.
+        if (c.estimates.size() == c.points.size())
+            for (std::size_t k = 0; k < c.points.size(); ++k) {
+                const double x = X(c.points[k].first), ye = Y(c.estimates[k]);
+                cv.line(x, Y(c.points[k].second), x, ye, col, 1, true);
+                cv.line(x - 7, ye, x + 7, ye, col, 3, false);
+            }
     }
 
     // Legend: groups by colour, methods by line style.
@@ -155,6 +169,12 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     cv.line(lx, ly, lx + 28, ly, axis, 2, true);
     cv.marker(lx + 14, ly, true, axis);
     cv.text(lx + 36, ly + 4, "raycast (rays)", 12, Anchor::Start);
+    if (std::any_of(curves.begin(), curves.end(), [](const Curve& c) { return c.method == "raycast@tolerance"; })) {
+        ly += 20;
+        cv.line(lx, ly, lx + 28, ly, axis, 4, true);
+        cv.marker(lx + 14, ly, true, axis);
+        cv.text(lx + 36, ly + 4, "to E (bar: estimate)", 12, Anchor::Start);
+    }
 }
 
 std::string xml_escape(const std::string& s) {

@@ -1,6 +1,7 @@
 // ffcube bench: hemicube and ray-cast form factors against analytic values, error against time.
 #include <fmt/format.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include "cli/commands.hpp"
@@ -15,6 +16,7 @@ struct Options {
     std::string suite = "all";
     std::vector<int> resolutions;
     std::vector<std::uint64_t> rays;
+    std::vector<double> tolerances;
     bool quick = false;
     std::string out = "bench-results";
     unsigned threads = 0;
@@ -39,6 +41,11 @@ int run(const Options& o) {
     b.rays = !o.rays.empty() ? o.rays
              : o.quick       ? std::vector<std::uint64_t>{256, 4096}
                              : std::vector<std::uint64_t>{100, 1000, 10000, 100000};
+    // Accuracy by target: 1e-2 … 1e-5 (1e-6 takes the ray caster's whole budget of 2^24 rays on
+    // many rows; ask for it with --tolerances).
+    b.tolerances = !o.tolerances.empty() ? o.tolerances
+                   : o.quick            ? std::vector<double>{1e-2, 1e-3}
+                                        : std::vector<double>{1e-2, 1e-3, 1e-4, 1e-5};
     const std::filesystem::path dir(o.out);
     std::error_code ec;
     std::filesystem::create_directories(dir, ec);
@@ -47,8 +54,9 @@ int run(const Options& o) {
 
     const std::vector<BenchCase> cases = bench_cases(o.quick);
     const auto results = run_bench(cases, b, [](std::size_t done, std::size_t total, const BenchResult& r) {
-        info("[{}/{}] {:<18} {:<9} {:<11} {:>9.3f} s  max abs err {:.3e}  rel {:.3e}", done, total, r.case_name, r.method,
-             r.setting, r.seconds, r.errors.max_abs_error, r.errors.max_rel_error);
+        info("[{}/{}] {:<18} {:<9} {:<11} {:>9.3f} s  max abs err {:.3e}  rel {:.3e}{}", done, total, r.case_name, r.method,
+             r.setting, r.seconds, r.errors.max_abs_error, r.errors.max_rel_error,
+             std::isnan(r.estimate) ? std::string() : fmt::format("  estimate {:.3e}", r.estimate));
     });
     write_bench_csv(dir / "results.csv", results);
     write_bench_json(dir / "results.json", results, b);
@@ -66,6 +74,9 @@ void add_bench_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--suite", opts->suite, "all, basic, enclosure, proximity, extreme or occlusion")->default_val("all");
     sub->add_option("--resolutions", opts->resolutions, "hemicube resolutions, e.g. 32,64,128,256,512")->delimiter(',');
     sub->add_option("--rays", opts->rays, "ray-cast rays per patch, e.g. 100,1000,10000,100000")->delimiter(',');
+    sub->add_option("--tolerances", opts->tolerances,
+                    "accuracy targets of the ray caster refined to each (--tolerance), e.g. 1e-2,1e-3,1e-4,1e-5")
+        ->delimiter(',');
     sub->add_flag("--quick", opts->quick, "fewer cases, coarser meshes, two settings per method (about a minute)");
     sub->add_option("--out", opts->out, "directory for results.csv, results.json, error_vs_time.svg/.png")
         ->default_val("bench-results");

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -56,6 +57,10 @@ struct BenchOptions {
     std::string suite = "all";            // "all" or one group name
     std::vector<int> resolutions;         // hemicube settings (even, 8..8192); none: no hemicube runs
     std::vector<std::uint64_t> rays;      // raycast settings (rays per row ≥ 1); none: no raycast runs
+    // Accuracy targets (--tolerance E, in [1e-9, 1)): one run each of the ray caster refined to E
+    // with the near-field correction, as `ffcube formfactors --method raycast --tolerance E`
+    // makes its rows (method "raycast@tolerance"); none: no such runs.
+    std::vector<double> tolerances;
     bool quick = false;
     unsigned threads = 0;                 // 0: every core (both methods)
     Backend backend = Backend::Auto;
@@ -69,10 +74,15 @@ struct BenchOptions {
 
 // One line of results.csv.
 struct BenchResult {
-    std::string case_name, group, method, setting;  // method "hemicube" (setting "N=256"), "hemicube+near" or "raycast" (setting "rays=1000")
+    // method "hemicube" (setting "N=256"), "hemicube+near", "raycast" (setting "rays=1000") or
+    // "raycast@tolerance" (setting "E=0.001")
+    std::string case_name, group, method, setting;
     double value = 0;                                // the resolution or ray count, for plotting
     std::size_t patches = 0;
     double seconds = 0;  // wall seconds of the row computation (provider start-up excluded)
+    // raycast@tolerance: the largest of the rows' own error estimates (the run's promise, to set
+    // beside its true errors); NaN for the other methods.
+    double estimate = std::numeric_limits<double>::quiet_NaN();
     BenchErrors errors;
 };
 
