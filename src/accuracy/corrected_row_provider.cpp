@@ -228,6 +228,32 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
             a.measured_error >= 0 ? estimate + a.measured_error
                                   : estimate - noise.l1 +
                                         kNoiseDeviations * std::max(noise.max, std::sqrt(noise.sky * noise.sky + noise.replaced_sum_sq));
+        // Accuracy by target: a row above it that its provider did not refine is measured again
+        // by the refiner (refine_with), whose error is measured, and corrected as its row.
+        bool refined = false;
+        if (refiner_ && a.measured_error < 0 && !a.skipped && !(tolerance_estimate <= refine_tolerance_)) {
+            RowStages again;
+            again.exact_entries = [&](std::size_t, std::uint32_t) {
+                return std::span<const std::pair<std::uint32_t, double>>(a.exact);
+            };
+            again.measured = [&](std::size_t, std::uint32_t, double error, double rays) {
+                a.measured_error = error;
+                a.measured_rays = rays;
+            };
+            const std::uint32_t one[1] = {i};
+            refiner_->compute_rows_staged(one, again, [&](std::uint32_t, const SparseRow& r) { row = r; });
+            FFCUBE_CHECK_MSG(a.measured_error >= 0 && a.measured_rays > 0, "the refiner measured no error");
+            inner = row;
+            NearFieldStats discarded;  // the row's statistics are its first correction's
+            noise = RowNoise{};
+            estimate = 0;
+            corrector_.correct(i, row, discarded, *scratch, &estimate, &a, true, a.measured_rays, &noise);
+            // Its own modelled noise out, its measured error in (as for the ray caster's rows).
+            estimate -= noise.l1;
+            tolerance_estimate = estimate + a.measured_error;
+            rows_refined_.fetch_add(1, std::memory_order_relaxed);
+            refined = true;
+        }
         if (a.measured_error >= 0) estimate += a.measured_error;
         // The last check before the row leaves the layer: a corrected row out of range (an entry
         // below 0 or above 1, not finite, or a sum above 1 beyond its tolerance) is replaced by
@@ -256,7 +282,8 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         // One writer per row (i is listed once); both are sized before the stages start.
         row_error_[i] = static_cast<float>(estimate);
         row_tolerance_[i] = static_cast<float>(std::max(tolerance_estimate, 0.0));
-        row_measure_[i] = a.skipped ? RowMeasure::analytic
+        row_measure_[i] = refined     ? RowMeasure::refined
+                          : a.skipped ? RowMeasure::analytic
                           : !sampled ? RowMeasure::centre
                           : a.occluder == 2 ? RowMeasure::sampled_touching
                           : a.refused_sampled > 0 ? RowMeasure::sampled_near_pair

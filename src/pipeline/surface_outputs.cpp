@@ -50,6 +50,7 @@ void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report,
         report.set("view3d.eps", v.eps);
         if (!rows.tolerance_given) {
             rows.tolerance = v.eps;
+            rows.tolerance_given = true;  // a target asked for, as --tolerance would
             info("{}:{}: eps={}: the accuracy target (--tolerance {})", scene.source, v.eps_line, v.eps, v.eps);
         } else if (rows.tolerance != v.eps) {
             info("{}:{}: eps={} is overridden by --tolerance {}", scene.source, v.eps_line, v.eps, rows.tolerance);

@@ -100,3 +100,86 @@ TEST(HemicubeTolerance, EstimatesCoverTheTrueErrorOfExactRows) {
 
 }  // namespace
 }  // namespace ffcube
+
+namespace ffcube {
+namespace {
+
+// Accuracy by target for hemicube rows (refine_hemicube_rows): with a target asked for, rows
+// whose estimate is above it are measured again by rays refined to it; without one, the rows are
+// the hemicube's, bit for bit. The scene is the closed box of the test above at N = 128, where
+// some drawn rows are above E = 1e-3 and some within; the reference the same closed forms.
+TEST(HemicubeTolerance, RowsAboveAnAskedForTargetAreMeasuredAgainByRays) {
+    const Scene scene = test::make_scene(test::inward_box(1.0, 1.0, 1.0), 0.1);
+    const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
+    std::vector<std::uint32_t> rows;
+    for (std::uint32_t i = 0; i < n; i += 9) rows.push_back(i);
+    const double E = 1e-3;
+    auto run = [&](bool given, std::vector<SparseRow>& got, std::vector<float>& estimate, std::vector<std::int8_t>& measure,
+                   std::uint64_t& refined) {
+        RowOptions o;
+        o.method = RowMethod::Hemicube;
+        o.resolution = 128;
+        o.threads = 2;
+        o.far_field = FarFieldMode::off;
+        o.tolerance = E;
+        o.tolerance_given = given;
+        EXPECT_EQ(refine_hemicube_rows(o), given);
+        RowSource source = make_row_source(scene, o);
+        got.assign(n, SparseRow{});
+        source.provider().compute_rows(rows, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
+        estimate = source.corrected()->row_tolerance_estimates();
+        measure = source.corrected()->row_measures();
+        refined = source.corrected()->rows_refined();
+    };
+    std::vector<SparseRow> plain, again;
+    std::vector<float> plain_estimate, estimate;
+    std::vector<std::int8_t> plain_measure, measure;
+    std::uint64_t plain_refined = 0, refined = 0;
+    run(false, plain, plain_estimate, plain_measure, plain_refined);
+    run(true, again, estimate, measure, refined);
+    EXPECT_EQ(plain_refined, 0u);
+    std::size_t above_before = 0, above_after = 0, covered = 0, checked = 0, kept = 0;
+    double worst = 0;
+    for (const std::uint32_t i : rows) {
+        const bool was_above = !(plain_estimate[i] <= E);
+        above_before += was_above;
+        above_after += !(estimate[i] <= E);
+        if (!was_above) {
+            // Rows within the target are the drawn rows, bit for bit.
+            EXPECT_NE(measure[i], CorrectedRowProvider::refined) << i;
+            EXPECT_EQ(again[i].col, plain[i].col) << i;
+            EXPECT_EQ(again[i].val, plain[i].val) << i;
+            ++kept;
+            continue;
+        }
+        EXPECT_EQ(measure[i], CorrectedRowProvider::refined) << i;
+        // The refined row against the closed forms: its estimate must cover its true error.
+        const auto pi = scene.patch_vertices(i);
+        std::vector<double> exact(n, 0.0), measured(n, 0.0);
+        for (std::uint32_t j = 0; j < n; ++j)
+            if (j != i) exact[j] = ff_polygon_polygon(pi, scene.patch_vertices(j));
+        for (std::size_t a = 0; a < again[i].nnz(); ++a) measured[again[i].col[a]] = again[i].val[a];
+        double entry = 0, sum_m = 0, sum_e = 0;
+        for (std::uint32_t j = 0; j < n; ++j) {
+            entry = std::max(entry, std::abs(measured[j] - exact[j]));
+            sum_m += measured[j], sum_e += exact[j];
+        }
+        const double truth = std::max(entry, std::abs(sum_m - sum_e));
+        ++checked;
+        covered += truth <= estimate[i];
+        worst = std::max(worst, truth / estimate[i]);
+    }
+    std::printf("%zu of %zu rows above E drawn, %zu after measuring again (%llu rows by rays); refined rows within their "
+                "estimate: %zu of %zu, worst true/estimate %.2f\n",
+                above_before, rows.size(), above_after, static_cast<unsigned long long>(refined), covered, checked, worst);
+    EXPECT_EQ(refined, above_before);
+    ASSERT_GT(checked, 10u) << "the test needs drawn rows above the target";
+    EXPECT_GT(kept, 0u);
+    // Rows whose rays' budget (64/E) ran out stay above, counted; the others now meet it.
+    EXPECT_LT(above_after, above_before) << "measuring again brought no row within the target";
+    EXPECT_GE(static_cast<double>(covered), 0.95 * static_cast<double>(checked));
+    EXPECT_LE(worst, 3.0);
+}
+
+}  // namespace
+}  // namespace ffcube

@@ -26,6 +26,7 @@
 // number of threads (each row's correction is a function of the scene and that row only).
 #pragma once
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -358,9 +359,24 @@ public:
         sampled_occluder = 3,   // 2 × 2 sub-hemicubes: an occluder beside the sender
         sampled_touching = 4,   // 4 × 4 sub-hemicubes: an occluder touching the sender
         sampled_unproven = 5,   // 2 × 2 sub-hemicubes: far pairs not proven unoccluded
+        refined = 6,            // measured again by the refiner (refine_with): its estimate was above the target
     };
     const std::vector<std::int8_t>& row_measures() const { return row_measure_; }
     const NearFieldCorrector& corrector() const { return corrector_; }
+    // Accuracy by target for an inner provider that does not refine its rows (the hemicube): a
+    // row measured by it whose tolerance estimate is above `tolerance` is measured again by
+    // `refiner`, which must refine its rows to that tolerance and say what its measuring error
+    // came to through RowStages::measured (the ray caster with RaycastOptions::tolerance); the
+    // row is then corrected as that provider's (its rays' error, no pixels, no quadrature residual).
+    // Called from the inner provider's workers, one row at a time, so the refiner must allow
+    // concurrent single-row calls on its own threads (the ray caster with one thread does).
+    // nullptr: none. The refiner must outlive this.
+    void refine_with(RowProvider* refiner, double tolerance) {
+        refiner_ = refiner;
+        refine_tolerance_ = tolerance;
+    }
+    // Rows measured again by the refiner so far.
+    std::uint64_t rows_refined() const { return rows_refined_.load(); }
     // Entries still held by the analyses of rows already handed on (0 after compute_rows: each
     // row's analysis, up to a whole row with the far field, is freed once the row is corrected).
     std::size_t retained_analysis_entries() const {
@@ -382,6 +398,9 @@ private:
     NearFieldStats stats_;
     std::vector<float> row_error_;
     std::vector<float> row_tolerance_;
+    RowProvider* refiner_ = nullptr;
+    double refine_tolerance_ = 0;
+    std::atomic<std::uint64_t> rows_refined_{0};
     std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call

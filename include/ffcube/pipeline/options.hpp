@@ -80,7 +80,9 @@ struct RowOptions {
     // Accuracy by target (--tolerance E, docs/accuracy.md): the largest error a row may keep in
     // any entry and in its sum. 0 (a RowOptions made in code): off, rows at fixed counts. The
     // command line and Python start at kDefaultTolerance; a .vs3's eps sets it when they give
-    // none (tolerance_given false). Ray-cast rows are refined to it unless --rays fixes their count.
+    // none (tolerance_given false), and then counts as given. Ray-cast rows are refined to it
+    // unless --rays fixes their count; hemicube rows above it are measured again by rays refined
+    // to it when it was given (refine_hemicube_rows, pipeline/row_source.hpp).
     double tolerance = 0;
     bool tolerance_given = false;
     // The near-field correction (accuracy/near_field.hpp) and its far field.

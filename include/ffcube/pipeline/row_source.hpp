@@ -60,12 +60,20 @@ private:
     // declared last (destroyed first).
     std::unique_ptr<HemicubeRowProvider> hemicube_;
     std::unique_ptr<RaycastRowProvider> raycast_;
+    // Hemicube rows above an asked-for tolerance, measured again by rays refined to it
+    // (refine_hemicube_rows; built on its first row: the hemicube's workers fork first).
+    std::unique_ptr<RowProvider> refiner_;
     std::unique_ptr<CorrectedRowProvider> corrected_;
     // With obstruction-only surfaces: the radiating rows, cut to the radiating columns; holds a
     // reference to the providers above, so it is declared after them.
     std::unique_ptr<LeadingRowProvider> leading_;
     double setup_seconds_ = 0;
 };
+
+// Whether hemicube rows whose estimate is above the tolerance are measured again by the ray
+// caster refined to it (CorrectedRowProvider::refine_with): a target asked for (--tolerance, a
+// .vs3's eps, Python's tolerance=), the hemicube, the near-field correction, no fixed ray count.
+bool refine_hemicube_rows(const RowOptions& o);
 
 // Validates the options (InputError) and starts the provider they name, on the scene as drawn
 // (Scene::drawn_scene(): obstruction-only surfaces included, their rows never asked for and their
