@@ -223,11 +223,14 @@ py::list cell_data_of(const PyScene& s, const py::object& values) {
     // Area-weighted mean over the patches of each cell (a cell split into several patches, or a
     // volume cell with several boundary faces); NaN for a cell with no patch.
     std::vector<double> sum(total * k, 0.0), area(total, 0.0);
+    std::vector<std::size_t> count(total, 0), last(total, 0);  // one patch: its value as it is
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint64_t e = scene.patch_elements[i];
         if (e == 0 || e > total) throw InternalError(fmt::format("patch {} has element id {} of {} cells", i, e, total));
         const double a = scene.patches[i].area;
         area[e - 1] += a;
+        ++count[e - 1];
+        last[e - 1] = i;
         for (std::size_t j = 0; j < k; ++j) sum[(e - 1) * k + j] += a * v.data()[i * k + j];
     }
     py::list out;
@@ -237,7 +240,9 @@ py::list cell_data_of(const PyScene& s, const py::object& values) {
         double* d = a.mutable_data();
         for (std::size_t c = 0; c < cells; ++c)
             for (std::size_t j = 0; j < k; ++j)
-                d[c * k + j] = area[first + c] > 0 ? sum[(first + c) * k + j] / area[first + c] : std::numeric_limits<double>::quiet_NaN();
+                d[c * k + j] = count[first + c] == 1 ? v.data()[last[first + c] * k + j]
+                               : area[first + c] > 0 ? sum[(first + c) * k + j] / area[first + c]
+                                                     : std::numeric_limits<double>::quiet_NaN();
         out.append(a);
         first += cells;
     }

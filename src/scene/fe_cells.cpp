@@ -2,8 +2,10 @@
 // guarded child and collected by the same code as a .msh file (gmsh_collector.hpp).
 #include "ffcube/scene/fe_cells.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <gmsh.h>
+#include <unistd.h>
 
 #include <array>
 #include <cmath>
@@ -101,6 +103,9 @@ void check(const FeCells& m) {
 
 // In the child: the model in Gmsh, then the faces as bytes.
 std::string build_and_collect(const FeCells& m, const FeLoadOptions& options) {
+    // Gmsh writes a line to stdout at its start, which may be ffcube's output: silence it here.
+    const int devnull = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (devnull >= 0) ::dup2(devnull, 1);
     gmsh::initialize(0, nullptr, false);
     gmsh::option::setNumber("General.Terminal", 0);
     gmsh::option::setNumber("General.NumThreads", 1);
