@@ -4,11 +4,16 @@
 //   gmsh_models OUTDIR
 //
 // writes into OUTDIR:
-//   box_41.msh box_41b.msh box_22.msh box_22b.msh box.unv box.bdf box.vtk box.step
+//   box_41.msh box_41b.msh box_22.msh box_22b.msh box.unv box.bdf box.vtk box.step box.igs
 //       the box [0,2]x[0,1]x[0,1.5] from OpenCASCADE, its six walls named physical surfaces
 //       xmin, xmax, ymin, ymax, zmin, zmax (normals out of the box, as OpenCASCADE orients them),
 //       meshed in triangles of edge at most 0.75; .msh 4.1 and 2.2, ASCII and binary (b), I-DEAS
-//       universal, Nastran bulk data, legacy VTK (no groups) and the STEP of the solid;
+//       universal, Nastran bulk data, legacy VTK (no groups) and the STEP and IGES of the solid;
+//   box_hex.msh box_prism.msh box_pyramid.msh
+//       the same box meshed in volume elements (and the boundary's surface elements): hexahedra,
+//       prisms, and tetrahedra with pyramids on the quadrangles of the bottom wall; walls named as
+//       above, the volume "solid"; box_hex_solid.msh ...: the volume elements alone (no wall groups);
+//       box_hex_o2.msh ..., box_hex_o2i.msh ...: raised to order 2, complete and incomplete;
 //   cavity.msh
 //       the cube [0,3]^3 less the cube [1,2]^3, meshed in tetrahedra (volume group "solid"),
 //       with the physical surfaces "outer" (the six outer walls) and "cavity" (the six inner);
@@ -71,6 +76,72 @@ void box() {
     gmsh::write(out + "/box.bdf");
     gmsh::write(out + "/box.vtk");
     gmsh::write(out + "/box.step");
+    gmsh::model::remove();
+}
+
+// The box of box() meshed in volume elements of one kind, its walls named as there and the
+// volume "solid": hexahedra (transfinite, recombined), prisms (a triangulated rectangle extruded
+// in 3 layers) or, from tetrahedra meeting the recombined (quadrangle) bottom wall, pyramids.
+void box_volume(const std::string& kind) {
+    gmsh::model::add("box_" + kind);
+    int volume = 0;
+    if (kind == "prism") {
+        const int r = gmsh::model::occ::addRectangle(0, 0, 0, 2, 1);
+        gmsh::vectorpair result;
+        gmsh::model::occ::extrude({{2, r}}, 0, 0, 1.5, result, {3}, {}, true);
+        for (const auto& [dim, tag] : result)
+            if (dim == 3) volume = tag;
+    } else {
+        volume = gmsh::model::occ::addBox(0, 0, 0, 2, 1, 1.5);
+    }
+    gmsh::model::occ::synchronize();
+    gmsh::vectorpair s;
+    gmsh::model::getEntities(s, 2);
+    const double hi[3] = {2, 1, 1.5};
+    const char* axes = "xyz";
+    for (int a = 0; a < 3; ++a) {
+        name_wall(s, a, 0.0, std::string(1, axes[a]) + "min");
+        name_wall(s, a, hi[a], std::string(1, axes[a]) + "max");
+    }
+    gmsh::model::setPhysicalName(3, gmsh::model::addPhysicalGroup(3, {volume}), "solid");
+    if (kind == "hex") {
+        gmsh::vectorpair curves;
+        gmsh::model::getEntities(curves, 1);
+        for (const auto& [dim, tag] : curves) gmsh::model::mesh::setTransfiniteCurve(tag, 3);
+        for (const auto& [dim, tag] : s) {
+            gmsh::model::mesh::setTransfiniteSurface(tag);
+            gmsh::model::mesh::setRecombine(2, tag);
+        }
+        gmsh::model::mesh::setTransfiniteVolume(volume);
+    } else if (kind == "pyramid") {
+        for (const auto& [dim, tag] : s) {
+            double x, y, z;
+            gmsh::model::occ::getCenterOfMass(dim, tag, x, y, z);
+            if (std::abs(z) < 1e-9) gmsh::model::mesh::setRecombine(2, tag);
+        }
+    }
+    gmsh::option::setNumber("Mesh.MeshSizeMax", 0.75);
+    gmsh::model::mesh::generate(3);
+    write("box_" + kind + ".msh", 4.1, false);
+    // Without the walls' groups Gmsh writes the volume elements only: the faces come from them.
+    gmsh::vectorpair walls;
+    gmsh::model::getPhysicalGroups(walls, 2);
+    gmsh::model::removePhysicalGroups(walls);
+    write("box_" + kind + "_solid.msh", 4.1, false);
+    // Quadratic: complete (27-node hexahedra, 18-node prisms, 14-node pyramids, 10-node
+    // tetrahedra) and incomplete (20-, 15- and 13-node), the walls named again.
+    gmsh::model::getEntities(s, 2);
+    for (int a = 0; a < 3; ++a) {
+        name_wall(s, a, 0.0, std::string(1, axes[a]) + "min");
+        name_wall(s, a, hi[a], std::string(1, axes[a]) + "max");
+    }
+    gmsh::model::mesh::setOrder(2);
+    write("box_" + kind + "_o2.msh", 4.1, false);
+    gmsh::option::setNumber("Mesh.SecondOrderIncomplete", 1);
+    gmsh::model::mesh::setOrder(1);
+    gmsh::model::mesh::setOrder(2);
+    write("box_" + kind + "_o2i.msh", 4.1, false);
+    gmsh::option::setNumber("Mesh.SecondOrderIncomplete", 0);
     gmsh::model::remove();
 }
 
@@ -137,6 +208,9 @@ int main(int argc, char** argv) {
         box();
         cavity();
         cylinder();
+        box_volume("hex");
+        box_volume("prism");
+        box_volume("pyramid");
         gmsh::finalize();
         // Out without the exit-time handlers: Debian 12's Gmsh 4.8 leaks a few kB in its mesher
         // (meshGFace) and OpenCASCADE in its STEP writer and static allocators, which

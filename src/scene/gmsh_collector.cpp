@@ -51,15 +51,60 @@ std::size_t surface_nodes(int type) {
     return 0;
 }
 
-// Volume element types: {triangular faces, quadrangular faces} per element.
-std::array<int, 2> volume_faces(int type) {
+// The faces of a volume element in Gmsh's node order (the Gmsh manual, "Node ordering"; the
+// tables of its MTetrahedron, MHexahedron, MPrism and MPyramid): corners, then one node per edge
+// (quadratic elements), then one per quadrangular face and one in the volume (complete quadratic
+// elements). ffcube reads them itself: Gmsh 4.8's getElementFaceNodes writes out of bounds for
+// prisms and returns wrong faces for pyramids beside tetrahedra (found by tests/fe).
+struct VolumeShape {
+    std::size_t corners;
+    std::vector<std::array<int, 2>> edges;
+    std::vector<std::vector<int>> faces;  // corner cycles
+    std::vector<int> centred;             // the faces that have a centre node, in the order of those nodes
+};
+
+const VolumeShape* volume_shape(int type) {
+    static const VolumeShape tet{4, {{0, 1}, {1, 2}, {2, 0}, {3, 0}, {3, 2}, {3, 1}}, {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {3, 1, 2}}, {}};
+    static const VolumeShape hex{8,
+                                 {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 5}, {2, 3}, {2, 6}, {3, 7}, {4, 5}, {4, 7}, {5, 6}, {6, 7}},
+                                 {{0, 3, 2, 1}, {0, 1, 5, 4}, {0, 4, 7, 3}, {1, 2, 6, 5}, {2, 3, 7, 6}, {4, 5, 6, 7}},
+                                 {0, 1, 2, 3, 4, 5}};
+    static const VolumeShape prism{6,
+                                   {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 4}, {2, 5}, {3, 4}, {3, 5}, {4, 5}},
+                                   {{0, 2, 1}, {3, 4, 5}, {0, 1, 4, 3}, {0, 3, 5, 2}, {1, 2, 5, 4}},
+                                   {2, 3, 4}};
+    static const VolumeShape pyramid{5,
+                                     {{0, 1}, {0, 3}, {0, 4}, {1, 2}, {1, 4}, {2, 3}, {2, 4}, {3, 4}},
+                                     {{0, 1, 4}, {3, 0, 4}, {1, 2, 4}, {2, 3, 4}, {0, 3, 2, 1}},
+                                     {4}};
     switch (type) {
-    case 4: case 11: return {4, 0};            // tetrahedra (4, 10 nodes)
-    case 5: case 12: case 17: return {0, 6};   // hexahedra (8, 27, 20)
-    case 6: case 13: case 18: return {2, 3};   // prisms (6, 18, 15)
-    case 7: case 14: case 19: return {4, 1};   // pyramids (5, 14, 13)
+    case 4: case 11: return &tet;                  // 4, 10 nodes
+    case 5: case 17: case 12: return &hex;         // 8, 20, 27
+    case 6: case 18: case 13: return &prism;       // 6, 15, 18
+    case 7: case 19: case 14: return &pyramid;     // 5, 13, 14
     }
-    return {-1, -1};
+    return nullptr;
+}
+
+// Face k of an element of `count` nodes `n`, in the order linear_pieces reads: corners, the
+// mid-side nodes of its edges in turn, its centre. Empty when `count` fits no order of the shape.
+std::vector<std::size_t> element_face(const VolumeShape& s, const std::size_t* n, std::size_t count, std::size_t k) {
+    const std::vector<int>& f = s.faces[k];
+    std::vector<std::size_t> out;
+    for (const int c : f) out.push_back(n[c]);
+    const std::size_t serendipity = s.corners + s.edges.size();
+    const std::size_t complete = serendipity + s.centred.size() + (s.corners == 8 ? 1 : 0);
+    if (count == s.corners) return out;
+    if (count != serendipity && count != complete) return {};
+    for (std::size_t i = 0; i < f.size(); ++i) {
+        const int a = f[i], b = f[(i + 1) % f.size()];
+        for (std::size_t e = 0; e < s.edges.size(); ++e)
+            if ((s.edges[e][0] == a && s.edges[e][1] == b) || (s.edges[e][0] == b && s.edges[e][1] == a)) out.push_back(n[s.corners + e]);
+    }
+    if (count == complete)
+        for (std::size_t c = 0; c < s.centred.size(); ++c)
+            if (std::size_t(s.centred[c]) == k) out.push_back(n[serendipity + c]);
+    return out;
 }
 
 std::string element_type_name(int type) {
@@ -78,8 +123,10 @@ using FaceKey = std::array<std::size_t, 4>;  // sorted corner node tags, a trian
 
 FaceKey face_key(const std::size_t* n, std::size_t corners) {
     FaceKey k{0, 0, 0, 0};
-    std::copy(n, n + corners, k.begin());
-    std::sort(k.begin(), k.begin() + corners);
+    const std::size_t m = std::min<std::size_t>(corners, 4);
+    std::copy(n, n + m, k.begin());
+    for (std::size_t i = 1; i < m; ++i)  // insertion sort of at most 4 (std::sort here draws a false -Warray-bounds)
+        for (std::size_t j = i; j > 0 && k[j - 1] > k[j]; --j) std::swap(k[j - 1], k[j]);
     return k;
 }
 
@@ -234,40 +281,37 @@ private:
         if (types.empty() || elements[0].empty()) return;
         const std::string group = options_.objects_by == FeObjectsBy::group ? group_of(3, tag, elements[0][0]) : std::string();
         for (std::size_t t = 0; t < types.size(); ++t) {
-            const std::array<int, 2> counts = volume_faces(types[t]);
-            if (counts[0] < 0)
+            const VolumeShape* shape = volume_shape(types[t]);
+            if (!shape)
                 throw InputError(fmt::format("{}: element {} is of {}, which ffcube does not read (it reads tetrahedra, hexahedra, "
                                              "prisms and pyramids of order 1 and 2)",
                                              source_, elements[t].empty() ? 0 : elements[t][0], element_type_name(types[t])));
             const std::size_t n_elements = elements[t].size();
             const std::size_t per_element = nodes[t].size() / std::max<std::size_t>(n_elements, 1);
-            for (int shape = 0; shape < 2; ++shape) {
-                const int per_elem_faces = counts[shape];
-                if (per_elem_faces == 0) continue;
-                std::vector<std::size_t> face_nodes;
-                gmsh::model::mesh::getElementFaceNodes(types[t], shape == 0 ? 3 : 4, face_nodes, tag, false);
-                const std::size_t total = n_elements * std::size_t(per_elem_faces);
-                if (total == 0 || face_nodes.size() % total != 0)
-                    throw InputError(fmt::format("{}: volume {}: Gmsh returned an inconsistent face list", source_, tag));
-                const std::size_t per_face = face_nodes.size() / total;
-                const std::size_t corners = shape == 0 ? 3 : 4;
-                for (std::size_t e = 0; e < n_elements; ++e) {
-                    const Vec3 centre = centroid(nodes[t].data() + per_element * e, per_element, elements[t][e]);
-                    for (int k = 0; k < per_elem_faces; ++k) {
-                        const std::size_t* n = face_nodes.data() + per_face * (e * std::size_t(per_elem_faces) + std::size_t(k));
-                        const FaceKey key = face_key(n, corners);
-                        const auto [it, inserted] = volume_index_.emplace(key, volume_faces_.size());
-                        if (!inserted) {
-                            ++volume_faces_[it->second].uses;
-                            continue;
-                        }
-                        PendingFace f{std::vector<std::size_t>(n, n + per_face), elements[t][e],
-                                      object_name(3, tag, elements[t][e], group)};
-                        f.uses = 1;
-                        // Out of the material: the corners' normal points away from the element's centre.
-                        f.reverse = glm::dot(newell(n, corners, elements[t][e]), centroid(n, corners, elements[t][e]) - centre) < 0.0;
-                        volume_faces_.push_back(std::move(f));
+            if (n_elements == 0 || nodes[t].size() != per_element * n_elements)
+                throw InputError(fmt::format("{}: volume {}: Gmsh returned an inconsistent element list", source_, tag));
+            for (std::size_t e = 0; e < n_elements; ++e) {
+                const std::size_t* en = nodes[t].data() + per_element * e;
+                const Vec3 centre = centroid(en, per_element, elements[t][e]);
+                for (std::size_t k = 0; k < shape->faces.size(); ++k) {
+                    std::vector<std::size_t> n = element_face(*shape, en, per_element, k);
+                    if (n.empty())
+                        throw InputError(fmt::format("{}: element {} of {} has {} nodes, which fits no order ffcube reads", source_,
+                                                     elements[t][e], element_type_name(types[t]), per_element));
+                    const std::size_t corners = shape->faces[k].size();
+                    const FaceKey key = face_key(n.data(), corners);
+                    const auto [it, inserted] = volume_index_.emplace(key, volume_faces_.size());
+                    if (!inserted) {
+                        ++volume_faces_[it->second].uses;
+                        continue;
                     }
+                    // Out of the material: the corners' normal points away from the element's centre.
+                    const bool reverse =
+                        glm::dot(newell(n.data(), corners, elements[t][e]), centroid(n.data(), corners, elements[t][e]) - centre) < 0.0;
+                    PendingFace f{std::move(n), elements[t][e], object_name(3, tag, elements[t][e], group)};
+                    f.uses = 1;
+                    f.reverse = reverse;
+                    volume_faces_.push_back(std::move(f));
                 }
             }
         }

@@ -368,6 +368,14 @@ TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
     r = run_ffcube("formfactors " + (models() / "box_41.msh") + " -q --method raycast --objects-by g");
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("apply to OBJ files"), std::string::npos) << r.output;
+    // VTK XML: not read here (Gmsh reads legacy .vtk only); the message names the Python route.
+    TempDir dir;
+    test::write_file(dir / "box.vtu", "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\"></VTKFile>\n");
+    r = run_ffcube("formfactors " + (dir / "box.vtu") + " -q --method raycast -o " + (dir / "F.ffm"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find((dir / "box.vtu") + ": VTK XML (.vtu) is not read by the command line"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("ffcube.load_scene(meshio.read("), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm"));
 }
 
 }  // namespace
