@@ -223,6 +223,67 @@ TEST(GmshCli, QuadraticCylinderComesCloserToTheCurvedValue) {
     EXPECT_LT(err[1] + noise[0] + noise[1], err[0]);
 }
 
+// The box in hexahedra, prisms, and tetrahedra with pyramids (tools/gmsh_models.cpp): the walls'
+// surface elements lie on the volume's boundary faces, which give the patches; Howell's closed
+// forms as for the surface meshes (an internal face would add a seventh object or area).
+TEST(GmshCli, HexPrismPyramidBoxesGiveTheClosedForms) {
+    for (const char* kind : {"hex", "prism", "pyramid"}) check_box(std::string("box_") + kind + ".msh");
+}
+
+// Patches of a patch table as rows; the patch count of a file read with --no-subdivide.
+std::vector<std::vector<std::string>> patch_rows(const std::string& file, const std::string& options, const TempDir& out) {
+    const auto r = run_ffcube("formfactors " + file + " --no-subdivide --method raycast -q --rays 256 " + options +
+                              " --patch-table " + (out / "t.csv") + " --groups " + (out / "g.csv"));
+    EXPECT_EQ(r.code, 0) << r.output;
+    return csv(read_text(out / "t.csv"));
+}
+
+// Every patch lies on a wall of the box: its normal is a unit axis (printed to 9 digits: 1e-8),
+// pointing out of the box (away from the centre (1, 0.5, 0.75)) or into it (`inward`); the walls'
+// areas are exact. Returns the patch count.
+std::size_t expect_box_walls(const std::vector<std::vector<std::string>>& rows, bool inward, const std::string& what) {
+    double area[3] = {0, 0, 0};
+    for (const auto& row : rows) {
+        int axis = 0;
+        double n[3], d = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            n[k] = std::stod(row.at(6 + k));
+            if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
+            d += (std::stod(row.at(3 + k)) - kBox[k] / 2) * n[k];
+        }
+        EXPECT_NEAR(std::abs(n[axis]), 1.0, 1e-8) << what << " patch " << row.at(0);
+        EXPECT_EQ(d < 0, inward) << what << " patch " << row.at(0);
+        area[axis] += std::stod(row.at(2));
+    }
+    for (int a = 0; a < 3; ++a) {
+        const double exact = 2.0 * kBox[(a + 1) % 3] * kBox[(a + 2) % 3];
+        EXPECT_NEAR(area[a], exact, kAreaPrinted * exact) << what << " axis " << a;
+    }
+    return rows.size();
+}
+
+// Volume elements alone (no surface elements in the file): their boundary faces are the patches,
+// facing out of the material, named by the volume's group; flipped into the box they close it,
+// so the group's factor to itself is 1 (every ray hits the box; float storage 1e-6). Raised to
+// order 2, each wall's pieces tile it exactly: a wrong mid-side node would overlap or flip them.
+TEST(GmshCli, VolumeElementsRadiateFromTheirBoundaryAtOrders1And2) {
+    const TempDir& m = models();
+    TempDir out;
+    for (const std::string kind : {"hex", "prism", "pyramid"}) {
+        const std::size_t linear = expect_box_walls(patch_rows(m / ("box_" + kind + ".msh"), "", out), false, kind);
+        const auto rows = patch_rows(m / ("box_" + kind + "_solid.msh"), "--flip solid", out);
+        EXPECT_EQ(expect_box_walls(rows, true, kind + " solid"), linear);
+        for (const auto& row : rows) EXPECT_EQ(row.at(1), "solid");
+        const auto g = csv(read_text(out / "g.csv"));
+        ASSERT_EQ(g.size(), 1u) << kind;
+        EXPECT_NEAR(std::stod(g[0].at(2)), 1.0, 1e-6) << kind;
+        // Complete quadratic faces split in 4 (6-node triangles, 9-node quadrangles); incomplete
+        // 8-node quadrangles in 5.
+        EXPECT_EQ(expect_box_walls(patch_rows(m / ("box_" + kind + "_o2.msh"), "", out), false, kind + " o2"), 4 * linear);
+        EXPECT_GT(expect_box_walls(patch_rows(m / ("box_" + kind + "_o2i.msh"), "", out), false, kind + " o2i"), 4 * linear - 1);
+    }
+}
+
 // A malformed file: exit 2, a message naming the file and what is wrong, no output file.
 void expect_refused(const std::string& path, const std::string& words) {
     TempDir out;
