@@ -23,6 +23,7 @@
 //       triangles whose mid-side nodes lie on the cylinder).
 #include <gmsh.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -145,6 +146,77 @@ void box_volume(const std::string& kind) {
     gmsh::model::remove();
 }
 
+// IGES, which Gmsh 4.8 does not write ("Unknown output file format"): the box's six walls as
+// untrimmed bilinear B-spline surfaces (IGES 5.3 entity 128, form 0), each parametrised so that
+// du x dv points out of the box, as OpenCASCADE orients a solid's faces. Fixed 80-column records:
+// Start, Global, Directory Entry (two lines per entity), Parameter Data, Terminate.
+void iges_box() {
+    std::vector<std::string> lines;
+    const auto record = [&](std::string text, char section, int seq) {
+        text.resize(72, ' ');
+        char tail[16];
+        std::snprintf(tail, sizeof tail, "%c%7d", section, seq);
+        lines.push_back(text + tail);
+    };
+    record("ffcube test box: six bilinear B-spline walls of [0,2]x[0,1]x[0,1.5]", 'S', 1);
+    const std::string global =
+        "1H,,1H;,4Hffcb,7Hbox.igs,6Hffcube,3H1.0,32,38,6,308,15,4Hffcb,1.0,2,2HMM,1,1.0,"
+        "15H20260101.120000,1.0E-6,10.0,6Hffcube,6Hffcube,11,0,15H20260101.120000;";
+    int g = 0;
+    for (std::size_t at = 0; at < global.size(); at += 72) record(global.substr(at, 72), 'G', ++g);
+    struct Wall {
+        double o[3], a[3], b[3];
+    };
+    const Wall walls[6] = {
+        {{0, 0, 0}, {0, 0, 1.5}, {0, 1, 0}},    // xmin: -x
+        {{2, 0, 0}, {0, 1, 0}, {0, 0, 1.5}},    // xmax: +x
+        {{0, 0, 0}, {2, 0, 0}, {0, 0, 1.5}},    // ymin: -y
+        {{0, 1, 0}, {0, 0, 1.5}, {2, 0, 0}},    // ymax: +y
+        {{0, 0, 0}, {0, 1, 0}, {2, 0, 0}},      // zmin: -z
+        {{0, 0, 1.5}, {2, 0, 0}, {0, 1, 0}},    // zmax: +z
+    };
+    std::vector<std::string> directory, parameters;
+    for (int w = 0; w < 6; ++w) {
+        const Wall& q = walls[w];
+        std::string p = "128,1,1,1,1,0,0,1,0,0,0.,0.,1.,1.,0.,0.,1.,1.,1.,1.,1.,1.";
+        const double* corners[4][2] = {{nullptr, nullptr}, {q.a, nullptr}, {q.b, nullptr}, {q.a, q.b}};
+        for (const auto& c : corners)
+            for (int k = 0; k < 3; ++k) {
+                char v[32];
+                std::snprintf(v, sizeof v, ",%.6g", q.o[k] + (c[0] ? c[0][k] : 0.0) + (c[1] ? c[1][k] : 0.0));
+                p += v;
+            }
+        p += ",0.,1.,0.,1.;";
+        const int de = 2 * w + 1, first = int(parameters.size()) + 1;
+        std::vector<std::string> chunk;
+        for (std::size_t at = 0; at < p.size();) {  // at most 64 columns, broken after a comma
+            std::size_t end = std::min(p.size(), at + 64);
+            if (end < p.size()) end = p.rfind(',', end - 1) + 1;
+            chunk.push_back(p.substr(at, end - at));
+            at = end;
+        }
+        for (const std::string& c : chunk) {
+            char ptr[96];
+            std::snprintf(ptr, sizeof ptr, "%-64s %7d", c.c_str(), de);
+            parameters.push_back(ptr);
+        }
+        char d1[80], d2[80];
+        std::snprintf(d1, sizeof d1, "%8d%8d%8d%8d%8d%8d%8d%8d%8s", 128, first, 0, 0, 0, 0, 0, 0, "00000000");
+        std::snprintf(d2, sizeof d2, "%8d%8d%8d%8zu%8d%8s%8s%8s%8d", 128, 0, 0, chunk.size(), 0, "", "", "", 0);
+        directory.push_back(d1);
+        directory.push_back(d2);
+    }
+    for (std::size_t i = 0; i < directory.size(); ++i) record(directory[i], 'D', int(i) + 1);
+    for (std::size_t i = 0; i < parameters.size(); ++i) record(parameters[i], 'P', int(i) + 1);
+    char t[80];
+    std::snprintf(t, sizeof t, "S%7dG%7dD%7zuP%7zu", 1, g, directory.size(), parameters.size());
+    record(t, 'T', 1);
+    FILE* f = std::fopen((out + "/box.igs").c_str(), "w");
+    if (!f) throw std::string("cannot write box.igs");
+    for (const std::string& l : lines) std::fprintf(f, "%s\n", l.c_str());
+    std::fclose(f);
+}
+
 void cavity() {
     gmsh::model::add("cavity");
     const int outer = gmsh::model::occ::addBox(0, 0, 0, 3, 3, 3);
@@ -206,6 +278,7 @@ int main(int argc, char** argv) {
         // The size of the points OpenCASCADE makes would override Mesh.MeshSizeMax.
         gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
         box();
+        iges_box();
         cavity();
         cylinder();
         box_volume("hex");

@@ -133,6 +133,8 @@ TEST(GmshCli, BoxMsh22Binary) { check_box("box_22b.msh"); }
 TEST(GmshCli, BoxUnv) { check_box("box.unv"); }
 TEST(GmshCli, BoxNastran) { check_box("box.bdf"); }
 TEST(GmshCli, BoxStepMeshedByGmsh) { check_box("box.step"); }
+// IGES B-spline walls (written by gmsh_models itself: Gmsh 4.8 writes no IGES), read by OpenCASCADE and meshed by Gmsh.
+TEST(GmshCli, BoxIgesMeshedByGmsh) { check_box("box.igs"); }
 
 TEST(GmshCli, GroupNamesAndIdsOfFormats) {
     const TempDir& m = models();
