@@ -420,6 +420,56 @@ namespace ffcube {
 namespace {
 
 // The mesh options name what they apply to when given for another format.
+// ffcube radiate on the box, walls flipped in: the floor (zmin) at 400 K with emissivity 0.5, the
+// other walls black at 300 K. The floor sees only black walls (F to itself is 0: it is flat), so
+// its irradiation is sigma 300^4 times its row sum and its net flux leaving is exactly
+// q = 0.5 sigma (400^4 - 300^4) whatever F is, as long as rows sum to 1 (a closed box); a black
+// wall's radiosity is sigma 300^4. The per-patch file and the .vtu carry each element's id.
+TEST(GmshCli, RadiateWritesHeatFluxOntoTheElements) {
+    const TempDir& m = models();
+    TempDir out;
+    test::write_file(out / "s.csv", "object,emissivity,temperature,heat_flux\nzmin,0.5,400,\n");
+    // Few rays: the floor's flux does not depend on F's accuracy, only on its rows summing to 1.
+    const auto r = run_ffcube("radiate " + (m / "box_41.msh") + " --no-subdivide --method raycast --rays 1024 -q --flip " +
+                              "xmin,xmax,ymin,ymax,zmin,zmax --surfaces " + (out / "s.csv") + " --default-surface 1,300 " +
+                              "--patch-out " + (out / "p.csv") + " --fields " + (out / "f.vtu"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    constexpr double sigma = 5.670374419e-8;
+    const double q_floor = 0.5 * sigma * (std::pow(400.0, 4) - std::pow(300.0, 4));
+    const double black = sigma * std::pow(300.0, 4);
+    // The floor's error: (1 - 0.5) sigma 300^4 |1 - row sum|, the row sum within 1e-6 of 1 (every
+    // ray hits the closed box; float storage of F), plus the 10 printed digits (5e-10 relative).
+    const double tol = 0.5 * black * 1e-6 + 5e-10 * q_floor;
+    std::map<long, double> flux;
+    std::size_t floor_patches = 0;
+    for (const auto& row : csv(read_text(out / "p.csv"))) {
+        ASSERT_EQ(row.size(), 8u);  // patch,object,area,temperature,heat_flux,radiosity,irradiation,element_id
+        const double q = std::stod(row.at(4)), j = std::stod(row.at(5));
+        if (row.at(1) == "zmin") {
+            EXPECT_NEAR(q, q_floor, tol) << "patch " << row.at(0);
+            ++floor_patches;
+        } else {
+            EXPECT_NEAR(j, black, 5e-10 * black) << "patch " << row.at(0);
+        }
+        EXPECT_TRUE(flux.emplace(std::stol(row.at(7)), q).second) << "element " << row.at(7) << " twice";
+    }
+    EXPECT_GT(floor_patches, 5u);
+    // meshio reads the .vtu: each element's heat flux as the patch table has it (17 digits there, 10 here).
+    const std::string script = "import meshio,sys\nm=meshio.read(sys.argv[1])\nd=m.cell_data\n"
+                               "for i,q in zip(d['element_id'][0],d['heat_flux'][0]): print(int(i),repr(float(q)))\n";
+    test::write_file(out / "read.py", script);
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + (out / "read.py") + " " + (out / "f.vtu") + " > " + (out / "v.txt")).c_str()), 0);
+    std::istringstream v(read_text(out / "v.txt"));
+    std::size_t cells = 0;
+    for (long id; v >> id; ++cells) {
+        double q = 0.0;
+        v >> q;
+        ASSERT_EQ(flux.count(id), 1u) << "element " << id;
+        EXPECT_NEAR(q, flux[id], 5e-10 * std::abs(q_floor)) << "element " << id;
+    }
+    EXPECT_EQ(cells, flux.size());
+}
+
 TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
     const std::string obj = test::example("cube.obj");
     auto r = run_ffcube("formfactors " + obj + " -q --method raycast --flip a");
