@@ -53,8 +53,11 @@ std::string cli_name(const std::string& keyword) {
 std::string path_argument(const py::object& what, const char* function) {
     if (what.is_none()) return {};
     if (!is_pathlike(what))
-        throw py::type_error(fmt::format("{}(): the scene must be a Scene, a path (str or os.PathLike) or None, not {}",
-                                         function, std::string(py::str(what.get_type().attr("__name__")))));
+        throw py::type_error(fmt::format("{}(): the scene must be a Scene, a path (str or os.PathLike) or None, not {}{}",
+                                         function, std::string(py::str(what.get_type().attr("__name__"))),
+                                         py::hasattr(what, "points") && py::hasattr(what, "cells")
+                                             ? " (a meshio.Mesh: make it a Scene with load_scene(mesh) first)"
+                                             : ""));
     std::string path = fspath(what);
     if (path.empty()) throw InputError(fmt::format("{}(): the scene path is empty (None means the built-in Cornell box)", function));
     return path;

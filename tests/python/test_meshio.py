@@ -212,6 +212,8 @@ class Meshio(unittest.TestCase):
         refused(meshio.Mesh(pts, [("line", np.array([[0, 1]]))]), "no surface or volume elements")
         with self.assertRaises(ffcube.InputError):
             ffcube.load_scene(os.path.join(models(), "box_41.msh"), objects_by="field:mat", quiet=True)
+        with self.assertRaisesRegex(TypeError, r"load_scene\(mesh\) first"):
+            ffcube.form_factors(meshio.Mesh(pts, [("triangle", tri)]))
 
 
 if __name__ == "__main__":
