@@ -189,6 +189,13 @@ class Meshio(unittest.TestCase):
         pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
         tri = np.array([[0, 1, 2], [0, 2, 3]])
 
+        # Planar points (n x 2) lie at z = 0; with no groups the block is one object. The two
+        # triangles tile the unit square: areas 0.5 each, exact in binary.
+        flat = ffcube.load_scene(meshio.Mesh(pts[:, :2], [("triangle", tri)]), no_subdivide=True, quiet=True)
+        self.assertEqual((len(flat), flat.objects), (2, ["surface_1"]))
+        self.assertEqual(list(flat.areas), [0.5, 0.5])
+        np.testing.assert_array_equal(flat.normals[:, 2], 1.0)
+
         def refused(mesh, *words, **options):
             with self.assertRaises(ffcube.InputError) as e:
                 ffcube.load_scene(mesh, quiet=True, **options)
