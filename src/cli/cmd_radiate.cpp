@@ -19,6 +19,7 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/ply.hpp"
+#include "ffcube/io/vtu.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
@@ -34,7 +35,7 @@ constexpr const char* kSkyNode = "(sky)";
 struct Options {
     SceneFlags scene;
     RowOptions rows;
-    std::string surfaces, bands, matrix, out, patch_out, conductances, default_surface, report, mesh;
+    std::string surfaces, bands, matrix, out, patch_out, conductances, default_surface, report, mesh, fields;
     double sky_temperature = 0.0;
     CLI::Option* sky_option = nullptr;
     double conductance_threshold = 1e-6;
@@ -115,13 +116,17 @@ void write_objects(const std::string& path, const Scene& scene, std::span<const 
     });
 }
 
+// A mesh read through Gmsh or meshio adds the element each patch comes from (Scene::patch_elements).
 void write_patches(const std::string& path, const Scene& scene, const RadiateResult& r) {
+    const bool ids = scene.patch_elements.size() == scene.size();
     write_file_atomically(path, [&](std::ostream& os) {
-        os << "patch,object,area,temperature,heat_flux,radiosity,irradiation\n";
+        os << "patch,object,area,temperature,heat_flux,radiosity,irradiation" << (ids ? ",element_id\n" : "\n");
         for (std::size_t i = 0; i < scene.size(); ++i) {
             const Patch& p = scene.patches[i];
             os << i << ',' << csv_field(scene.objects[p.object]) << ',' << num(p.area) << ',' << num(r.temperature[i])
-               << ',' << num(r.heat_flux[i]) << ',' << num(r.radiosity[i]) << ',' << num(r.irradiation[i]) << '\n';
+               << ',' << num(r.heat_flux[i]) << ',' << num(r.radiosity[i]) << ',' << num(r.irradiation[i]);
+            if (ids) os << ',' << scene.patch_elements[i];
+            os << '\n';
         }
     });
 }
@@ -188,10 +193,12 @@ int run(const Options& o) {
     Stopwatch total;
     for (const auto& [option, path] : {std::pair{"-o", &o.out}, {"--patch-out", &o.patch_out},
                                        {"--conductances", &o.conductances}, {"--report", &o.report},
-                                       {"--mesh", &o.mesh}})
+                                       {"--mesh", &o.mesh}, {"--fields", &o.fields}})
         check_output_path(option, *path);
     if (!o.mesh.empty() && !o.mesh.ends_with(".ply"))
         throw InputError(fmt::format("--mesh {}: the name must end in .ply", o.mesh));
+    if (!o.fields.empty() && !o.fields.ends_with(".vtu"))
+        throw InputError(fmt::format("--fields {}: the name must end in .vtu", o.fields));
     if (!(o.conductance_threshold >= 0.0 && o.conductance_threshold < 1.0))
         throw InputError(fmt::format("--conductance-threshold {}: must be in [0, 1)", o.conductance_threshold));
     if (mpi_distributed()) throw InputError("ffcube radiate runs in one process; run it without mpirun");
@@ -364,6 +371,12 @@ int run(const Options& o) {
     if (!o.out.empty()) write_objects(o.out, scene, object_spec, r);
     if (!o.patch_out.empty()) write_patches(o.patch_out, scene, r);
     if (!o.mesh.empty()) report.set("mesh.heat_flux_max", write_heat_flux_mesh(o.mesh, scene, r));
+    if (!o.fields.empty()) {
+        write_fields_vtu(o.fields, scene,
+                         {{"temperature", r.temperature}, {"heat_flux", r.heat_flux}, {"radiosity", r.radiosity},
+                          {"irradiation", r.irradiation}, {"sky_view_factor", r.sky_view}});
+        report.set("fields.written", o.fields);
+    }
     if (g) {
         const auto [written, dropped] = write_conductances(o.conductances, scene, *g, o.conductance_threshold);
         report.set("conductances.written", written);
@@ -396,6 +409,9 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
                     "write per patch: patch,object,area,temperature,heat_flux,radiosity,irradiation");
     sub->add_option("--mesh", opts->mesh, "write the mesh coloured by net heat flux as OUT.ply (white 0, red out, blue in)");
     sub->add_option("--conductances", opts->conductances, "write Gebhart conductances between objects: from,to,GR (m^2)");
+    expert(sub->add_option("--fields", opts->fields,
+                           "write the meshed scene with per-patch temperature, heat_flux, radiosity, irradiation, "
+                           "sky_view_factor (and element_id) as a VTK .vtu for ParaView (docs/fe-meshes.md)"));
     sub->add_option("--report", opts->report, "write a JSON report (energy balance, solver, timings)");
     expert(sub->add_option("--conductance-threshold", opts->conductance_threshold,
                            "drop conductances below this fraction of the largest")

@@ -22,11 +22,24 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
     ImportedMaterials imported;  // filled by the assimp reader
     ObjLoadOptions load;
     load.objects_by = o.objects_by;
-    load.fe.objects_by = o.fe_objects_by;
-    load.fe.flip = o.flip;
-    load.fe.cad_mesh_size = o.max_patch_edge;
-    load.fe.cad_patches = o.patches;
+    load.fe = fe_load_options(o);
     ObjModel model = o.path.empty() ? load_cornell_box() : load_model(o.path, o.format, load, &imported);
+    const SceneFormat format = o.path.empty() ? SceneFormat::Obj : o.format == SceneFormat::Auto ? format_for_path(o.path) : o.format;
+    return mesh_model(std::move(model), o, report, to_string(format), watch.seconds(), imported);
+}
+
+FeLoadOptions fe_load_options(const SceneOptions& o) {
+    FeLoadOptions fe;
+    fe.objects_by = o.fe_objects_by;
+    fe.flip = o.flip;
+    fe.cad_mesh_size = o.max_patch_edge;
+    fe.cad_patches = o.patches;
+    return fe;
+}
+
+Scene mesh_model(ObjModel model, const SceneOptions& o, Report& report, std::string_view format, double read_seconds,
+                 const ImportedMaterials& imported) {
+    Stopwatch watch;
     if (!o.materials.empty()) apply_material_map_file(model, o.materials);
     for (const auto& w : model.warnings) log_warning(w);
     // Far from its origin the scene is meshed around its own centre (outputs add scene.origin
@@ -47,7 +60,7 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
         else
             info("contact cuts ({}): no object stands on another, nothing cut", to_string(o.contact_cuts));
     }
-    const double load_s = watch.seconds();
+    const double load_s = read_seconds + watch.seconds();
     watch.restart();
     MeshOptions mo;
     mo.max_patch_edge = o.max_patch_edge;
@@ -89,8 +102,7 @@ Scene load_and_mesh(const SceneOptions& o, Report& report) {
         report.set("meshing.contact_cuts.covered_area", cuts->covered_area);
         report.set("meshing.contact_cuts.skipped", cuts->skipped);
     }
-    const SceneFormat format = o.path.empty() ? SceneFormat::Obj : o.format == SceneFormat::Auto ? format_for_path(o.path) : o.format;
-    report.set("loading.format", to_string(format));
+    report.set("loading.format", std::string(format));
     report.set("loading.dropped_degenerate", model.dropped_degenerate);
     report.set("loading.merged_vertices", model.merged_vertices);
     report.set("loading.duplicates_removed", defects.duplicates_removed);

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <climits>
 #include <cmath>
 #include <cstdint>
@@ -16,7 +17,8 @@ namespace py = pybind11;
 namespace ffcube::python {
 namespace {
 
-constexpr const char* kSceneKeywords[] = {"max_patch_edge", "patches", "format", "materials", "no_subdivide", "objects_by", "contact_cuts"};
+constexpr const char* kSceneKeywords[] = {"max_patch_edge", "patches", "format", "materials", "no_subdivide", "objects_by", "flip",
+                                          "contact_cuts"};
 
 // bool or numpy.bool_ (told by its type's name, so that no call imports numpy: an import can
 // start threads, and a process with threads gets thread workers instead of forked ones).
@@ -51,8 +53,11 @@ std::string cli_name(const std::string& keyword) {
 std::string path_argument(const py::object& what, const char* function) {
     if (what.is_none()) return {};
     if (!is_pathlike(what))
-        throw py::type_error(fmt::format("{}(): the scene must be a Scene, a path (str or os.PathLike) or None, not {}",
-                                         function, std::string(py::str(what.get_type().attr("__name__")))));
+        throw py::type_error(fmt::format("{}(): the scene must be a Scene, a path (str or os.PathLike) or None, not {}{}",
+                                         function, std::string(py::str(what.get_type().attr("__name__"))),
+                                         py::hasattr(what, "points") && py::hasattr(what, "cells")
+                                             ? " (a meshio.Mesh: make it a Scene with load_scene(mesh) first)"
+                                             : ""));
     std::string path = fspath(what);
     if (path.empty()) throw InputError(fmt::format("{}(): the scene path is empty (None means the built-in Cornell box)", function));
     return path;
@@ -118,7 +123,7 @@ bool Kwargs::flag(const std::string& name, bool fallback) {
     return v.is_none() ? fallback : boolean(name, v);
 }
 
-void Kwargs::read_scene_options(SceneOptions& o) {
+void Kwargs::read_scene_options(SceneOptions& o, std::string* field) {
     if (py::object v = take("max_patch_edge"); !v.is_none()) {
         o.max_patch_edge = number("max_patch_edge", v);
         // The command line refuses 0 (CLI::PositiveNumber); 0 here would silently mean the default.
@@ -133,7 +138,36 @@ void Kwargs::read_scene_options(SceneOptions& o) {
         o.materials = fspath(v);
     }
     if (py::object v = take("no_subdivide"); !v.is_none()) o.subdivide = !boolean("no_subdivide", v);
-    if (py::object v = take("objects_by"); !v.is_none()) o.objects_by = parse_objects_by(word("objects_by", v));
+    if (py::object v = take("objects_by"); !v.is_none()) {
+        const std::string w = word("objects_by", v);
+        if (w == "group" || w == "entity" || w == "element")  // a mesh read through Gmsh, as --objects-by
+            o.fe_objects_by = w == "group" ? FeObjectsBy::group : w == "entity" ? FeObjectsBy::entity : FeObjectsBy::element;
+        else if (w.starts_with("field:") && field && w.size() > 6)
+            *field = w.substr(6);
+        else if (w.starts_with("field:"))
+            throw InputError(fmt::format("objects_by='{}': field:NAME names an integer cell-data array of a meshio.Mesh "
+                                         "(load_scene(mesh, objects_by='field:NAME')); a file takes auto, o, g, material, group, "
+                                         "entity or element",
+                                         w));
+        else
+            o.objects_by = parse_objects_by(w);
+    }
+    if (py::object v = take("flip"); !v.is_none()) {
+        // A list of names, or one string of names separated by commas (as --flip a,b).
+        if (py::isinstance<py::str>(v)) {
+            const std::string all = v.cast<std::string>();
+            for (std::size_t at = 0; at <= all.size();) {
+                const std::size_t comma = std::min(all.find(',', at), all.size());
+                if (comma > at) o.flip.push_back(all.substr(at, comma - at));
+                at = comma + 1;
+            }
+        } else if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
+            for (const py::handle item : v) o.flip.push_back(word("flip", py::reinterpret_borrow<py::object>(item)));
+        } else {
+            throw py::type_error(fmt::format("{}(): flip must be a str or a list of str, not {}", function_,
+                                             std::string(py::str(v.get_type().attr("__name__")))));
+        }
+    }
     if (py::object v = take("contact_cuts"); !v.is_none()) o.contact_cuts = parse_contact_cuts(word("contact_cuts", v));
     validate(o);
 }

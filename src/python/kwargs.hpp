@@ -22,8 +22,10 @@ class Kwargs {
 public:
     Kwargs(const pybind11::kwargs& kwargs, std::string function);
 
-    // path's siblings: max_patch_edge, patches, format, materials, no_subdivide, objects_by.
-    void read_scene_options(SceneOptions& o);
+    // path's siblings: max_patch_edge, patches, format, materials, no_subdivide, objects_by, flip.
+    // objects_by="field:NAME" (a meshio.Mesh's integer cell-data array) is stored in *field when
+    // given, else refused.
+    void read_scene_options(SceneOptions& o, std::string* field = nullptr);
     // The first of those present, or "" (they are refused beside a Scene object).
     std::string scene_option_given() const;
     // method, resolution, backend, threads, rotate / no_rotate, seed, rays, correct, near_k,

@@ -169,6 +169,18 @@ PYBIND11_MODULE(ffcube, m) {
         .def_property_readonly("fingerprint", [](const PyScene& s) { return fmt::format("{:016x}", s.scene->fingerprint); })
         .def_property_readonly("report", [](const PyScene& s) { return json_loads(s.load_report); },
                                "loading and meshing figures, as in the command line's --report")
+        .def_property_readonly("element_ids",
+                               [](const PyScene& s) -> py::object {
+                                   if (s.scene->patch_elements.size() != s.scene->size()) return py::none();
+                                   return vector_array<std::uint64_t>(s.scene->size(),
+                                                                      [&](std::size_t i) { return s.scene->patch_elements[i]; });
+                               },
+                               "the mesh element each patch comes from (uint64, n), for meshes read through Gmsh or meshio; "
+                               "from a meshio.Mesh, 1 + the cell's index counted over mesh.cells in order; None otherwise")
+        .def("cell_data", &cell_data_of, py::arg("values"),
+             "cell_data(values) -> list of arrays, one per block of the meshio.Mesh this scene was loaded from, for "
+             "mesh.cell_data[name]: values (one row per patch, shape (n,) or (n, k)) averaged over each cell's patches by "
+             "area; NaN for a cell with no patch (lines, vertices, volume cells off the boundary)")
         .def("__repr__", [](const PyScene& s) {
             return fmt::format("<ffcube.Scene {}: {} patches, {} objects>", s.scene->source, s.scene->size(),
                                s.scene->objects.size());
@@ -178,6 +190,7 @@ PYBIND11_MODULE(ffcube, m) {
         "load_scene",
         [](const py::object& path, const py::kwargs& kwargs) {
             Kwargs kw(kwargs, "load_scene");
+            if (is_meshio_mesh(path)) return load_meshio(path, kw);
             SceneOptions options;
             options.path = path_argument(path, "load_scene");
             kw.read_scene_options(options);
@@ -186,8 +199,9 @@ PYBIND11_MODULE(ffcube, m) {
             return load(options, quiet);
         },
         py::arg("path") = py::none(),
-        "load_scene(path=None, **mesh_options) -> Scene. path: a scene file (OBJ, STL, .vs3, PLY, glTF ...), None: "
-        "the built-in Cornell box. Options: max_patch_edge, patches, format, materials, no_subdivide, objects_by, quiet.");
+        "load_scene(path=None, **mesh_options) -> Scene. path: a scene file (OBJ, STL, .vs3, PLY, glTF, .msh ...), a "
+        "meshio.Mesh (docs/fe-meshes.md), None: the built-in Cornell box. Options: max_patch_edge, patches, format, "
+        "materials, no_subdivide, objects_by (a meshio.Mesh also 'field:NAME'), flip, quiet.");
     m.def("form_factors", &form_factors, py::arg("scene_or_path") = py::none(),
           "form_factors(scene_or_path=None, **options) -> scipy.sparse.csr_matrix (float32): F[i, j] = fraction of "
           "the energy leaving patch i that arrives at patch j; the rows `ffcube formfactors` writes for the same "

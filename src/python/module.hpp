@@ -9,6 +9,7 @@
 
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "ffcube/core/log.hpp"
 #include "ffcube/io/report.hpp"
@@ -23,6 +24,9 @@ namespace py = pybind11;
 struct PyScene {
     std::shared_ptr<const Scene> scene;
     std::string load_report;  // the JSON of load_and_mesh's figures (scene, patches, meshing.*, time.*)
+    // Loaded from a meshio.Mesh: the number of cells of each of its blocks (Scene.cell_data maps
+    // patches back to them); empty otherwise.
+    std::vector<std::size_t> mesh_blocks;
 };
 
 // set_log_level for the duration of one call (quiet=True: warnings and errors only).
@@ -103,6 +107,12 @@ inline py::array_t<double> vec3_array(std::size_t n, auto&& value) {
     }
     return a;
 }
+
+// meshio (meshio.cpp): whether `what` is a meshio.Mesh (points and cells); load_scene of one;
+// Scene.cell_data: per-patch values as a list of per-cell arrays, one per block of the mesh.
+bool is_meshio_mesh(const py::object& what);
+PyScene load_meshio(const py::object& mesh, Kwargs& kw);
+py::list cell_data_of(const PyScene& s, const py::object& values);
 
 // Registers radiate() and the Radiation class (radiate.cpp).
 void add_radiate(py::module_& m);

@@ -55,7 +55,19 @@ SceneFormat format_for_path(const std::filesystem::path& path) {
 
 ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const ObjLoadOptions& obj,
                     ImportedMaterials* materials) {
-    if (format == SceneFormat::Auto) format = format_for_path(path);
+    if (format == SceneFormat::Auto) {
+        std::string ext = path.extension().string();
+        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        // Gmsh 4.8 reads legacy .vtk only, and without its cell data; meshio reads VTK XML and its
+        // arrays, so the route is Python's (docs/fe-meshes.md, "From Python and meshio").
+        if (ext == ".vtu" || ext == ".pvtu" || ext == ".vtp")
+            throw InputError(fmt::format("{}: VTK XML ({}) is not read by the command line (Gmsh reads legacy .vtk only, without "
+                                         "its cell data); in Python, ffcube.load_scene(meshio.read(\"{}\"), "
+                                         "objects_by=\"field:NAME\") reads it with an integer cell array NAME as the groups "
+                                         "(docs/fe-meshes.md)",
+                                         path.string(), ext, path.string()));
+        format = format_for_path(path);
+    }
     if (format != SceneFormat::Gmsh && !obj.fe.flip.empty())
         throw InputError(fmt::format("{}: --flip {}: --flip reverses groups of a mesh read through Gmsh (.msh, .unv, .bdf, .nas, "
                                      ".vtk, .step, .iges); this file is read as {}",

@@ -133,6 +133,8 @@ TEST(GmshCli, BoxMsh22Binary) { check_box("box_22b.msh"); }
 TEST(GmshCli, BoxUnv) { check_box("box.unv"); }
 TEST(GmshCli, BoxNastran) { check_box("box.bdf"); }
 TEST(GmshCli, BoxStepMeshedByGmsh) { check_box("box.step"); }
+// IGES B-spline walls (written by gmsh_models itself: Gmsh 4.8 writes no IGES), read by OpenCASCADE and meshed by Gmsh.
+TEST(GmshCli, BoxIgesMeshedByGmsh) { check_box("box.igs"); }
 
 TEST(GmshCli, GroupNamesAndIdsOfFormats) {
     const TempDir& m = models();
@@ -221,6 +223,67 @@ TEST(GmshCli, QuadraticCylinderComesCloserToTheCurvedValue) {
     // only when its geometry is truly farther from the cylinder.
     std::printf("noise bounds: linear %.2e, quadratic %.2e\n", noise[0], noise[1]);
     EXPECT_LT(err[1] + noise[0] + noise[1], err[0]);
+}
+
+// The box in hexahedra, prisms, and tetrahedra with pyramids (tools/gmsh_models.cpp): the walls'
+// surface elements lie on the volume's boundary faces, which give the patches; Howell's closed
+// forms as for the surface meshes (an internal face would add a seventh object or area).
+TEST(GmshCli, HexPrismPyramidBoxesGiveTheClosedForms) {
+    for (const char* kind : {"hex", "prism", "pyramid"}) check_box(std::string("box_") + kind + ".msh");
+}
+
+// Patches of a patch table as rows; the patch count of a file read with --no-subdivide.
+std::vector<std::vector<std::string>> patch_rows(const std::string& file, const std::string& options, const TempDir& out) {
+    const auto r = run_ffcube("formfactors " + file + " --no-subdivide --method raycast -q --rays 256 " + options +
+                              " --patch-table " + (out / "t.csv") + " --groups " + (out / "g.csv"));
+    EXPECT_EQ(r.code, 0) << r.output;
+    return csv(read_text(out / "t.csv"));
+}
+
+// Every patch lies on a wall of the box: its normal is a unit axis (printed to 9 digits: 1e-8),
+// pointing out of the box (away from the centre (1, 0.5, 0.75)) or into it (`inward`); the walls'
+// areas are exact. Returns the patch count.
+std::size_t expect_box_walls(const std::vector<std::vector<std::string>>& rows, bool inward, const std::string& what) {
+    double area[3] = {0, 0, 0};
+    for (const auto& row : rows) {
+        int axis = 0;
+        double n[3], d = 0.0;
+        for (int k = 0; k < 3; ++k) {
+            n[k] = std::stod(row.at(6 + k));
+            if (std::abs(n[k]) > std::abs(n[axis])) axis = k;
+            d += (std::stod(row.at(3 + k)) - kBox[k] / 2) * n[k];
+        }
+        EXPECT_NEAR(std::abs(n[axis]), 1.0, 1e-8) << what << " patch " << row.at(0);
+        EXPECT_EQ(d < 0, inward) << what << " patch " << row.at(0);
+        area[axis] += std::stod(row.at(2));
+    }
+    for (int a = 0; a < 3; ++a) {
+        const double exact = 2.0 * kBox[(a + 1) % 3] * kBox[(a + 2) % 3];
+        EXPECT_NEAR(area[a], exact, kAreaPrinted * exact) << what << " axis " << a;
+    }
+    return rows.size();
+}
+
+// Volume elements alone (no surface elements in the file): their boundary faces are the patches,
+// facing out of the material, named by the volume's group; flipped into the box they close it,
+// so the group's factor to itself is 1 (every ray hits the box; float storage 1e-6). Raised to
+// order 2, each wall's pieces tile it exactly: a wrong mid-side node would overlap or flip them.
+TEST(GmshCli, VolumeElementsRadiateFromTheirBoundaryAtOrders1And2) {
+    const TempDir& m = models();
+    TempDir out;
+    for (const std::string kind : {"hex", "prism", "pyramid"}) {
+        const std::size_t linear = expect_box_walls(patch_rows(m / ("box_" + kind + ".msh"), "", out), false, kind);
+        const auto rows = patch_rows(m / ("box_" + kind + "_solid.msh"), "--flip solid", out);
+        EXPECT_EQ(expect_box_walls(rows, true, kind + " solid"), linear);
+        for (const auto& row : rows) EXPECT_EQ(row.at(1), "solid");
+        const auto g = csv(read_text(out / "g.csv"));
+        ASSERT_EQ(g.size(), 1u) << kind;
+        EXPECT_NEAR(std::stod(g[0].at(2)), 1.0, 1e-6) << kind;
+        // Complete quadratic faces split in 4 (6-node triangles, 9-node quadrangles); incomplete
+        // 8-node quadrangles in 5.
+        EXPECT_EQ(expect_box_walls(patch_rows(m / ("box_" + kind + "_o2.msh"), "", out), false, kind + " o2"), 4 * linear);
+        EXPECT_GT(expect_box_walls(patch_rows(m / ("box_" + kind + "_o2i.msh"), "", out), false, kind + " o2i"), 4 * linear - 1);
+    }
 }
 
 // A malformed file: exit 2, a message naming the file and what is wrong, no output file.
@@ -357,6 +420,56 @@ namespace ffcube {
 namespace {
 
 // The mesh options name what they apply to when given for another format.
+// ffcube radiate on the box, walls flipped in: the floor (zmin) at 400 K with emissivity 0.5, the
+// other walls black at 300 K. The floor sees only black walls (F to itself is 0: it is flat), so
+// its irradiation is sigma 300^4 times its row sum and its net flux leaving is exactly
+// q = 0.5 sigma (400^4 - 300^4) whatever F is, as long as rows sum to 1 (a closed box); a black
+// wall's radiosity is sigma 300^4. The per-patch file and the .vtu carry each element's id.
+TEST(GmshCli, RadiateWritesHeatFluxOntoTheElements) {
+    const TempDir& m = models();
+    TempDir out;
+    test::write_file(out / "s.csv", "object,emissivity,temperature,heat_flux\nzmin,0.5,400,\n");
+    // Few rays: the floor's flux does not depend on F's accuracy, only on its rows summing to 1.
+    const auto r = run_ffcube("radiate " + (m / "box_41.msh") + " --no-subdivide --method raycast --rays 1024 -q --flip " +
+                              "xmin,xmax,ymin,ymax,zmin,zmax --surfaces " + (out / "s.csv") + " --default-surface 1,300 " +
+                              "--patch-out " + (out / "p.csv") + " --fields " + (out / "f.vtu"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    constexpr double sigma = 5.670374419e-8;
+    const double q_floor = 0.5 * sigma * (std::pow(400.0, 4) - std::pow(300.0, 4));
+    const double black = sigma * std::pow(300.0, 4);
+    // The floor's error: (1 - 0.5) sigma 300^4 |1 - row sum|, the row sum within 1e-6 of 1 (every
+    // ray hits the closed box; float storage of F), plus the 10 printed digits (5e-10 relative).
+    const double tol = 0.5 * black * 1e-6 + 5e-10 * q_floor;
+    std::map<long, double> flux;
+    std::size_t floor_patches = 0;
+    for (const auto& row : csv(read_text(out / "p.csv"))) {
+        ASSERT_EQ(row.size(), 8u);  // patch,object,area,temperature,heat_flux,radiosity,irradiation,element_id
+        const double q = std::stod(row.at(4)), j = std::stod(row.at(5));
+        if (row.at(1) == "zmin") {
+            EXPECT_NEAR(q, q_floor, tol) << "patch " << row.at(0);
+            ++floor_patches;
+        } else {
+            EXPECT_NEAR(j, black, 5e-10 * black) << "patch " << row.at(0);
+        }
+        EXPECT_TRUE(flux.emplace(std::stol(row.at(7)), q).second) << "element " << row.at(7) << " twice";
+    }
+    EXPECT_GT(floor_patches, 5u);
+    // meshio reads the .vtu: each element's heat flux as the patch table has it (17 digits there, 10 here).
+    const std::string script = "import meshio,sys\nm=meshio.read(sys.argv[1])\nd=m.cell_data\n"
+                               "for i,q in zip(d['element_id'][0],d['heat_flux'][0]): print(int(i),repr(float(q)))\n";
+    test::write_file(out / "read.py", script);
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + (out / "read.py") + " " + (out / "f.vtu") + " > " + (out / "v.txt")).c_str()), 0);
+    std::istringstream v(read_text(out / "v.txt"));
+    std::size_t cells = 0;
+    for (long id; v >> id; ++cells) {
+        double q = 0.0;
+        v >> q;
+        ASSERT_EQ(flux.count(id), 1u) << "element " << id;
+        EXPECT_NEAR(q, flux[id], 5e-10 * std::abs(q_floor)) << "element " << id;
+    }
+    EXPECT_EQ(cells, flux.size());
+}
+
 TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
     const std::string obj = test::example("cube.obj");
     auto r = run_ffcube("formfactors " + obj + " -q --method raycast --flip a");
@@ -368,6 +481,14 @@ TEST(GmshCli, MeshOptionsOnOtherFormatsAreRefused) {
     r = run_ffcube("formfactors " + (models() / "box_41.msh") + " -q --method raycast --objects-by g");
     EXPECT_EQ(r.code, 2) << r.output;
     EXPECT_NE(r.output.find("apply to OBJ files"), std::string::npos) << r.output;
+    // VTK XML: not read here (Gmsh reads legacy .vtk only); the message names the Python route.
+    TempDir dir;
+    test::write_file(dir / "box.vtu", "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\"></VTKFile>\n");
+    r = run_ffcube("formfactors " + (dir / "box.vtu") + " -q --method raycast -o " + (dir / "F.ffm"));
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find((dir / "box.vtu") + ": VTK XML (.vtu) is not read by the command line"), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find("ffcube.load_scene(meshio.read("), std::string::npos) << r.output;
+    EXPECT_FALSE(std::filesystem::exists(dir / "F.ffm"));
 }
 
 }  // namespace
