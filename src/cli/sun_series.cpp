@@ -184,6 +184,7 @@ int run_sun_series(const SunSeriesRequest& q) {
     std::uint32_t max_sweeps = 0;
     std::size_t renders = 0, solved = 0;
     double sun_seconds = 0.0, solve_seconds = 0.0, write_seconds = 0.0;
+    std::array<double, 5> sun_parts{};  // SunResult::seconds_setup ... seconds_count, summed
     std::unique_ptr<GlContext> context;  // one for every step's item buffer, made at the first
     for (std::size_t b0 = 0; b0 < steps.size(); b0 += q.batch) {
         const std::size_t b1 = std::min(steps.size(), b0 + q.batch);
@@ -197,9 +198,12 @@ int run_sun_series(const SunSeriesRequest& q) {
             const SunStep& st = steps[s];
             const bool sun_up = st.z > 0.0 && st.dni > 0.0;
             if (sun_up) {
-                if (!context) context = create_headless_context(q.sun.backend);
-                const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun, *context);
+                if (!context && q.method == "pixels") context = create_headless_context(q.sun.backend);
+                const SunResult sun = q.method == "pixels" ? sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun, *context)
+                                                           : sunlit_fractions_clipped(scene, Vec3(st.x, st.y, st.z));
                 sun_seconds += sun.seconds;
+                sun_parts[0] += sun.seconds_setup, sun_parts[1] += sun.seconds_project, sun_parts[2] += sun.seconds_draw;
+                sun_parts[3] += sun.seconds_readback, sun_parts[4] += sun.seconds_count;
                 ++renders;
                 for (std::size_t i = 0; i < n; ++i)
                     r.direct[s - b0][i] = st.dni * sun.fraction[i] * std::max(0.0, sun.cosine[i]);
@@ -239,6 +243,12 @@ int run_sun_series(const SunSeriesRequest& q) {
         if (incident_w[s] > 0.0) worst = std::max(worst, std::abs(absorbed_w[s] + escaped_w[s] - incident_w[s]) / incident_w[s]);
     report.set("time.sun", sun_seconds);
     report.set("sun.renders", renders);
+    report.set("sun.method", q.method);
+    report.set("time.sun_parts.setup", sun_parts[0]);
+    report.set("time.sun_parts.project", sun_parts[1]);
+    report.set("time.sun_parts.draw", sun_parts[2]);
+    report.set("time.sun_parts.readback", sun_parts[3]);
+    report.set("time.sun_parts.count", sun_parts[4]);
     info("direct beam: {} item buffers, {:.2f} s", renders, sun_seconds);
     const double rate = solve_seconds > 0.0 ? static_cast<double>(solved) / solve_seconds : 0.0;
     report.set("time.reflections", solve_seconds);
