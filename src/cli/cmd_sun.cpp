@@ -156,27 +156,33 @@ int run(const Options& o) {
     report.set_array("sun_direction", direction);
     report.set("method", o.method);
     report.set("renderer", r.renderer);
-    report.set("pixel.size", r.pixel_size);
-    report.set("pixel.wanted_size", r.wanted_pixel_size);
-    report.set("pixel.tolerance", so.tolerance);
-    report.set("pixel.max_pixels", so.max_pixels);
-    report.set("pixel.grid_u", r.pixels_u);
-    report.set("pixel.grid_v", r.pixels_v);
-    report.set("tiles.size", r.tile_size);
-    report.set("tiles.u", r.tiles_u);
-    report.set("tiles.v", r.tiles_v);
+    if (o.method == "pixels") {
+        report.set("pixel.size", r.pixel_size);
+        report.set("pixel.wanted_size", r.wanted_pixel_size);
+        report.set("pixel.tolerance", so.tolerance);
+        report.set("pixel.max_pixels", so.max_pixels);
+        report.set("pixel.grid_u", r.pixels_u);
+        report.set("pixel.grid_v", r.pixels_v);
+        report.set("tiles.size", r.tile_size);
+        report.set("tiles.u", r.tiles_u);
+        report.set("tiles.v", r.tiles_v);
+    }
     report.set("patches_lit", r.lit_patches);
     report.set("clamps.count", r.clamped);
     report.set("clamps.max_overshoot", r.max_overshoot);
-    report.set("error_bound.max", r.error_bound);
-    report.set("error_bound.patches_above_tolerance", r.under_resolved);
+    if (o.method == "pixels") {
+        report.set("error_bound.max", r.error_bound);
+        report.set("error_bound.patches_above_tolerance", r.under_resolved);
+    }
     report.set("sunlit_projected_area", r.sunlit_projected_area);
     report.set("time.sun", r.seconds);
-    report.set("time.sun_parts.setup", r.seconds_setup);
-    report.set("time.sun_parts.project", r.seconds_project);
-    report.set("time.sun_parts.draw", r.seconds_draw);
-    report.set("time.sun_parts.readback", r.seconds_readback);
-    report.set("time.sun_parts.count", r.seconds_count);
+    if (o.method == "pixels") {
+        report.set("time.sun_parts.setup", r.seconds_setup);
+        report.set("time.sun_parts.project", r.seconds_project);
+        report.set("time.sun_parts.draw", r.seconds_draw);
+        report.set("time.sun_parts.readback", r.seconds_readback);
+        report.set("time.sun_parts.count", r.seconds_count);
+    }
     watch.restart();
     if (!o.out.empty()) {
         if (o.by == "object")
