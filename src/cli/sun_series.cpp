@@ -44,14 +44,20 @@ struct Series {
 void write_lines(std::ostream& os, const Scene& scene, std::span<const SunStep> steps, const std::vector<double>& albedo,
                  const Series& r, bool by_object) {
     if (!by_object) {
+        // One buffer per step, formatted with fmt (the bytes of num(), without a string per number).
+        std::vector<std::string> object(scene.objects.size());
+        for (std::size_t k = 0; k < object.size(); ++k) object[k] = csv_field(scene.objects[k]);
+        fmt::memory_buffer buf;
         for (std::size_t s = 0; s < steps.size(); ++s) {
             const std::string time = csv_field(steps[s].time);
+            buf.clear();
             for (std::size_t i = 0; i < scene.size(); ++i) {
                 const Patch& p = scene.patches[i];
-                os << time << ',' << i << ',' << csv_field(scene.objects[p.object]) << ',' << num(p.area) << ','
-                   << num(albedo[i]) << ',' << num(r.direct[s][i]) << ',' << num(r.diffuse[s][i]) << ','
-                   << num(r.reflected[s][i]) << ',' << num(r.absorbed[s][i]) << '\n';
+                fmt::format_to(std::back_inserter(buf), "{},{},{},{:.12g},{:.12g},{:.12g},{:.12g},{:.12g},{:.12g}\n", time, i,
+                               object[p.object], p.area, albedo[i], r.direct[s][i], r.diffuse[s][i], r.reflected[s][i],
+                               r.absorbed[s][i]);
             }
+            os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
         }
         return;
     }
