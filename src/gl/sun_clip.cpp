@@ -119,8 +119,9 @@ void subtract(Pieces& lit, const Poly& c, const Box& cb, Pieces& out, Poly& in, 
     out.clear();
     for (std::size_t k = 0; k < lit.size(); ++k) {
         if (!overlap(lit.box[k], cb)) {
-            in.assign(lit.pts.begin() + lit.off[k], lit.pts.begin() + lit.off[k + 1]);
-            out.add(in, lit.box[k]);
+            out.pts.insert(out.pts.end(), lit.pts.begin() + lit.off[k], lit.pts.begin() + lit.off[k + 1]);
+            out.off.push_back(static_cast<std::uint32_t>(out.pts.size()));
+            out.box.push_back(lit.box[k]);
             continue;
         }
         in.assign(lit.pts.begin() + lit.off[k], lit.pts.begin() + lit.off[k + 1]);
@@ -328,7 +329,16 @@ SunResult sunlit_fractions_clipped(const Scene& scene, Vec3 towards_sun, unsigne
                             const double ca = area(c);
                             if (ca == 0.0) continue;
                             if (ca < 0.0) std::reverse(c.begin(), c.end());
-                            subtract(lit, c, box_of(c), scratch, in, left, right);
+                            const Box cb = box_of(c);
+                            if (!overlap(cb, b)) continue;
+                            subtract(lit, c, cb, scratch, in, left, right);
+                            // The box of what is still lit: later candidates are tested against it.
+                            if (lit.size() > 0) {
+                                b = lit.box[0];
+                                for (std::size_t k = 1; k < lit.size(); ++k)
+                                    b = {std::min(b.u0, lit.box[k].u0), std::min(b.v0, lit.box[k].v0),
+                                         std::max(b.u1, lit.box[k].u1), std::max(b.v1, lit.box[k].v1)};
+                            }
                         }
                     }
                 lit_area[i] = lit.area();
