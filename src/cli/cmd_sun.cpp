@@ -1,5 +1,6 @@
-// ffcube sun: the sunlit fraction of every patch (or object) for one sun direction, by an
-// orthographic item buffer along the sun (gl/sun.hpp; docs/urban.md, "Sun and shade"); with
+// ffcube sun: the sunlit fraction of every patch (or object) for one sun direction, by shadow
+// polygons (exact; --set sun-method=pixels: an orthographic item buffer along the sun; gl/sun.hpp;
+// docs/urban.md, "Sun and shade"); with
 // --sun-series, absorbed shortwave with reflections for every step (cli/sun_series.hpp).
 #include <fmt/format.h>
 

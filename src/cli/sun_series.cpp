@@ -1,6 +1,7 @@
 // ffcube sun --sun-series (cli/sun_series.hpp). Per step s and patch i:
-//   direct_i  = DNI_s × sunlit_fraction_i × cos θ_i       (the item buffer along the sun; 0 when the
-//                                                          sun is at or below the horizon)
+//   direct_i  = DNI_s × sunlit_fraction_i × cos θ_i       (shadow polygons, or the item buffer along
+//                                                          the sun; 0 when the sun is at or below
+//                                                          the horizon)
 //   diffuse_i = DHI_s × SVF_i                              (isotropic sky: SVF_i = 1 − Σ_j F_ij, or
 //                                                          Σ_p V_ip over the Tregenza patches)
 //   reflected_i from B = E + ρ F B (solver/shortwave.hpp), all daylight steps of a batch at once;
@@ -250,11 +251,13 @@ int run_sun_series(const SunSeriesRequest& q) {
     report.set("time.sun", sun_seconds);
     report.set("sun.renders", renders);
     report.set("sun.method", q.method);
-    report.set("time.sun_parts.setup", sun_parts[0]);
-    report.set("time.sun_parts.project", sun_parts[1]);
-    report.set("time.sun_parts.draw", sun_parts[2]);
-    report.set("time.sun_parts.readback", sun_parts[3]);
-    report.set("time.sun_parts.count", sun_parts[4]);
+    if (q.method == "pixels") {
+        report.set("time.sun_parts.setup", sun_parts[0]);
+        report.set("time.sun_parts.project", sun_parts[1]);
+        report.set("time.sun_parts.draw", sun_parts[2]);
+        report.set("time.sun_parts.readback", sun_parts[3]);
+        report.set("time.sun_parts.count", sun_parts[4]);
+    }
     info("direct beam: {} item buffers, {:.2f} s", renders, sun_seconds);
     const double rate = solve_seconds > 0.0 ? static_cast<double>(solved) / solve_seconds : 0.0;
     report.set("time.reflections", solve_seconds);
