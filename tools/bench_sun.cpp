@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
         if (el > 0) suns.push_back(ffcube::sun_direction_from_angles(az, el));
     }
     fmt::print("{} patches, {} suns above the horizon of {} steps\n", scene.size(), suns.size(), steps);
+    const auto count_of = static_cast<double>(suns.size());
     std::vector<ffcube::SunResult> clip;
     for (const unsigned threads : {1u, 2u}) {
         clip.clear();
@@ -53,7 +54,7 @@ int main(int argc, char** argv) {
         for (const ffcube::Vec3& s : suns) clip.push_back(ffcube::sunlit_fractions_clipped(scene, s, threads));
         const double wall = now() - w0, used = cpu() - c0;
         fmt::print("clip, threads {}: {:.3f} s wall ({:.1f} steps/s, {:.1f} ms a step), {:.3f} s CPU ({:.1f} steps per CPU second)\n",
-                   threads, wall, suns.size() / wall, 1e3 * wall / suns.size(), used, suns.size() / used);
+                   threads, wall, count_of / wall, 1e3 * wall / count_of, used, count_of / used);
     }
     if (budget == 0) return 0;
     ffcube::SunOptions o;
@@ -76,6 +77,6 @@ int main(int argc, char** argv) {
                        p.pixel_size, p.seconds_setup, p.seconds_project, p.seconds_draw, p.seconds_readback, p.seconds_count);
     }
     fmt::print("pixels {}: {:.3f} s wall ({:.2f} s a step); |f_pixels - f_clip| over {} lit fractions: mean {:.3g}, max {:.3g}\n",
-               budget, wall, wall / suns.size(), count, sum / static_cast<double>(count), worst);
+               budget, wall, wall / count_of, count, sum / static_cast<double>(count), worst);
     return 0;
 }
