@@ -8,7 +8,8 @@ Makes (or reuses) WORKDIR/city.stl (tools/gen_city.py) and WORKDIR/F.ffm (`ffcub
 --no-subdivide`), writes a 96-step day (quarter hours; the sun from east to west up to 60 degrees;
 DNI and DHI of a clear day) and one albedo for the city, runs `ffcube sun --sun-series --matrix`
 and prints the report's timings: the reflections' step rate (the solve alone, F known), the
-direct beam's item buffers, the sweeps and the worst energy balance. The machine's load average
+direct beam (shadow polygons, or with --extra "--set sun-method=pixels" the item buffers and
+their parts), the sweeps and the worst energy balance. The machine's load average
 is printed before and after (the development machine is shared).
 """
 import argparse
@@ -71,7 +72,11 @@ def main():
     print(f"patches {r['patches']}, steps {r['steps']} ({rf['steps_solved']} with light), sky {r['sky']['model']}")
     print(f"reflections: {rf['steps_solved']} steps in {t['reflections']:.3f} s = {rf['steps_per_second']:.1f} steps/s, "
           f"at most {rf['max_sweeps']} passes over F, contraction {rf['contraction']:.3f}")
-    print(f"direct beam: {r['sun']['renders']} item buffers in {t['sun']:.1f} s ({t['sun'] / max(1, r['sun']['renders']):.2f} s each)")
+    what = "shadow polygons" if r['sun'].get('method', 'pixels') == 'clip' else "item buffers"
+    print(f"direct beam: {r['sun']['renders']} {what} in {t['sun']:.1f} s ({t['sun'] / max(1, r['sun']['renders']):.3f} s each)")
+    if 'sun_parts' in t and t['sun_parts'].get('draw', 0) > 0:
+        p = t['sun_parts']
+        print("item buffers: " + ", ".join(f"{k} {p[k]:.2f} s" for k in ('setup', 'project', 'draw', 'readback', 'count')))
     print(f"sky: {t['sky']:.2f} s; loading {t['loading']:.1f} s, F read {t['rows']:.1f} s, writing {t['writing']:.1f} s; "
           f"whole run {wall:.1f} s")
     print(f"energy balance: worst |absorbed + escaped - incident| / incident = {r['energy']['max_relative_error']:.2e}")

@@ -1,5 +1,6 @@
-// ffcube sun: the sunlit fraction of every patch (or object) for one sun direction, by an
-// orthographic item buffer along the sun (gl/sun.hpp; docs/urban.md, "Sun and shade"); with
+// ffcube sun: the sunlit fraction of every patch (or object) for one sun direction, by shadow
+// polygons (exact; --set sun-method=pixels: an orthographic item buffer along the sun; gl/sun.hpp;
+// docs/urban.md, "Sun and shade"); with
 // --sun-series, absorbed shortwave with reflections for every step (cli/sun_series.hpp).
 #include <fmt/format.h>
 
@@ -29,7 +30,7 @@ namespace {
 
 struct Options {
     SceneFlags scene;
-    std::string direction, angles, out, by, report, backend = "auto";
+    std::string direction, angles, out, by, report, backend = "auto", method = "clip";
     SunOptions sun;
     std::string series, albedo, matrix, sky_patches, sky_out;
     double reflection_tolerance = 1e-12;
@@ -94,6 +95,8 @@ int run(const Options& o) {
         throw InputError(fmt::format("--tolerance {}: must be in (0, 1)", o.sun.tolerance));
     if (o.sun.max_pixels < 1) throw InputError("--max-pixels 0: must be at least 1");
     if (o.sun.tile < 0 || o.sun.tile == 1) throw InputError(fmt::format("--tile {}: must be 0 (automatic) or at least 2", o.sun.tile));
+    if (o.method != "clip" && o.method != "pixels")
+        throw InputError(fmt::format("--sun-method {}: must be clip (shadow polygons, exact) or pixels (the item buffer)", o.method));
     if (!o.series.empty()) {
         if (!o.direction.empty() || !o.angles.empty())
             throw InputError("--sun-series gives the sun of every step; leave out --sun and --sun-direction");
@@ -112,6 +115,7 @@ int run(const Options& o) {
         q.sun.backend = parse_backend(o.backend);
         q.tolerance = o.reflection_tolerance;
         q.batch = o.batch;
+        q.method = o.method;
         return run_sun_series(q);
     }
     for (const auto& [option, value] : {std::pair{"--albedo", &o.albedo}, {"--matrix", &o.matrix}, {"--sky-patches", &o.sky_patches},
@@ -136,7 +140,11 @@ int run(const Options& o) {
     Stopwatch watch;
     const Scene scene = load_and_mesh(o.scene.scene, report);
     report.set("time.loading", watch.seconds());
-    const SunResult r = sunlit_fractions(scene, s, so);
+    const SunResult r = o.method == "clip" ? sunlit_fractions_clipped(scene, s) : sunlit_fractions(scene, s, so);
+    if (o.method == "clip")
+        info("sun ({:.6f}, {:.6f}, {:.6f}): {} of {} patches face it; shadow polygons (exact); {:.2f} s", r.sun.x, r.sun.y,
+             r.sun.z, r.lit_patches, scene.size(), r.seconds);
+    else
     info("sun ({:.6f}, {:.6f}, {:.6f}): {} of {} patches face it; pixel {:.4g} ({}x{} in {}x{} tiles of {}), bound {:.3g} "
          "(worst case; tolerance {:g}, {} patches above), {} clamped; {:.2f} s",
          r.sun.x, r.sun.y, r.sun.z, r.lit_patches, scene.size(), r.pixel_size, r.pixels_u, r.pixels_v, r.tiles_u, r.tiles_v,
@@ -147,23 +155,35 @@ int run(const Options& o) {
     report.set("objects", scene.objects.size());
     const double direction[3] = {r.sun.x, r.sun.y, r.sun.z};
     report.set_array("sun_direction", direction);
+    report.set("method", o.method);
     report.set("renderer", r.renderer);
-    report.set("pixel.size", r.pixel_size);
-    report.set("pixel.wanted_size", r.wanted_pixel_size);
-    report.set("pixel.tolerance", so.tolerance);
-    report.set("pixel.max_pixels", so.max_pixels);
-    report.set("pixel.grid_u", r.pixels_u);
-    report.set("pixel.grid_v", r.pixels_v);
-    report.set("tiles.size", r.tile_size);
-    report.set("tiles.u", r.tiles_u);
-    report.set("tiles.v", r.tiles_v);
+    if (o.method == "pixels") {
+        report.set("pixel.size", r.pixel_size);
+        report.set("pixel.wanted_size", r.wanted_pixel_size);
+        report.set("pixel.tolerance", so.tolerance);
+        report.set("pixel.max_pixels", so.max_pixels);
+        report.set("pixel.grid_u", r.pixels_u);
+        report.set("pixel.grid_v", r.pixels_v);
+        report.set("tiles.size", r.tile_size);
+        report.set("tiles.u", r.tiles_u);
+        report.set("tiles.v", r.tiles_v);
+    }
     report.set("patches_lit", r.lit_patches);
     report.set("clamps.count", r.clamped);
     report.set("clamps.max_overshoot", r.max_overshoot);
-    report.set("error_bound.max", r.error_bound);
-    report.set("error_bound.patches_above_tolerance", r.under_resolved);
+    if (o.method == "pixels") {
+        report.set("error_bound.max", r.error_bound);
+        report.set("error_bound.patches_above_tolerance", r.under_resolved);
+    }
     report.set("sunlit_projected_area", r.sunlit_projected_area);
     report.set("time.sun", r.seconds);
+    if (o.method == "pixels") {
+        report.set("time.sun_parts.setup", r.seconds_setup);
+        report.set("time.sun_parts.project", r.seconds_project);
+        report.set("time.sun_parts.draw", r.seconds_draw);
+        report.set("time.sun_parts.readback", r.seconds_readback);
+        report.set("time.sun_parts.count", r.seconds_count);
+    }
     watch.restart();
     if (!o.out.empty()) {
         if (o.by == "object")
@@ -212,6 +232,10 @@ void add_sun_command(CLI::App& app, std::function<int()>& action) {
                ->default_val(1e-12));
     expert(sub->add_option("--batch", opts->batch, "--sun-series: steps computed, solved and written together (memory: 4 x steps x patches doubles)")
                ->default_val(32));
+    expert(sub->add_option("--sun-method", opts->method,
+                           "clip (default: shadow polygons clipped on the CPU, exact) or pixels (the GL item buffer, "
+                           "--tolerance, --max-pixels, --tile)")
+               ->default_val("clip"));
     expert(sub->add_option("--tile", opts->sun.tile, "tile side in pixels (0: min(4096, GL limits))")->default_val(0));
     sub->callback([opts, &action] {
         action = [opts] {

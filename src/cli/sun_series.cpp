@@ -1,6 +1,7 @@
 // ffcube sun --sun-series (cli/sun_series.hpp). Per step s and patch i:
-//   direct_i  = DNI_s × sunlit_fraction_i × cos θ_i       (the item buffer along the sun; 0 when the
-//                                                          sun is at or below the horizon)
+//   direct_i  = DNI_s × sunlit_fraction_i × cos θ_i       (shadow polygons, or the item buffer along
+//                                                          the sun; 0 when the sun is at or below
+//                                                          the horizon)
 //   diffuse_i = DHI_s × SVF_i                              (isotropic sky: SVF_i = 1 − Σ_j F_ij, or
 //                                                          Σ_p V_ip over the Tregenza patches)
 //   reflected_i from B = E + ρ F B (solver/shortwave.hpp), all daylight steps of a batch at once;
@@ -44,14 +45,20 @@ struct Series {
 void write_lines(std::ostream& os, const Scene& scene, std::span<const SunStep> steps, const std::vector<double>& albedo,
                  const Series& r, bool by_object) {
     if (!by_object) {
+        // One buffer per step, formatted with fmt (the bytes of num(), without a string per number).
+        std::vector<std::string> object(scene.objects.size());
+        for (std::size_t k = 0; k < object.size(); ++k) object[k] = csv_field(scene.objects[k]);
+        fmt::memory_buffer buf;
         for (std::size_t s = 0; s < steps.size(); ++s) {
             const std::string time = csv_field(steps[s].time);
+            buf.clear();
             for (std::size_t i = 0; i < scene.size(); ++i) {
                 const Patch& p = scene.patches[i];
-                os << time << ',' << i << ',' << csv_field(scene.objects[p.object]) << ',' << num(p.area) << ','
-                   << num(albedo[i]) << ',' << num(r.direct[s][i]) << ',' << num(r.diffuse[s][i]) << ','
-                   << num(r.reflected[s][i]) << ',' << num(r.absorbed[s][i]) << '\n';
+                fmt::format_to(std::back_inserter(buf), "{},{},{},{:.12g},{:.12g},{:.12g},{:.12g},{:.12g},{:.12g}\n", time, i,
+                               object[p.object], p.area, albedo[i], r.direct[s][i], r.diffuse[s][i], r.reflected[s][i],
+                               r.absorbed[s][i]);
             }
+            os.write(buf.data(), static_cast<std::streamsize>(buf.size()));
         }
         return;
     }
@@ -184,6 +191,7 @@ int run_sun_series(const SunSeriesRequest& q) {
     std::uint32_t max_sweeps = 0;
     std::size_t renders = 0, solved = 0;
     double sun_seconds = 0.0, solve_seconds = 0.0, write_seconds = 0.0;
+    std::array<double, 5> sun_parts{};  // SunResult::seconds_setup ... seconds_count, summed
     std::unique_ptr<GlContext> context;  // one for every step's item buffer, made at the first
     for (std::size_t b0 = 0; b0 < steps.size(); b0 += q.batch) {
         const std::size_t b1 = std::min(steps.size(), b0 + q.batch);
@@ -197,9 +205,12 @@ int run_sun_series(const SunSeriesRequest& q) {
             const SunStep& st = steps[s];
             const bool sun_up = st.z > 0.0 && st.dni > 0.0;
             if (sun_up) {
-                if (!context) context = create_headless_context(q.sun.backend);
-                const SunResult sun = sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun, *context);
+                if (!context && q.method == "pixels") context = create_headless_context(q.sun.backend);
+                const SunResult sun = q.method == "pixels" ? sunlit_fractions(scene, Vec3(st.x, st.y, st.z), q.sun, *context)
+                                                           : sunlit_fractions_clipped(scene, Vec3(st.x, st.y, st.z));
                 sun_seconds += sun.seconds;
+                sun_parts[0] += sun.seconds_setup, sun_parts[1] += sun.seconds_project, sun_parts[2] += sun.seconds_draw;
+                sun_parts[3] += sun.seconds_readback, sun_parts[4] += sun.seconds_count;
                 ++renders;
                 for (std::size_t i = 0; i < n; ++i)
                     r.direct[s - b0][i] = st.dni * sun.fraction[i] * std::max(0.0, sun.cosine[i]);
@@ -239,6 +250,14 @@ int run_sun_series(const SunSeriesRequest& q) {
         if (incident_w[s] > 0.0) worst = std::max(worst, std::abs(absorbed_w[s] + escaped_w[s] - incident_w[s]) / incident_w[s]);
     report.set("time.sun", sun_seconds);
     report.set("sun.renders", renders);
+    report.set("sun.method", q.method);
+    if (q.method == "pixels") {
+        report.set("time.sun_parts.setup", sun_parts[0]);
+        report.set("time.sun_parts.project", sun_parts[1]);
+        report.set("time.sun_parts.draw", sun_parts[2]);
+        report.set("time.sun_parts.readback", sun_parts[3]);
+        report.set("time.sun_parts.count", sun_parts[4]);
+    }
     info("direct beam: {} item buffers, {:.2f} s", renders, sun_seconds);
     const double rate = solve_seconds > 0.0 ? static_cast<double>(solved) / solve_seconds : 0.0;
     report.set("time.reflections", solve_seconds);

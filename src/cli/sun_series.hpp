@@ -15,6 +15,7 @@ struct SunSeriesRequest {
     SunOptions sun;         // the item buffer of every step (backend resolved)
     double tolerance = 1e-12;  // the reflections' stopping rule (ShortwaveControl::tolerance)
     std::uint32_t batch = 32;  // steps computed, solved and written together
+    std::string method = "clip";  // the direct beam: clip (sunlit_fractions_clipped) or pixels (the item buffer)
 };
 
 int run_sun_series(const SunSeriesRequest& request);

@@ -206,6 +206,7 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
         ctx->make_current();
         r.renderer = ctx->renderer();
         const gl::Api& gl = ctx->api();
+        Stopwatch stage;
         {
             GLint tex = 0, rb = 0, vp[2] = {0, 0};
             gl.GetIntegerv(GL_MAX_TEXTURE_SIZE, &tex);
@@ -243,6 +244,7 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
             gl.Disable(GL_SCISSOR_TEST);
             gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
             gl::check_gl(gl, "sun item buffer setup");
+            r.seconds_setup = stage.seconds();
 
             const double depth_span = d_max - d_min;
             std::vector<float> xyz;
@@ -255,6 +257,7 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
                     const int th = static_cast<int>(std::min<std::uint64_t>(T, r.pixels_v - l0));
                     const double u0 = u_min + static_cast<double>(k0) * h, v0 = v_min + static_cast<double>(l0) * h;
                     const double u1 = u0 + tw * h, v1 = v0 + th * h;
+                    stage.restart();
                     xyz.clear();
                     ids.clear();
                     for (const Tri& t : tris) {
@@ -271,26 +274,37 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
                             ids.push_back(t.id);
                         }
                     }
-                    if (ids.empty()) continue;
+                    if (ids.empty()) {
+                        r.seconds_project += stage.seconds();
+                        continue;
+                    }
                     gl.BindBuffer(GL_ARRAY_BUFFER, pos_vbo.id());
                     gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(xyz.size() * sizeof(float)), xyz.data(),
                                   GL_STREAM_DRAW);
                     gl.BindBuffer(GL_ARRAY_BUFFER, id_vbo.id());
                     gl.BufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(ids.size() * sizeof(std::uint32_t)), ids.data(),
                                   GL_STREAM_DRAW);
+                    r.seconds_project += stage.seconds();
+                    stage.restart();
                     gl.Viewport(0, 0, tw, th);
                     const GLuint zero_id[4] = {0, 0, 0, 0};
                     const GLfloat zero_depth = 0.0f;
                     gl.ClearBufferuiv(GL_COLOR, 0, zero_id);
                     gl.ClearBufferfv(GL_DEPTH, 0, &zero_depth);
                     gl.DrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(ids.size()));
+                    gl.Finish();
+                    r.seconds_draw += stage.seconds();
+                    stage.restart();
                     gl.ReadPixels(0, 0, tw, th, GL_RED_INTEGER, GL_UNSIGNED_INT, image.data());
                     gl::check_gl(gl, "sun item buffer tile");
+                    r.seconds_readback += stage.seconds();
+                    stage.restart();
                     const std::size_t shown = static_cast<std::size_t>(tw) * th;
                     for (std::size_t k = 0; k < shown; ++k) {
                         const std::uint32_t id = image[k];
                         if (id < counts.size()) ++counts[id];
                     }
+                    r.seconds_count += stage.seconds();
                 }
             }
             gl.BindVertexArray(0);

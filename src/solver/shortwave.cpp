@@ -49,11 +49,11 @@ constexpr double kMaxIrradiance = 1e5;  // W/m², parse_sun_series
 // y[c] is summed in the same order in both, but GCC may fuse a·b + c into one FMA in the Haswell
 // clone, so the last bits can differ between a machine with FMA and one without; on one machine
 // they never depend on the thread count.
-template <class T>
+template <class T, class I>
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 __attribute__((target_clones("arch=haswell", "default")))
 #endif
-void row_times_group(const std::uint32_t* col, const float* val, std::uint64_t count, const T* P, std::size_t stride,
+void row_times_group(const I* col, const float* val, std::uint64_t count, const T* P, std::size_t stride,
                      double* y) {
     double acc[kGroup] = {};
     for (std::uint64_t e = 0; e < count; ++e) {
@@ -98,6 +98,10 @@ ShortwaveSystem make_shortwave_system(const CsrMatrix& F, std::vector<double> al
             weighted[j] += albedo[i] * static_cast<double>(r.val[k]);
         }
         s.escape[j] = 1.0 - sum;
+    }
+    if (n <= 65536) {  // the sweeps stream the columns in 16 bits
+        s.t_col16.assign(s.t_col.begin(), s.t_col.end());
+        std::vector<std::uint32_t>().swap(s.t_col);
     }
     std::uint32_t worst = 0;
     for (std::uint32_t j = 0; j < n; ++j)
@@ -159,13 +163,21 @@ GroupResult solve_group(const ShortwaveSystem& s, std::span<const double> incide
         std::fill(change, change + kGroup, 0.0);
         for (std::uint32_t i = 0; i < n; ++i) {
             double y[kGroup];
-            const std::uint32_t* col = s.t_col.data() + s.t_ptr[i];
             const float* val = s.t_val.data() + s.t_ptr[i];
             const std::uint64_t count = s.t_ptr[i + 1] - s.t_ptr[i];
-            if (single)
-                row_times_group(col, val, count, Pf.data(), kGroup, y);
-            else
-                row_times_group(col, val, count, P.data(), kGroup, y);
+            if (!s.t_col16.empty()) {
+                const std::uint16_t* col = s.t_col16.data() + s.t_ptr[i];
+                if (single)
+                    row_times_group(col, val, count, Pf.data(), kGroup, y);
+                else
+                    row_times_group(col, val, count, P.data(), kGroup, y);
+            } else {
+                const std::uint32_t* col = s.t_col.data() + s.t_ptr[i];
+                if (single)
+                    row_times_group(col, val, count, Pf.data(), kGroup, y);
+                else
+                    row_times_group(col, val, count, P.data(), kGroup, y);
+            }
             const std::size_t x = std::size_t(i) * kGroup;
             for (std::uint32_t c = 0; c < kGroup; ++c) {
                 change[c] += std::abs(y[c] - R[x + c]);
@@ -186,8 +198,12 @@ GroupResult solve_group(const ShortwaveSystem& s, std::span<const double> incide
     std::fill(change, change + kGroup, 0.0);
     for (std::uint32_t i = 0; i < n; ++i) {
         double y[kGroup];
-        row_times_group(s.t_col.data() + s.t_ptr[i], s.t_val.data() + s.t_ptr[i], s.t_ptr[i + 1] - s.t_ptr[i], P.data(), kGroup,
-                        y);
+        if (!s.t_col16.empty())
+            row_times_group(s.t_col16.data() + s.t_ptr[i], s.t_val.data() + s.t_ptr[i], s.t_ptr[i + 1] - s.t_ptr[i], P.data(),
+                            kGroup, y);
+        else
+            row_times_group(s.t_col.data() + s.t_ptr[i], s.t_val.data() + s.t_ptr[i], s.t_ptr[i + 1] - s.t_ptr[i], P.data(),
+                            kGroup, y);
         for (std::uint32_t c = 0; c < width; ++c) {
             const std::size_t x = std::size_t(i) * kGroup + c, o = std::size_t(i) * k + c0 + c;
             change[c] += std::abs(y[c] - R[x]);

@@ -52,12 +52,14 @@ TEST(SunCli, BoxOnPlaneByObjectMatchesTheAnalyticShadow) {
     }
 }
 
+// Both methods: the shadow polygons (the default, exact) and the item buffer (--set sun-method=pixels).
 TEST(SunCli, DirectionPerPatchAndReport) {
     TempDir dir;
     write_file(dir / "box.obj", kBoxOnPlane);
+    for (const std::string method : {"clip", "pixels"}) {
     // Towards the sun (1, −2, 2)/3 (not unit on the command line).
     const RunResult r = run_ffcube("sun " + (dir / "box.obj") + " --no-subdivide -q --sun-direction 1,-2,2 -o " +
-                                   (dir / "p.csv") + " --report " + (dir / "r.json"));
+                                   (dir / "p.csv") + " --report " + (dir / "r.json") + " --set sun-method=" + method);
     ASSERT_EQ(r.code, 0) << r.output;
     std::istringstream in(read_text(dir / "p.csv"));
     std::string line;
@@ -73,16 +75,22 @@ TEST(SunCli, DirectionPerPatchAndReport) {
         std::getline(ls, area, ',');
         std::getline(ls, fraction, ',');
         EXPECT_EQ(patch, std::to_string(rows));
-        EXPECT_NEAR(std::stod(fraction), want.at(object), 1e-3) << object;
+        EXPECT_NEAR(std::stod(fraction), want.at(object), 1e-3) << object << " " << method;
         ++rows;
     }
     EXPECT_EQ(rows, 6);
     const auto j = nlohmann::json::parse(read_text(dir / "r.json"));
-    EXPECT_GT(j["pixel"]["size"].get<double>(), 0.0);
-    EXPECT_GE(j["tiles"]["u"].get<int>(), 1);
+    EXPECT_EQ(j["method"].get<std::string>(), method);
+    if (method == "pixels") {
+        EXPECT_GT(j["pixel"]["size"].get<double>(), 0.0);
+        EXPECT_GE(j["tiles"]["u"].get<int>(), 1);
+    } else {
+        EXPECT_FALSE(j.contains("pixel"));
+    }
     EXPECT_TRUE(j["clamps"].contains("count"));
     EXPECT_TRUE(j["time"].contains("sun"));
     EXPECT_NEAR(j["sun_direction"][1].get<double>(), -2.0 / 3, 1e-15);
+    }
 }
 
 // A View3D obstruction-only surface (O) shades but has no line of its own: the ground [−2,2]² under
@@ -164,14 +172,16 @@ TEST(SunCli, CityFractionsStayInRangeAndCreateNoEnergy) {
         // Every beam line that meets z = 0 inside the footprint meets the ground (which covers it, gen_city.py)
         // or something above it first: at least the footprint's cross-section s_z a b is intercepted.
         const double footprint = s[2] * a * b;
+        // The pixel h: 0 for the default shadow polygons (exact, no "pixel" in the report).
+        const double h = j.contains("pixel") ? j["pixel"]["size"].get<double>() : 0.0;
         std::printf("city, sun %g,%g: sunlit projected area %.6g, footprint's beam %.6g, beam through the bounding box "
                     "%.6g, sunlit area %.6g, %d clamped (largest overshoot %.2e), pixel %.3g\n",
                     az, el, sunlit, footprint, beam, area_lit, j["clamps"]["count"].get<int>(),
-                    j["clamps"]["max_overshoot"].get<double>(), j["pixel"]["size"].get<double>());
+                    j["clamps"]["max_overshoot"].get<double>(), h);
         EXPECT_GT(sunlit, 0.0);
         EXPECT_LE(sunlit, beam);
         // The pixel counts' error over the footprint's outline (perimeter 2(a + b), pixel h): 2(a + b) h.
-        EXPECT_GE(sunlit, footprint - 2 * (a + b) * j["pixel"]["size"].get<double>());
+        EXPECT_GE(sunlit, footprint - 2 * (a + b) * h);
     }
 }
 
@@ -194,6 +204,7 @@ TEST(SunCli, BadInputExitsTwoNamingTheOptionAndWritesNothing) {
         {" --sun 10,30 --by floor", "--by"},
         {" --sun 10,30 --set tolerance=0", "--tolerance"},
         {" --sun 10,30 --set max-pixels=0", "--max-pixels"},
+        {" --sun 10,30 --set sun-method=raster", "--sun-method"},
     };
     for (const auto& [args, option] : cases) {
         const RunResult r = run_ffcube(base + args);

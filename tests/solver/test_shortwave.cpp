@@ -104,6 +104,38 @@ TEST(Shortwave, TheSameBitsForOneOrManyThreads) {
     EXPECT_EQ(a.escaped, b.escaped);
 }
 
+// More than 65,536 patches: the columns stay in 32 bits (16 bits below, as in the tests above).
+// Checked against the equations themselves, recomputed here from F: R_i = Σ_j F_ji P_j with
+// P_j = ρ_j (Q_j + R_j). The answer's R' = Fᵀ P comes from the last sweep's P; P' = ρ (Q + R')
+// differs from P by ρ |R' − R| entrywise, so Σ_i |(Fᵀ P')_i − R'_i| ≤ max_j ρ_j Σ_i F_ji · Σ|R' − R|
+// ≤ contraction × change × Σ Q: asserted with change × Σ Q (contraction < 1) plus 1e-12 Σ Q of
+// rounding. The balance is bounded by the same change (shortwave.cpp).
+TEST(Shortwave, MoreThan65536PatchesKeep32BitColumnsAndSolveTheEquations) {
+    const std::uint32_t n = 70000, k = 2;
+    const CsrMatrix F = random_rows(n, 3, 0.9, 13);
+    std::vector<double> albedo(n, 0.4), Q(std::size_t(n) * k);
+    for (std::size_t x = 0; x < Q.size(); ++x) Q[x] = static_cast<double>((x * 2654435761u) % 1000);
+    const ShortwaveSystem s = make_shortwave_system(F, albedo, name_of);
+    EXPECT_TRUE(s.t_col16.empty());
+    EXPECT_EQ(s.t_col.size(), F.nnz());
+    EXPECT_FALSE(make_shortwave_system(random_rows(100, 5, 0.9, 1), std::vector<double>(100, 0.4), name_of).t_col16.empty());
+    const ShortwaveSolution x = solve_shortwave(s, Q, k);
+    for (std::uint32_t c = 0; c < k; ++c) {
+        std::vector<double> R(n, 0.0);
+        double total = 0.0, absorbed = 0.0, residual = 0.0;
+        for (std::uint32_t j = 0; j < n; ++j) {
+            const double P = albedo[j] * (Q[std::size_t(j) * k + c] + x.reflected[std::size_t(j) * k + c]);
+            const RowView row = F.row(j);
+            for (std::size_t e = 0; e < row.col.size(); ++e) R[row.col[e]] += static_cast<double>(row.val[e]) * P;
+            total += Q[std::size_t(j) * k + c];
+            absorbed += x.absorbed[std::size_t(j) * k + c];
+        }
+        for (std::uint32_t i = 0; i < n; ++i) residual += std::abs(R[i] - x.reflected[std::size_t(i) * k + c]);
+        EXPECT_LE(residual, (x.change + 1e-12) * total) << "rhs " << c;
+        EXPECT_NEAR(absorbed + x.escaped[c], total, (x.change + 1e-12) * total) << "rhs " << c;
+    }
+}
+
 TEST(Shortwave, NoReflectorMeansNothingReflected) {
     // Albedo 0 everywhere: the closed form is R = 0, absorbed = Q, escaped = 0.
     const CsrMatrix F = random_rows(20, 6, 0.9, 5);

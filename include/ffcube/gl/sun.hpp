@@ -42,6 +42,9 @@ struct SunResult {
     std::size_t under_resolved = 0;          // lit patches whose bound exceeds the tolerance
     double sunlit_projected_area = 0.0;      // Σ pixels × pixel area over the scene's patches
     double seconds = 0.0;                    // the whole computation (context, drawing, counting)
+    // Its parts: GL objects made (program, framebuffer), the tiles' vertices projected and uploaded,
+    // the GL's rasterization (to glFinish), the read-back of the IDs, and counting them.
+    double seconds_setup = 0.0, seconds_project = 0.0, seconds_draw = 0.0, seconds_readback = 0.0, seconds_count = 0.0;
     std::string renderer;                    // GL_RENDERER
 };
 
@@ -63,5 +66,12 @@ SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOption
 SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& options, GlContext& context);
 // nullptr: a context of its own (the first form).
 SunResult sunlit_fractions(const Scene& scene, Vec3 towards_sun, const SunOptions& options, GlContext* context);
+
+// The same fractions without pixels and without GL: every shadow cast on a patch's plane is
+// clipped as a polygon and subtracted from the patch's projection (sun_clip.cpp), so each
+// fraction is exact up to rounding (no tolerance, no pixel budget; pixel fields stay 0,
+// error_bound 0). `threads` 0: the hardware's; the result does not depend on it. InputError for a
+// zero or non-finite direction.
+SunResult sunlit_fractions_clipped(const Scene& scene, Vec3 towards_sun, unsigned threads = 0);
 
 }  // namespace ffcube

@@ -25,7 +25,8 @@ namespace ffcube {
 struct ShortwaveSystem {
     std::uint32_t n = 0;
     std::vector<std::uint64_t> t_ptr;  // Fᵀ in CSR: row i holds the j with F_ji > 0
-    std::vector<std::uint32_t> t_col;
+    std::vector<std::uint32_t> t_col;    // empty when t_col16 holds the columns
+    std::vector<std::uint16_t> t_col16;  // the same columns in 16 bits when n ≤ 65,536 (6 bytes an entry streamed, not 8)
     std::vector<float> t_val;
     std::vector<double> albedo;  // per patch, in [0, 1)
     std::vector<double> escape;  // per patch: 1 − Σ_i F_ji (may be slightly negative for a row above 1)
