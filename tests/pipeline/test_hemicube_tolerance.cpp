@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "ffcube/accuracy/near_field.hpp"
-#include "ffcube/geometry/analytic.hpp"
 #include "ffcube/pipeline/row_source.hpp"
+#include "support/exact_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -45,17 +45,7 @@ Checked check_rows(const Scene& scene, int resolution, std::uint32_t stride) {
     const std::vector<float>& estimate = source.corrected()->row_tolerance_estimates();
     Checked c;
     for (const std::uint32_t i : rows) {
-        const auto pi = scene.patch_vertices(i);
-        std::vector<double> exact(n, 0.0), measured(n, 0.0);
-        for (std::uint32_t j = 0; j < n; ++j)
-            if (j != i) exact[j] = ff_polygon_polygon(pi, scene.patch_vertices(j));
-        for (std::size_t a = 0; a < got[i].nnz(); ++a) measured[got[i].col[a]] = got[i].val[a];
-        double entry = 0, sum_m = 0, sum_e = 0;
-        for (std::uint32_t j = 0; j < n; ++j) {
-            entry = std::max(entry, std::abs(measured[j] - exact[j]));
-            sum_m += measured[j], sum_e += exact[j];
-        }
-        const double truth = std::max(entry, std::abs(sum_m - sum_e));
+        const double truth = test::unoccluded_row_error(scene, i, got[i]);
         const double e = estimate.at(i);
         EXPECT_GT(e, 0.0) << "row " << i << ": no estimate";
         ++c.rows;
@@ -154,17 +144,7 @@ TEST(HemicubeTolerance, RowsAboveAnAskedForTargetAreMeasuredAgainByRays) {
         }
         EXPECT_EQ(measure[i], CorrectedRowProvider::refined) << i;
         // The refined row against the closed forms: its estimate must cover its true error.
-        const auto pi = scene.patch_vertices(i);
-        std::vector<double> exact(n, 0.0), measured(n, 0.0);
-        for (std::uint32_t j = 0; j < n; ++j)
-            if (j != i) exact[j] = ff_polygon_polygon(pi, scene.patch_vertices(j));
-        for (std::size_t a = 0; a < again[i].nnz(); ++a) measured[again[i].col[a]] = again[i].val[a];
-        double entry = 0, sum_m = 0, sum_e = 0;
-        for (std::uint32_t j = 0; j < n; ++j) {
-            entry = std::max(entry, std::abs(measured[j] - exact[j]));
-            sum_m += measured[j], sum_e += exact[j];
-        }
-        const double truth = std::max(entry, std::abs(sum_m - sum_e));
+        const double truth = test::unoccluded_row_error(scene, i, again[i]);
         ++checked;
         covered += truth <= estimate[i];
         worst = std::max(worst, truth / estimate[i]);

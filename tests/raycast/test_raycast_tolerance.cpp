@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "ffcube/core/error.hpp"
-#include "ffcube/geometry/analytic.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
+#include "support/exact_rows.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -51,18 +51,7 @@ Checked check_rows(const Scene& scene, double E) {
     provider.compute_rows_staged(rows, stages, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
     Checked c;
     for (std::uint32_t i = 0; i < n; ++i) {
-        const auto pi = scene.patch_vertices(i);
-        std::vector<double> exact(n, 0.0);
-        for (std::uint32_t j = 0; j < n; ++j)
-            if (j != i) exact[j] = ff_polygon_polygon(pi, scene.patch_vertices(j));
-        std::vector<double> measured(n, 0.0);
-        for (std::size_t a = 0; a < got[i].nnz(); ++a) measured[got[i].col[a]] = got[i].val[a];
-        double entry = 0, sum_m = 0, sum_e = 0;
-        for (std::uint32_t j = 0; j < n; ++j) {
-            entry = std::max(entry, std::abs(measured[j] - exact[j]));
-            sum_m += measured[j], sum_e += exact[j];
-        }
-        const double truth = std::max(entry, std::abs(sum_m - sum_e));
+        const double truth = test::unoccluded_row_error(scene, i, got[i]);
         EXPECT_GT(estimate[i], 0.0) << "row " << i << ": no estimate";
         ++c.rows;
         c.covered += truth <= estimate[i];
