@@ -528,6 +528,9 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
             ++(r.closed ? stats.rows_closed : stats.rows_capped);
             stats.closed_scale_max_change = std::max(stats.closed_scale_max_change, std::abs(r.factor - 1.0));
             estimate += r.moved;
+            // A closed row now sums to 1, as its exact row does: no sum error is left for the
+            // noise to explain (the entries' share of the change is in r.moved above).
+            if (r.closed && noise) noise->sky = noise->replaced_sum_sq = 0.0;
         }
     }
     if (error_estimate) *error_estimate = estimate;

@@ -98,8 +98,8 @@ void add_row_options(CLI::App& app, RowOptions& o, RowTolerance tolerance) {
            tolerance == RowTolerance::main ? "--tolerance" : "--row-tolerance",
            [&o](double e) { o.tolerance = e, o.tolerance_given = true; },
            "accuracy target E: the largest error a row may keep in any F entry and in its sum (the sky view factor); "
-           "ray-cast rows are refined until their estimate meets it, rows that do not are counted and named "
-           "(default 1e-3; a .vs3's eps sets it)")
+           "ray-cast rows are refined until their estimate meets it, and when it is given hemicube rows above it are "
+           "cast again by rays; rows that do not meet it are counted and named (default 1e-3; a .vs3's eps sets it)")
         ->default_str("1e-3");
     if (tolerance == RowTolerance::expert) expert(target);
     app.add_option_function<std::string>(
