@@ -108,16 +108,19 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
     base.backend = options.backend;
     base.seed = options.seed;
     base.near_k = options.near_k;
-    double estimate = 0;  // the last run's largest row estimate (rows of a corrected source)
+    // The rows, their time, and their largest row estimate (0 without the correction).
+    struct Run {
+        CsrMatrix F;
+        double seconds = 0, estimate = 0;
+    };
     auto run = [&](std::size_t k, const RowOptions& ro) {
         RowSource rows = make_row_source(scenes[k], ro);
         Stopwatch watch;
-        CsrMatrix F = compute_all_rows(rows.provider());
-        const double seconds = watch.seconds();
-        estimate = 0;
+        Run out{compute_all_rows(rows.provider()), 0.0, 0.0};
+        out.seconds = watch.seconds();
         if (rows.corrected())
-            for (float e : rows.corrected()->row_tolerance_estimates()) estimate = std::max(estimate, static_cast<double>(e));
-        return std::pair{std::move(F), seconds};
+            for (float e : rows.corrected()->row_tolerance_estimates()) out.estimate = std::max(out.estimate, static_cast<double>(e));
+        return out;
     };
     // Hemicubes first (see the header: worker processes need a single-threaded process).
     for (std::size_t k = 0; k < selected.size(); ++k)
@@ -126,16 +129,16 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             ro.method = RowMethod::Hemicube;
             ro.resolution = options.resolutions[s];
             ro.correct = Correction::None;
-            const auto [F, seconds] = run(k, ro);
-            record(k, s, "hemicube", fmt::format("N={}", ro.resolution), ro.resolution, F, seconds);
+            const Run plain = run(k, ro);
+            record(k, s, "hemicube", fmt::format("N={}", ro.resolution), ro.resolution, plain.F, plain.seconds);
             if (!options.corrected) continue;
             // The default `--correct near` as the command line runs it: a fresh source, so rows the
             // correction flags are measured by sub-hemicubes, and the time is the whole run's
             // (rendering, sub-hemicubes, correction).
             ro.correct = Correction::Near;
-            const auto [C, corrected_seconds] = run(k, ro);
-            record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", ro.resolution), ro.resolution, C,
-                   corrected_seconds);
+            const Run corrected = run(k, ro);
+            record(k, options.resolutions.size() + s, "hemicube+near", fmt::format("N={}", ro.resolution), ro.resolution,
+                   corrected.F, corrected.seconds);
         }
     for (std::size_t k = 0; k < selected.size(); ++k)
         for (std::size_t s = 0; s < options.rays.size(); ++s) {
@@ -143,9 +146,9 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             ro.method = RowMethod::Raycast;
             ro.rays = options.rays[s];
             ro.correct = Correction::None;
-            const auto [F, seconds] = run(k, ro);
-            record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays), static_cast<double>(ro.rays), F,
-                   seconds);
+            const Run cast = run(k, ro);
+            record(k, hemicube_runs + s, "raycast", fmt::format("rays={}", ro.rays), static_cast<double>(ro.rays), cast.F,
+                   cast.seconds);
         }
     // Accuracy by target: the rows refined to E as the command line makes them (the default
     // correction on), each run's promise (its largest row estimate) beside its true errors.
@@ -155,10 +158,11 @@ std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const Be
             ro.method = RowMethod::Raycast;
             ro.tolerance = options.tolerances[s];
             ro.correct = Correction::Near;
-            const auto [F, seconds] = run(k, ro);
+            const Run refined = run(k, ro);
             const std::size_t slot = hemicube_runs + options.rays.size() + s;
-            results[k * per_case + slot].estimate = estimate;
-            record(k, slot, "raycast@tolerance", fmt::format("E={:g}", ro.tolerance), ro.tolerance, F, seconds);
+            results[k * per_case + slot].estimate = refined.estimate;
+            record(k, slot, "raycast@tolerance", fmt::format("E={:g}", ro.tolerance), ro.tolerance, refined.F,
+                   refined.seconds);
         }
     return results;
 }

@@ -15,19 +15,7 @@
 namespace ffcube {
 namespace {
 
-// The unit box [0,1]³ (roof and four walls, one-sided, facing out; no floor) on the ground
-// [−5,5]² at z = 0 (facing up); one object per face, one patch per face.
-Scene box_on_plane() {
-    const std::vector<NamedPolygon> polys{
-        {"ground", {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}}},
-        {"roof", {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}},
-        {"south", {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}},
-        {"east", {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}},
-        {"north", {{1, 1, 0}, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}}},
-        {"west", {{0, 1, 0}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}}},
-    };
-    return test::make_scene(polys, 100.0);
-}
+using test::box_on_plane;
 
 // Exact: the roof and the walls facing the sun are wholly lit (a convex box shades none of its own
 // faces that face the sun), the walls facing away get nothing, the ground loses the shadow.

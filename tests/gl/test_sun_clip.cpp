@@ -22,17 +22,7 @@ namespace {
 // still 7 orders below the item buffer's tolerance 1e-3.
 constexpr double kRounding = 1e-10;
 
-Scene box_on_plane() {
-    const std::vector<NamedPolygon> polys{
-        {"ground", {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}}},
-        {"roof", {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}},
-        {"south", {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}},
-        {"east", {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}},
-        {"north", {{1, 1, 0}, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}}},
-        {"west", {{0, 1, 0}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}}},
-    };
-    return test::make_scene(polys, 100.0);
-}
+using test::box_on_plane;
 
 TEST(SunClip, BoxOnPlaneIsExactToRounding) {
     const Scene s = box_on_plane();

@@ -55,4 +55,19 @@ inline std::vector<NamedPolygon> inward_box(double sx, double sy, double sz) {
     };
 }
 
+// The unit box [0,1]³ (roof and four walls, one-sided, facing out; no floor) on the ground
+// [−5,5]² at z = 0 (facing up); one object per face, one patch per face: the scene of the shadow
+// closed form in support/box_shadow.hpp.
+inline Scene box_on_plane() {
+    const std::vector<NamedPolygon> polys{
+        {"ground", {{-5, -5, 0}, {5, -5, 0}, {5, 5, 0}, {-5, 5, 0}}},
+        {"roof", {{0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}}},
+        {"south", {{0, 0, 0}, {1, 0, 0}, {1, 0, 1}, {0, 0, 1}}},
+        {"east", {{1, 0, 0}, {1, 1, 0}, {1, 1, 1}, {1, 0, 1}}},
+        {"north", {{1, 1, 0}, {0, 1, 0}, {0, 1, 1}, {1, 1, 1}}},
+        {"west", {{0, 1, 0}, {0, 0, 0}, {0, 0, 1}, {0, 1, 1}}},
+    };
+    return make_scene(polys, 100.0);
+}
+
 }  // namespace ffcube::test
