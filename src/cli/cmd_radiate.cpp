@@ -19,7 +19,7 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/ply.hpp"
-#include "ffcube/io/vtu.hpp"
+#include "ffcube/io/fields.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
@@ -197,8 +197,7 @@ int run(const Options& o) {
         check_output_path(option, *path);
     if (!o.mesh.empty() && !o.mesh.ends_with(".ply"))
         throw InputError(fmt::format("--mesh {}: the name must end in .ply", o.mesh));
-    if (!o.fields.empty() && !o.fields.ends_with(".vtu"))
-        throw InputError(fmt::format("--fields {}: the name must end in .vtu", o.fields));
+    check_fields_path("--fields", o.fields);
     if (!(o.conductance_threshold >= 0.0 && o.conductance_threshold < 1.0))
         throw InputError(fmt::format("--conductance-threshold {}: must be in [0, 1)", o.conductance_threshold));
     if (mpi_distributed()) throw InputError("ffcube radiate runs in one process; run it without mpirun");
@@ -372,7 +371,7 @@ int run(const Options& o) {
     if (!o.patch_out.empty()) write_patches(o.patch_out, scene, r);
     if (!o.mesh.empty()) report.set("mesh.heat_flux_max", write_heat_flux_mesh(o.mesh, scene, r));
     if (!o.fields.empty()) {
-        write_fields_vtu(o.fields, scene,
+        write_fields(o.fields, scene,
                          {{"temperature", r.temperature}, {"heat_flux", r.heat_flux}, {"radiosity", r.radiosity},
                           {"irradiation", r.irradiation}, {"sky_view_factor", r.sky_view}});
         report.set("fields.written", o.fields);
@@ -411,7 +410,8 @@ void add_radiate_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--conductances", opts->conductances, "write Gebhart conductances between objects: from,to,GR (m^2)");
     expert(sub->add_option("--fields", opts->fields,
                            "write the meshed scene with per-patch temperature, heat_flux, radiosity, irradiation, "
-                           "sky_view_factor (and element_id) as a VTK .vtu for ParaView (docs/fe-meshes.md)"));
+                           "sky_view_factor (and element_id): OUT.vtu for ParaView, or OUT.msh, a Gmsh model with views "
+                           "(docs/fe-meshes.md)"));
     sub->add_option("--report", opts->report, "write a JSON report (energy balance, solver, timings)");
     expert(sub->add_option("--conductance-threshold", opts->conductance_threshold,
                            "drop conductances below this fraction of the largest")

@@ -2,6 +2,7 @@
 // as CSV, a JSON report, a picture (EXR or PNG) and a coloured mesh (PLY). docs/solve.md.
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <cmath>
@@ -18,8 +19,10 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
 #include "ffcube/core/timer.hpp"
+#include "ffcube/formfactor/sky.hpp"
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
+#include "ffcube/io/fields.hpp"
 #include "ffcube/io/ply.hpp"
 #include "ffcube/pipeline/adaptive.hpp"
 #include "ffcube/pipeline/row_source.hpp"
@@ -41,7 +44,7 @@ struct Options {
     std::uint64_t max_iterations = 0;
     CLI::Option* overshoot_option = nullptr;  // unbound: 0 or 1 values, parsed in run()
     double row_cache_mb = 512.0;
-    std::string matrix, objects, radiosity, report, render, mesh, camera;
+    std::string matrix, objects, radiosity, report, render, mesh, camera, fields;
     int width = 512, height = 512;
     bool flat = false;
     double exposure = 0.0;  // 0: automatic
@@ -90,6 +93,26 @@ std::size_t sky_row_sums(RowProvider& provider, std::vector<double>& sums, bool 
     return n - missing.size();
 }
 
+// --fields: B per patch (one array per channel), and the sky view factors when --sky computed
+// them (less what obstruction-only surfaces intercept, as --sky writes them).
+void write_solve_fields(const std::string& path, const Scene& scene, std::span<const Vec3> radiosity, std::span<const double> sky_sums,
+                        std::span<const double> obstructed, Report& report) {
+    std::array<std::vector<double>, 3> b;
+    for (int c = 0; c < 3; ++c) {
+        b[std::size_t(c)].resize(scene.size());
+        for (std::size_t i = 0; i < scene.size(); ++i) b[std::size_t(c)][i] = radiosity[i][c];
+    }
+    std::vector<CellField> fields{{"radiosity_r", b[0]}, {"radiosity_g", b[1]}, {"radiosity_b", b[2]}};
+    std::vector<double> svf;
+    if (!sky_sums.empty()) {
+        svf = sky_view_factors(sky_sums);
+        for (std::size_t i = 0; i < obstructed.size() && i < svf.size(); ++i) svf[i] = std::max(0.0, svf[i] - obstructed[i]);
+        fields.push_back({"sky_view_factor", svf});
+    }
+    write_fields(path, scene, fields);
+    report.set("fields.written", path);
+}
+
 int run(const Options& o) {
     // Everything that can be refused is refused before any work.
     SolverOptions so;
@@ -113,8 +136,9 @@ int run(const Options& o) {
     if (o.exposure_option && o.exposure_option->count() > 0 && !(o.exposure > 0.0 && std::isfinite(o.exposure)))
         throw InputError(fmt::format("--exposure {}: must be a finite number > 0", o.exposure));
     for (const auto& [option, path] : {std::pair{"--objects", &o.objects}, {"--radiosity", &o.radiosity},
-                                       {"--report", &o.report}, {"--render", &o.render}, {"--mesh", &o.mesh}})
+                                       {"--report", &o.report}, {"--render", &o.render}, {"--mesh", &o.mesh}, {"--fields", &o.fields}})
         check_output_path(option, *path);
+    check_fields_path("--fields", o.fields);
     check_surface_output_paths(o.sky);
     if (!o.sky.sky.empty() && mpi_distributed())
         throw InputError("--sky under mpirun: ffcube solve's ranks hold only their block of rows; use `mpirun ... ffcube "
@@ -264,6 +288,7 @@ int run(const Options& o) {
         write_patch_radiosity_csv(o.radiosity, object, area, res.radiosity, scene.objects);
     }
     if (!o.sky.sky.empty()) write_sky_outputs(o.sky, sky_sums, scene, report, obstructed);
+    if (!o.fields.empty()) write_solve_fields(o.fields, scene, res.radiosity, sky_sums, obstructed, report);
     if (!o.mesh.empty()) {
         write_ply(o.mesh, solved_ply_mesh(scene, res.radiosity, shading, exposure),
                   fmt::format("ffcube solve of {}: colours = sRGB of exposure {:.6g} x radiosity / pi; radiosity_* = B", scene.source,
@@ -309,6 +334,9 @@ void add_solve_command(CLI::App& app, std::function<int()>& action) {
     opts->exposure_option =
         sub->add_option("--exposure", opts->exposure, "PNG and PLY colours: display value = exposure x radiance (default: automatic)");
     sub->add_option("--mesh", opts->mesh, "write the solved mesh with per-vertex colours as OUT.ply");
+    expert(sub->add_option("--fields", opts->fields,
+                           "write the meshed scene with per-patch radiosity_r/g/b (and sky_view_factor with --sky, element_id): "
+                           "OUT.vtu for ParaView, or OUT.msh, a Gmsh model with views (docs/fe-meshes.md)"));
     add_adaptive_options(*sub, opts->adaptive);
     add_sky_options(*sub, opts->sky);
     expert(sub->add_flag("--allow-unconverged", opts->allow_unconverged,

@@ -2,6 +2,7 @@
 
 #include "cli/common.hpp"
 #include "cli/expert.hpp"
+#include "ffcube/io/fields.hpp"
 
 namespace ffcube::cli {
 
@@ -31,8 +32,8 @@ void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
     app.add_option("--patch-table", o.patch_table,
                    "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz; element_id for a mesh read through Gmsh)");
     expert(app.add_option("--fields", o.fields,
-                          "write the meshed scene with per-patch fields (sky view factor, row sum, element id) as a VTK "
-                          ".vtu for ParaView (docs/fe-meshes.md)"));
+                          "write the meshed scene with per-patch fields (sky view factor, row sum, element id): OUT.vtu "
+                          "for ParaView, or OUT.msh, a Gmsh model with views (docs/fe-meshes.md)"));
 }
 
 void check_surface_output_paths(const SurfaceOutputOptions& o) {
@@ -41,6 +42,7 @@ void check_surface_output_paths(const SurfaceOutputOptions& o) {
     check_output_path("--elmer", o.elmer);
     check_output_path("--patch-table", o.patch_table);
     check_output_path("--fields", o.fields);
+    check_fields_path("--fields", o.fields);
 }
 
 }  // namespace ffcube::cli

@@ -11,7 +11,7 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sky.hpp"
-#include "ffcube/io/vtu.hpp"
+#include "ffcube/io/fields.hpp"
 #include "ffcube/solver/exchange.hpp"
 
 namespace ffcube {
@@ -168,7 +168,7 @@ void write_sky_and_table(const SurfaceOutputOptions& o, std::vector<double> svf,
     }
     if (!o.patch_table.empty()) write_patch_table(o.patch_table, scene, row_error);
     if (!o.fields.empty()) {
-        write_fields_vtu(o.fields, scene, {{"sky_view_factor", svf}, {"row_sum", row_sum}});
+        write_fields(o.fields, scene, {{"sky_view_factor", svf}, {"row_sum", row_sum}});
         report.set("fields.written", o.fields);
     }
 }

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "cli/cli_util.hpp"
+#include "fe/fe_util.hpp"
 #include "ffcube/reference/closed_forms.hpp"
 
 namespace ffcube {
@@ -30,28 +31,8 @@ constexpr double kBox[3] = {2.0, 1.0, 1.5};  // the box of gmsh_models
 constexpr double kAreaPrinted = 1e-8;
 constexpr int kRays = 32768;  // well under 1 s per run on the models' 100 to 200 patches
 
-// The models, written once per process into a temporary directory.
-const TempDir& models() {
-    static TempDir dir;
-    static const int status = std::system((std::string(FFCUBE_GMSH_MODELS) + " " + dir.path().string() + " > /dev/null").c_str());
-    EXPECT_EQ(status, 0);
-    return dir;
-}
-
-std::vector<std::vector<std::string>> csv(const std::string& text) {
-    std::vector<std::vector<std::string>> rows;
-    std::istringstream in(text);
-    std::string line;
-    std::getline(in, line);  // header
-    while (std::getline(in, line)) {
-        std::vector<std::string> cells;
-        std::stringstream ls(line);
-        std::string cell;
-        while (std::getline(ls, cell, ',')) cells.push_back(cell);
-        rows.push_back(cells);
-    }
-    return rows;
-}
+using test::csv;
+using test::models;
 
 struct ObjectShape {
     double area = 0.0, largest_patch = 0.0;
