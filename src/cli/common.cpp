@@ -63,12 +63,20 @@ void add_scene_options(CLI::App& app, SceneFlags& o) {
                   [&o](const std::string& w) {
                       if (w == "group" || w == "entity" || w == "element")
                           o.scene.fe_objects_by = w == "group" ? FeObjectsBy::group : w == "entity" ? FeObjectsBy::entity : FeObjectsBy::element;
+                      else if (w.starts_with("field:"))
+                          o.scene.fe_field = w.substr(6);
                       else
                           o.scene.objects_by = parse_objects_by(w);
                   },
                   "what names objects: in an OBJ auto (default: o, else g, else the material), o, g or material; in a "
-                  "mesh read through Gmsh group (default: physical groups), entity or element (docs/fe-meshes.md)")
-               ->check(CLI::IsMember({"auto", "o", "g", "material", "group", "entity", "element"}))
+                  "mesh read through Gmsh group (default: physical groups), entity or element; in a legacy .vtk "
+                  "field:NAME, its integer cell array NAME (docs/fe-meshes.md)")
+               ->check([](const std::string& w) -> std::string {
+                   for (const char* k : {"auto", "o", "g", "material", "group", "entity", "element"})
+                       if (w == k) return "";
+                   if (w.starts_with("field:") && w.size() > 6) return "";
+                   return "must be auto, o, g, material, group, entity, element or field:NAME, not '" + w + "'";
+               })
                ->default_str("auto"));
     expert(app.add_option("--flip", o.scene.flip,
                           "reverse the faces of these groups (objects) of a mesh read through Gmsh: --flip a,b (docs/fe-meshes.md)")

@@ -32,6 +32,7 @@ FeLoadOptions fe_load_options(const SceneOptions& o) {
     FeLoadOptions fe;
     fe.objects_by = o.fe_objects_by;
     fe.flip = o.flip;
+    fe.field = o.fe_field;
     fe.cad_mesh_size = o.max_patch_edge;
     fe.cad_patches = o.patches;
     return fe;

@@ -144,10 +144,11 @@ void Kwargs::read_scene_options(SceneOptions& o, std::string* field) {
             o.fe_objects_by = w == "group" ? FeObjectsBy::group : w == "entity" ? FeObjectsBy::entity : FeObjectsBy::element;
         else if (w.starts_with("field:") && field && w.size() > 6)
             *field = w.substr(6);
+        else if (w.starts_with("field:") && w.size() > 6)  // a file: a legacy .vtk's cell array, as --objects-by
+            o.fe_field = w.substr(6);
         else if (w.starts_with("field:"))
-            throw InputError(fmt::format("objects_by='{}': field:NAME names an integer cell-data array of a meshio.Mesh "
-                                         "(load_scene(mesh, objects_by='field:NAME')); a file takes auto, o, g, material, group, "
-                                         "entity or element",
+            throw InputError(fmt::format("objects_by='{}': field:NAME names an integer cell-data array (of a meshio.Mesh or a "
+                                         "legacy .vtk file)",
                                          w));
         else
             o.objects_by = parse_objects_by(w);

@@ -26,6 +26,8 @@
 #include "ffcube/core/guarded_child.hpp"
 #include "ffcube/core/input_file.hpp"
 #include "ffcube/scene/assimp_loader.hpp"
+#include "ffcube/scene/fe_cells.hpp"
+#include "ffcube/scene/vtk_legacy.hpp"
 #include "scene/gmsh_collector.hpp"
 #include "scene/model_wire.hpp"
 
@@ -271,6 +273,10 @@ ObjModel load_with_gmsh(const std::filesystem::path& path, const FeLoadOptions& 
         if (bytes == 0) throw InputError(fmt::format("{}: the file is empty", source));
         if (ext == ".bdf" || ext == ".nas") check_nastran_cards(file.bytes(), source);
         if (ext == ".msh") check_msh_physical_names(file.bytes(), source);
+        // A cell array as the objects, or a version Gmsh 4.8 misreads (5.x): ffcube's own VTK
+        // reader, and the cells through Gmsh's model API as for Python's meshio (vtk_legacy.hpp).
+        if (ext == ".vtk" && (!options.field.empty() || vtk_legacy_version(file.bytes()) >= 5))
+            return load_fe_cells(read_vtk_legacy(file.bytes(), source, options.field), options);
         if (gmsh_is_cad_extension(ext)) {
             const std::string_view head = file.bytes().substr(0, 80);
             const bool step = ext == ".step" || ext == ".stp";

@@ -72,6 +72,11 @@ ObjModel load_model(const std::filesystem::path& path, SceneFormat format, const
         throw InputError(fmt::format("{}: --flip {}: --flip reverses groups of a mesh read through Gmsh (.msh, .unv, .bdf, .nas, "
                                      ".vtk, .step, .iges); this file is read as {}",
                                      path.string(), obj.fe.flip.front(), to_string(format)));
+    if (!obj.fe.field.empty() && (format != SceneFormat::Gmsh || path.extension() != ".vtk"))
+        throw InputError(fmt::format("{}: --objects-by field:{} names objects by an integer cell array of a legacy VTK file (.vtk); "
+                                     "this file is read as {}{}",
+                                     path.string(), obj.fe.field, to_string(format),
+                                     format == SceneFormat::Gmsh ? " (its groups: --objects-by group, entity or element)" : ""));
     if (format != SceneFormat::Gmsh && obj.fe.objects_by != FeObjectsBy::group)
         throw InputError(fmt::format("{}: --objects-by entity and element apply to meshes read through Gmsh; this file is read "
                                      "as {} (its words: auto, o, g, material)",

@@ -61,17 +61,17 @@ int axis_of(const ObjectShape& s) {
     return a;
 }
 
-// Reads the box in `file` with its walls flipped to face into the box and checks every
-// object-to-object factor against Howell's closed forms.
-void check_box(const std::string& file) {
+// Reads the box in `file` (with the reading `options`) with its walls flipped to face into the box
+// and checks every object-to-object factor against Howell's closed forms.
+void check_box(const std::string& file, const std::string& options = "") {
     const TempDir& m = models();
     TempDir out;
     // A first run learns the object names (they differ by format: groups, pid_N, surface_N).
-    auto r = run_ffcube("formfactors " + (m / file) + " --no-subdivide --method raycast -q --patch-table " + (out / "t0.csv"));
+    auto r = run_ffcube("formfactors " + (m / file) + options + " --no-subdivide --method raycast -q --patch-table " + (out / "t0.csv"));
     ASSERT_EQ(r.code, 0) << r.output;
     std::string names;
     for (const auto& [name, s] : shapes(read_text(out / "t0.csv"))) names += (names.empty() ? "" : ",") + name;
-    r = run_ffcube("formfactors " + (m / file) + " --no-subdivide --method raycast -q --rays " + std::to_string(kRays) +
+    r = run_ffcube("formfactors " + (m / file) + options + " --no-subdivide --method raycast -q --rays " + std::to_string(kRays) +
                    " --flip " + names + " --patch-table " + (out / "t.csv") + " --groups " + (out / "g.csv"));
     ASSERT_EQ(r.code, 0) << r.output;
     const auto walls = shapes(read_text(out / "t.csv"));
@@ -243,6 +243,55 @@ std::size_t expect_box_walls(const std::vector<std::vector<std::string>>& rows, 
         EXPECT_NEAR(area[a], exact, kAreaPrinted * exact) << what << " axis " << a;
     }
     return rows.size();
+}
+
+// meshio (Debian's python3-meshio, an independent writer) writes the box of box_41.msh and the
+// box in prisms as legacy VTK, in its default version 5.1 and in 4.2, binary and ASCII, with
+// each cell's physical group as the integer cell array "wall". --objects-by field:wall names the
+// walls wall_<tag>, which give Howell's closed forms (the prisms: only the boundary faces of the
+// wedges radiate, an internal face would add area or a seventh object). Each triangle's element
+// id is 1 + its index among the file's cells, at the centroid meshio's arrays give that cell.
+TEST(GmshCli, VtkCellArrayNamesTheObjects) {
+    const TempDir& m = models();
+    TempDir out;
+    test::write_file(out / "w.py",
+                     "import meshio,sys,numpy as np\nd=sys.argv[1]\n"
+                     "for src in ['box_41','box_prism']:\n"
+                     "  m=meshio.read(d+'/'+src+'.msh')\n"
+                     "  cells=[(c.type,c.data) for c in m.cells]\n"
+                     "  wall=[p.astype(np.int32) for p in m.cell_data['gmsh:physical']]\n"
+                     "  v=meshio.Mesh(m.points,cells,cell_data={'wall':wall})\n"
+                     "  meshio.vtk.write(d+'/'+src+'_51.vtk',v,fmt_version='5.1',binary=True)\n"
+                     "  meshio.vtk.write(d+'/'+src+'_51a.vtk',v,fmt_version='5.1',binary=False)\n"
+                     "  meshio.vtk.write(d+'/'+src+'_42.vtk',v,fmt_version='4.2',binary=True)\n"
+                     "  meshio.vtk.write(d+'/'+src+'_42a.vtk',v,fmt_version='4.2',binary=False)\n"
+                     "  if src=='box_41':\n"
+                     "    k=0\n"
+                     "    for t,c in cells:\n"
+                     "      for e in c:\n"
+                     "        k+=1\n"
+                     "        if t=='triangle': print(k,*(repr(float(x)) for x in m.points[e].mean(axis=0)))\n");
+    ASSERT_EQ(std::system(("/usr/bin/python3 " + (out / "w.py") + " " + m.path().string() + " > " + (out / "c.txt") + " 2>/dev/null").c_str()), 0);
+    check_box("box_41_51.vtk", " --objects-by field:wall");
+    check_box("box_prism_42.vtk", " --objects-by field:wall");
+    // The other versions and encodings give the same patches, ids and names.
+    const auto patches = patch_rows(m / "box_41_51.vtk", "--objects-by field:wall", out);
+    for (const char* v : {"box_41_51a.vtk", "box_41_42.vtk", "box_41_42a.vtk"}) EXPECT_EQ(patch_rows(m / v, "--objects-by field:wall", out), patches) << v;
+    const auto prisms = patch_rows(m / "box_prism_42.vtk", "--objects-by field:wall", out);
+    for (const char* v : {"box_prism_51.vtk"})
+        EXPECT_EQ(patch_rows(m / v, "--objects-by field:wall", out), prisms) << v;
+    std::map<long, std::array<double, 3>> centroid;
+    std::istringstream c(read_text(out / "c.txt"));
+    for (long id; c >> id;) c >> centroid[id][0] >> centroid[id][1] >> centroid[id][2];
+    ASSERT_EQ(centroid.size(), patches.size());
+    for (const auto& row : patches) {
+        EXPECT_EQ(row.at(1).rfind("wall_", 0), 0u) << row.at(1);
+        const long id = std::stol(row.at(9));
+        ASSERT_EQ(centroid.count(id), 1u) << "element " << id;
+        // The table prints 9 significant digits of coordinates of at most 2: 5e-9 each.
+        for (int a = 0; a < 3; ++a) EXPECT_NEAR(std::stod(row.at(3 + std::size_t(a))), centroid[id][std::size_t(a)], 1e-8) << "element " << id;
+        centroid.erase(id);  // each element once
+    }
 }
 
 // Volume elements alone (no surface elements in the file): their boundary faces are the patches,

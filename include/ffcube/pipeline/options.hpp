@@ -33,6 +33,7 @@ struct SceneOptions {
     ObjObjectsBy objects_by = ObjObjectsBy::automatic;  // OBJ: what names objects (--objects-by)
     FeObjectsBy fe_objects_by = FeObjectsBy::group;     // meshes read through Gmsh: the same (--objects-by)
     std::vector<std::string> flip;                      // --flip GROUP: reversed objects of a mesh file
+    std::string fe_field;  // --objects-by field:NAME: a legacy .vtk's integer cell array NAME names objects
     SceneFormat format = SceneFormat::Auto;  // --format: Auto = by the file's extension
     std::string materials;       // --materials: CSV of Kd and Ke per object (scene/material_map.hpp)
     bool subdivide = true;       // false (--no-subdivide): one patch per input face

@@ -32,6 +32,9 @@ struct FeLoadOptions {
     FeObjectsBy objects_by = FeObjectsBy::group;
     // Groups (object names) whose faces are reversed (--flip); a name that no face takes is an error.
     std::vector<std::string> flip;
+    // A legacy .vtk's integer cell array whose values name the objects (--objects-by field:NAME,
+    // vtk_legacy.hpp); empty: none.
+    std::string field;
     // CAD files: the mesh size Gmsh meshes at (--max-patch-edge), or, when 0, the size that gives
     // about `cad_patches` squares of the model's area (--patches); both 0: Gmsh's default.
     double cad_mesh_size = 0.0;
