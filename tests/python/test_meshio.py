@@ -154,6 +154,13 @@ class Meshio(unittest.TestCase):
                     axis = "xyz".index(name[0])
                     self.assertAlmostEqual(s.areas[s.patch_object == s.objects.index(f"wall_{k + 1}")].sum(),
                                            BOX[(axis + 1) % 3] * BOX[(axis + 2) % 3], delta=1e-12, msg=ext)
+                if ext == "vtk":
+                    # The file itself (ffcube's legacy VTK reader): the same elements, objects and areas.
+                    f = ffcube.load_scene(path, objects_by="field:wall", no_subdivide=True, quiet=True)
+                    self.assertEqual(sorted(f.objects), sorted(s.objects))
+                    def by_id(x):
+                        return {int(e): (x.objects[o], a) for e, o, a in zip(x.element_ids, x.patch_object, x.areas)}
+                    self.assertEqual(by_id(f), by_id(s))
 
     def test_results_go_back_onto_the_cells(self):
         mesh = meshio.read(os.path.join(models(), "box_41.msh"))
