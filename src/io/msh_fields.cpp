@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstdint>
 #include <fstream>
+#include <string_view>
 #include <unordered_set>
 
 #include "ffcube/core/error.hpp"
@@ -61,6 +62,17 @@ std::vector<std::size_t> element_tags(const Scene& scene) {
     return tags;
 }
 
+// A physical name as the .msh format can hold it: between double quotes on one line, with no
+// escape, so a double quote becomes a single one and a control character a space.
+std::string msh_name(std::string_view name) {
+    std::string out(name);
+    for (char& c : out) {
+        if (c == '"') c = '\'';
+        if (static_cast<unsigned char>(c) < 32) c = ' ';
+    }
+    return out;
+}
+
 // In the child: the model through Gmsh's API, written with its views into `file`.
 std::string write_in_child(const std::filesystem::path& file, const Scene& scene, const std::vector<CellField>& arrays) {
     // Gmsh's messages go to its logger, not to ffcube's stdout (which may be an output).
@@ -107,7 +119,7 @@ std::string write_in_child(const std::filesystem::path& file, const Scene& scene
                 if (!element.empty()) gmsh::model::mesh::addElementsByType(entity, count == 3 ? 2 : 3, element, nodes);
             }
             gmsh::model::addPhysicalGroup(2, {entity}, entity);
-            gmsh::model::setPhysicalName(2, entity, scene.objects[o]);
+            gmsh::model::setPhysicalName(2, entity, msh_name(scene.objects[o]));
         }
         gmsh::option::setNumber("Mesh.MshFileVersion", 4.1);
         gmsh::option::setNumber("Mesh.Binary", 0);

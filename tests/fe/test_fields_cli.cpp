@@ -17,6 +17,7 @@
 
 #include "cli/cli_util.hpp"
 #include "fe/fe_util.hpp"
+#include "ffcube/reference/closed_forms.hpp"
 
 namespace ffcube {
 namespace {
@@ -221,6 +222,34 @@ TEST(GmshFields, SolveWritesTheRadiosityOntoTheElements) {
     const int s = vtu.column("sky_view_factor");
     ASSERT_GE(s, 0);
     for (const auto& row : vtu.rows) EXPECT_NEAR(std::stod(row.at(std::size_t(s))), 0.0, 1e-6);
+}
+
+// Two unit squares facing each other 1 apart, as quads in an OBJ whose object names hold a double
+// quote and a space: the .msh holds 4-node quadrangles (Gmsh type 3), the name with its quote
+// written as a single one (the format has no escape), and each square's row sum, Howell's C-11
+// for parallel unit squares at distance 1.
+TEST(GmshFields, QuadsAndQuotedNamesReopenInGmsh) {
+    TempDir out;
+    test::write_file(out / "q.obj", "o we\"ird name\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"
+                                    "o other\nv 0 0 1\nv 0 1 1\nv 1 1 1\nv 1 0 1\nf 5 6 7 8\n");
+    constexpr int kRaysHere = 4096;
+    const auto r = run_ffcube("formfactors " + (out / "q.obj") + " --no-subdivide --method raycast -q --rays " +
+                              std::to_string(kRaysHere) + " --fields " + (out / "q.msh"));
+    ASSERT_EQ(r.code, 0) << r.output;
+    const Table msh = msh_elements(out, out / "q.msh");
+    ASSERT_EQ(msh.rows.size(), 2u);
+    const int row_sum = msh.column("row_sum");
+    ASSERT_GE(row_sum, 0);
+    const double exact = ff_parallel_rectangles(1.0, 1.0, 1.0);
+    // A ray-cast row of R rays has a standard error of at most sqrt(F (1 - F) / R): 5 of them.
+    const double tol = 5.0 * std::sqrt(exact * (1.0 - exact) / kRaysHere);
+    std::vector<std::string> groups;
+    for (const auto& row : msh.rows) {
+        EXPECT_EQ(row.at(1), "3");
+        groups.push_back(row.at(2));
+        EXPECT_NEAR(std::stod(row.at(std::size_t(row_sum))), exact, tol) << row.at(2);
+    }
+    EXPECT_EQ(groups, (std::vector<std::string>{"we'ird name", "other"}));
 }
 
 // A name that is neither .vtu nor .msh is refused before any work, naming the option; so is a

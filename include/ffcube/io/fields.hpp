@@ -3,7 +3,7 @@
 // view per field (.msh, written through Gmsh's API).
 //
 // The .msh (format 4.1, ASCII) holds one discrete surface per object with a physical surface
-// group of the object's name, the patches as 3-node triangles and 4-node quadrangles, and one
+// group of the object's name (a double quote written as a single one, which the format needs), the patches as 3-node triangles and 4-node quadrangles, and one
 // view of "ElementData" per array, in the order and with the names the .vtu has: `patch`,
 // `object`, `element_id` (when the scene came from a mesh read through Gmsh), `area`, then the
 // fields given. A mesh element's tag is its element id when every patch has one and no two
