@@ -2,10 +2,8 @@
 #include <fmt/format.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <memory>
 #include <optional>
-#include <vector>
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
@@ -14,20 +12,13 @@
 #include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
-#include "ffcube/core/progress.hpp"
 #include "ffcube/core/timer.hpp"
-#include "ffcube/formfactor/checks.hpp"
 #include "ffcube/io/csv.hpp"
-#include "ffcube/io/ffm.hpp"
-#include "ffcube/io/mtx.hpp"
-#include "ffcube/io/solver_files.hpp"
-#include "ffcube/io/transpose_scratch.hpp"
 #include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/surface_outputs.hpp"
-#include "ffcube/scene/patch_areas.hpp"
 
 namespace ffcube::cli {
 namespace {

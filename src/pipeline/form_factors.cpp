@@ -170,7 +170,7 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
     // no pass over the rows follows. Beyond, it gives up and frees them, and the rows are read again.
     constexpr std::uint64_t kLiveReciprocityBytes = std::uint64_t{64} << 20;
     std::optional<StreamedPatchReciprocity> live;
-    if (!enforce) live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
+    if (!enforce && o.reciprocity) live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
     View3dCutoff cutoff(scene, o.max_distance);
     {
         Stopwatch watch, piece;
@@ -226,6 +226,8 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         f.nnz = nnz;
         final_checks = &*out_checks;
         f.reciprocity.patch_max_abs = e.patch_max_abs;  // computed with the enforced rows
+    } else if (!o.reciprocity) {
+        // Not asked for: no pass.
     } else if (live && live->complete()) {
         if (progress)
             info("reciprocity: checked while the rows came ({:.1f} MiB held at most), no pass over {}",
@@ -265,6 +267,17 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
     write_surface_outputs(o.surface, sums, *final_checks, scene, report,
                           scene.drawn ? feed.obstructed() : std::span<const double>{}, row_errors(rows));
     return f;
+}
+
+CsrMatrix form_factor_matrix(const Scene& scene, RowSource& rows, Report& report, const FormFactorOptions& options,
+                             FormFactorFigures* figures) {
+    FFCUBE_CHECK(options.output.empty());
+    LocalRowFeed feed(rows, nullptr, options.progress);
+    CsrMatrixSink matrix(static_cast<std::uint32_t>(scene.size()));
+    MatrixSink* sinks[] = {&matrix};
+    FormFactorFigures f = compute_form_factors(scene, rows, feed, options, sinks, report);
+    if (figures) *figures = std::move(f);
+    return matrix.take();
 }
 
 }  // namespace ffcube

@@ -73,11 +73,8 @@ py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
         RowSource rows = make_row_source(*scene, ro);
         for (const std::string& line : describe(rows)) info("{}", line);
         // The one path of `ffcube formfactors` (pipeline/form_factors.hpp), into memory.
-        LocalRowFeed feed(rows, nullptr, false);
-        CsrMatrixSink matrix(static_cast<std::uint32_t>(scene->size()));
-        MatrixSink* sinks[] = {&matrix};
-        const FormFactorFigures f = compute_form_factors(*scene, rows, feed, FormFactorOptions{}, sinks, report);
-        F = matrix.take();
+        FormFactorFigures f;
+        F = form_factor_matrix(*scene, rows, report, {}, &f);
         if (want_report) {  // the keys of `ffcube formfactors --report`, but for writing and checkpoints
             report.set("seconds", f.seconds);
             report_rates(report, rows, scene->size(), f.seconds);

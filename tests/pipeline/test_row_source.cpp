@@ -11,7 +11,6 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/report.hpp"
-#include "ffcube/io/matrix_sink.hpp"
 #include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/scene/patch_areas.hpp"
@@ -300,11 +299,7 @@ TEST(RowSource, PlainAndRaycastSources) {
 // Every row through the one path (pipeline/form_factors.hpp), enforced as rows.options() asks,
 // into memory.
 CsrMatrix finished_matrix(RowSource& rows, const Scene& scene, Report& report) {
-    LocalRowFeed feed(rows, nullptr, false);
-    CsrMatrixSink matrix(static_cast<std::uint32_t>(scene.size()));
-    MatrixSink* sinks[] = {&matrix};
-    compute_form_factors(scene, rows, feed, FormFactorOptions{}, sinks, report);
-    return matrix.take();
+    return form_factor_matrix(scene, rows, report);
 }
 
 TEST(RowSource, ClosureIsRefusedForAnOpenScene) {

@@ -88,6 +88,9 @@ struct FormFactorOptions {
     // centroids lie farther apart removed from each row as it comes; 0: none.
     double max_distance = 0.0;
     bool object_factors = false;  // FormFactorFigures::object_factors wanted (--groups)
+    // The patch reciprocity check (FormFactorFigures::reciprocity.patch_max_abs, report
+    // "reciprocity.*"); off where nobody reads it (radiation of a sun series): no pass for it.
+    bool reciprocity = true;
     bool progress = false;
 };
 
@@ -109,5 +112,11 @@ struct FormFactorFigures {
 FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows, RowFeed& feed,
                                        const FormFactorOptions& options, std::span<MatrixSink* const> sinks,
                                        Report& report);
+
+// compute_form_factors of this process's rows (no checkpoint; options.output must be empty) into
+// memory: the finished matrix (enforced when rows.options().enforce asks), its figures in *figures
+// when given. Python's form_factors and radiate, `ffcube radiate` and `ffcube sun` take F this way.
+CsrMatrix form_factor_matrix(const Scene& scene, RowSource& rows, Report& report, const FormFactorOptions& options = {},
+                             FormFactorFigures* figures = nullptr);
 
 }  // namespace ffcube
