@@ -133,8 +133,13 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
     FormFactorFigures f;
     RowStreamChecks checks(scene);
     std::vector<double> sums(scene.size(), 0.0);  // for the sky view factors: 8 bytes a patch
-    // Removed on return and on error: next to the output, else in the temporary directory.
-    ScratchDir scratch(output.empty() ? std::filesystem::temp_directory_path() / "ffcube" : o.output);
+    // Made when first needed, removed on return and on error: next to the output, else in the
+    // temporary directory.
+    std::optional<ScratchDir> scratch;
+    const auto scratch_dir = [&]() -> const std::filesystem::path& {
+        if (!scratch) scratch.emplace(output.empty() ? std::filesystem::temp_directory_path() / "ffcube" : o.output);
+        return scratch->path();
+    };
     // The finished rows' files besides the .ffm, each created now so that a bad path fails before
     // any row is computed; then the caller's.
     std::vector<std::unique_ptr<MatrixSink>> files;
@@ -156,7 +161,7 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         computed.path = o.output;
         computed.file.emplace(computed.path, scene, o.written);
     } else if (!output.empty()) {
-        computed.path = scratch.path() / "computed.ffm";
+        computed.path = scratch_dir() / "computed.ffm";
         computed.file.emplace(computed.path, scene, o.written, FfmWriterOptions{1u << 20, 1});
     } else {
         if (!enforce)
@@ -208,7 +213,7 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         if (ffm) writer.emplace(o.output, scene, o.written);
         std::uint64_t nnz = 0;
         const EnforcementFigures e = apply_enforcement(
-            rows.options(), computed.pass(), checks, sums, scene, feed.evidence(), scratch.path(), budget_bytes,
+            rows.options(), computed.pass(), checks, sums, scene, feed.evidence(), scratch_dir(), budget_bytes,
             progress,
             [&](std::uint32_t i, RowView row) {
                 if (writer) writer->append_row(row);
@@ -237,6 +242,15 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         report.set("reciprocity.bands", 0);
         report.set("reciprocity.scratch_bytes", 0);
         report.set("reciprocity.in_stream_peak_entries", live->peak_entries());
+    } else if (computed.memory) {
+        live.reset();
+        // The rows are in memory: each entry's F_ji looked up in its row (reciprocity_stats: a
+        // cursor per row, O(nnz), no transpose).
+        Progress bar("reciprocity", n, progress);
+        f.reciprocity.patch_max_abs = reciprocity_stats(computed.memory->matrix(), scene, &bar).patch_max_abs;
+        report.set("reciprocity.passes", 1);
+        report.set("reciprocity.bands", 0);
+        report.set("reciprocity.scratch_bytes", 0);
     } else {
         live.reset();
         // Each row with its column (F_ji), by bands of columns of at most --stats-memory (8 bytes
@@ -252,7 +266,7 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
                                  computed.name(), plan.band_count(), plan.band_count() == 1 ? "" : "s"),
                      std::uint64_t(scene.size()) * plan.passes, progress);
         const TransposeFigures t = for_each_row_and_column(
-            computed.pass(), checks.lower_col_counts(), plan, scratch.path(),
+            computed.pass(), checks.lower_col_counts(), plan, scratch_dir(),
             [&](std::uint32_t i, RowView row, RowView column) { patch.add(i, row, column); }, &bar,
             ColumnPart::below_diagonal);
         f.reciprocity.patch_max_abs = patch.max_abs();
