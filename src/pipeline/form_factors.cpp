@@ -170,12 +170,14 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         if (!computed.memory) computed.memory = &computed.own.emplace(n);
     }
     const std::vector<double> areas = patch_areas(scene);
-    // Reciprocity while the rows come, when the entries waiting for their column's row stay
-    // within min(--stats-memory, 64 MiB) at 16 bytes each (scenes to about 10k patches): then
-    // no pass over the rows follows. Beyond, it gives up and frees them, and the rows are read again.
+    // Reciprocity while the rows come into a file, when the entries waiting for their column's row
+    // stay within min(--stats-memory, 64 MiB) at 16 bytes each (scenes to about 10k patches): then
+    // no pass over the file follows. Beyond, it gives up and frees them, and the file is read
+    // again. Rows held in memory are checked in place after the last (cheaper than waiting entries).
     constexpr std::uint64_t kLiveReciprocityBytes = std::uint64_t{64} << 20;
     std::optional<StreamedPatchReciprocity> live;
-    if (!enforce && o.reciprocity) live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
+    if (!enforce && o.reciprocity && !computed.memory)
+        live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
     View3dCutoff cutoff(scene, o.max_distance);
     {
         Stopwatch watch, piece;
@@ -243,7 +245,6 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
         report.set("reciprocity.scratch_bytes", 0);
         report.set("reciprocity.in_stream_peak_entries", live->peak_entries());
     } else if (computed.memory) {
-        live.reset();
         // The rows are in memory: each entry's F_ji looked up in its row (reciprocity_stats: a
         // cursor per row, O(nnz), no transpose).
         Progress bar("reciprocity", n, progress);
