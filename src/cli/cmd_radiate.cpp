@@ -21,6 +21,7 @@
 #include "ffcube/io/ply.hpp"
 #include "ffcube/io/fields.hpp"
 #include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/render/shading.hpp"
@@ -251,6 +252,7 @@ int run(const Options& o) {
     // Rows: once, into a CsrMatrix (from the file, checked against the scene, or computed).
     watch.restart();
     CsrMatrix F;
+    std::optional<FormFactorFigures> computed;  // F computed here: its figures
     std::unique_ptr<StreamedRows> streamed;
     if (o.stream_matrix) {
         streamed = std::make_unique<StreamedRows>(o.matrix);
@@ -267,7 +269,7 @@ int run(const Options& o) {
         RowSource rows = make_row_source(scene, resolve_row_method(o.rows, scene.drawn_scene()));
         for (const std::string& line : describe(rows)) info("{}", line);
         report.set("rows", rows.provider().name());
-        F = compute_all_rows(rows.provider());
+        F = form_factor_matrix(scene, rows, report, {}, &computed.emplace());  // the one path, with its checks
         report_row_source(report, rows);
     }
     report.set("time.rows", watch.seconds());
@@ -283,6 +285,8 @@ int run(const Options& o) {
         report.set("row_sums.min", sums.empty() ? 0.0 : lo);
         report.set("row_sums.max", sums.empty() ? 0.0 : hi);
         report.set("row_sums.mean", sums.empty() ? 0.0 : mean / double(sums.size()));
+    } else if (computed) {  // checked while the rows came (pipeline/form_factors.hpp)
+        report_matrix_stats(report, computed->nnz, computed->row_sums, computed->reciprocity);
     } else {
         report_matrix_checks(report, F, scene, false);  // row sums and reciprocity: a transpose of F
     }

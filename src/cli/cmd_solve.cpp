@@ -13,7 +13,6 @@
 #include "cli/common.hpp"
 #include "cli/expert.hpp"
 #include "cli/mpi_glue.hpp"
-#include "cli/row_store.hpp"
 #include "cli/surface_options.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
@@ -57,7 +56,7 @@ struct Options {
 
 // The solve's provider, passed through, keeping the sum of each row it hands on: the rows the
 // solve shoots, for the sky view factors (--sky), which then compute only the rows not shot.
-// Sums as stored (SparseRow::stored_sum: RowView::sum of what stream_rows hands on, bit for bit).
+// Sums as stored (SparseRow::stored_sum: RowView::sum of the rows compute_form_factors hands on, bit for bit).
 class RowSumKeeper final : public ObservingRowProvider {
 public:
     explicit RowSumKeeper(RowProvider& inner) : ObservingRowProvider(inner), sums_(inner.size(), NAN) {}

@@ -12,11 +12,11 @@
 
 #include "cli/commands.hpp"
 #include "cli/common.hpp"
-#include "cli/row_store.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/enforcement.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/surface_outputs.hpp"
@@ -55,11 +55,16 @@ int run(const Options& o) {
     refuse_enforcement_with_obstructions(row_options.enforce, scene);
     RowSource rows = make_row_source(scene, row_options);
     for (const std::string& line : describe(rows)) info("{}", line);
-    Stopwatch watch;
-    CsrMatrix F = compute_matrix(rows.provider(), nullptr, !o.quiet, rows.obstructed());
-    const double seconds = watch.seconds();
-    if (scene.view3d.max_distance > 0.0) F = apply_view3d_cutoff(F, scene, scene.view3d.max_distance);
-    F = apply_enforcement(rows, std::move(F), scene, report, nullptr, !o.quiet);
+    // Every row through the one path (pipeline/form_factors.hpp), cut at maxD as it comes, into memory:
+    // View3D's table needs the whole matrix.
+    LocalRowFeed feed(rows, nullptr, !o.quiet);
+    FormFactorOptions fo;
+    fo.max_distance = scene.view3d.max_distance;
+    fo.progress = !o.quiet;
+    CsrMatrixSink matrix(static_cast<std::uint32_t>(scene.size()));
+    MatrixSink* sinks[] = {&matrix};
+    const double seconds = compute_form_factors(scene, rows, feed, fo, sinks, report).seconds;
+    const CsrMatrix& F = matrix.matrix();
     write_view3d_output(o.output, F, scene, scene.view3d.out, report);
     info("{}: {} surfaces ({} rows in {:.2f} s), View3D {} output; {:.2f} s in all", o.output,
          scene.objects.size() + scene.view3d.masks.size(), scene.size(), seconds,

@@ -207,6 +207,16 @@ void add_enforce_option(CLI::App& app, RowOptions& o) {
                     "reciprocity, closure or both (closed scenes only) on the finished matrix", "");
 }
 
+void add_checkpoint_options(CLI::App& app, CheckpointOptions& o) {
+    auto* dir = app.add_option("--checkpoint", o.dir,
+                               "stream finished rows to directory DIR (created if missing) so that a killed run can "
+                               "be resumed");
+    app.add_flag("--resume", o.resume,
+                 "continue the checkpoint in --checkpoint DIR: reuse its rows (it must have been made by the same "
+                 "scene and settings), compute the rest")
+        ->needs(dir);
+}
+
 void check_output_path(const std::string& option, const std::string& path) {
     if (path.empty()) return;
     const std::filesystem::path p(path);

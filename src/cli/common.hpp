@@ -10,6 +10,7 @@
 #include <string>
 
 #include "ffcube/pipeline/adaptive.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/options.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -45,6 +46,8 @@ void add_row_options(CLI::App& app, RowOptions& o, RowTolerance tolerance = RowT
 void add_far_field_emitters_option(CLI::App& app, RowOptions& o);
 // --enforce (formfactors only: it acts on the finished matrix).
 void add_enforce_option(CLI::App& app, RowOptions& o);
+// Adds --checkpoint DIR and --resume (which needs --checkpoint).
+void add_checkpoint_options(CLI::App& app, CheckpointOptions& o);
 
 // Writes the area-weighted mean radiosity per object of `scene` (io/csv.hpp's object CSV,
 // atomically): solve --objects and view --objects.

@@ -89,6 +89,16 @@ void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t fir
     store.sync();
 }
 
+// What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
+// own block only: reduced over the ranks onto rank 0.
+struct RanksFigures {
+    ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
+    // With obstruction-only surfaces (Scene::drawn): every row's obstructed share
+    // (RowSource::obstructed(), or a reused row's from its rank's checkpoint shard), each from the
+    // rank that owns the row; empty without them.
+    std::vector<double> obstructed;
+};
+
 // The closure evidence of every rank's rows (a process's providers saw only its own), and with
 // obstruction-only surfaces every row's obstructed share, on rank 0. Collective. This rank's rows
 // are [first, last); store: where they wait (their shares as stored, reused rows' included), or
@@ -142,63 +152,57 @@ Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) {
     return s;
 }
 
-std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
-                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress, RanksFigures* figures) {
-    RowProvider& provider = rows.provider();
-    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options);
-    const int r = mpi::rank(), k = mpi::size();
-    const std::uint32_t first = bounds[r], last = bounds[r + 1];
-    info("{} ranks; rank 0 computes rows {}..{} of {}", k, bounds[0], bounds[1], scene.size());
-    report.set("mpi.rows_rank0", bounds[1] - bounds[0]);
-    mpi::RowBlock mine;
-    std::optional<RowCheckpoint> shard;
-    if (checkpoint.dir.empty()) {
-        std::vector<std::uint32_t> list;
-        for (std::uint32_t i = first; i < last; ++i) list.push_back(i);
-        Progress bar("rows (rank 0's block)", list.size(), progress && r == 0);
-        provider.compute_rows(list, [&](std::uint32_t, const SparseRow& row) {
-            mine.nnz.push_back(static_cast<std::uint32_t>(row.nnz()));
-            mine.col.insert(mine.col.end(), row.col.begin(), row.col.end());
-            for (double v : row.val) mine.val.push_back(static_cast<float>(v));  // as CsrMatrix::append_row
-            bar.add();
-        });
-    } else {
-        std::optional<RowCheckpoint> c = open_shard(checkpoint, scene, meta, report);
-        compute_into(provider, *c, first, last, progress, rows.obstructed());
-        c->read_rows(first, last, mine.nnz, mine.col, mine.val);  // bit-identical to the rows as computed
-        shard = std::move(c);
-    }
-    const RanksFigures reduced = reduce_figures(rows, scene, first, last, shard ? &*shard : nullptr);
-    if (figures) *figures = reduced;
-    return mpi::gather_rows(static_cast<std::uint32_t>(scene.size()), bounds, mine);
-}
+namespace {
 
-std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene, const RowOptions& options,
-                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            const std::string& output, Report& report, bool progress,
-                                            const std::function<void(std::uint32_t, RowView)>& sink) {
-    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options);
+class MpiRowFeed final : public RowFeed {
+public:
+    MpiRowFeed(RowSource& rows, const Scene& scene, const RowOptions& options, const CheckpointOptions& checkpoint,
+               const FfmMetadata& meta, const std::string& output, Report& report, bool progress)
+        : rows_(rows), scene_(scene), options_(options), checkpoint_(checkpoint), meta_(meta), output_(output),
+          report_(report), progress_(progress) {}
+    void rows(const RowViewFn& sink) override;
+    ClosureEvidence evidence() const override { return figures_.evidence; }
+    std::span<const double> obstructed() const override { return figures_.obstructed; }
+
+private:
+    RowSource& rows_;
+    const Scene& scene_;
+    RowOptions options_;
+    CheckpointOptions checkpoint_;
+    FfmMetadata meta_;
+    std::string output_;
+    Report& report_;
+    bool progress_;
+    RanksFigures figures_;
+};
+
+void MpiRowFeed::rows(const RowViewFn& sink) {
+    const Scene& scene = scene_;
+    Report& report = report_;
+    const bool progress = progress_;
+    const CheckpointOptions& checkpoint = checkpoint_;
+    const std::vector<std::uint32_t> bounds = mpi::row_blocks(scene, options_);
     const int r = mpi::rank(), k = mpi::size();
     const std::uint32_t first = bounds[r], last = bounds[r + 1];
     info("{} ranks; rank 0 computes rows {}..{} of {}, then takes the other blocks in order", k, bounds[0], bounds[1],
          scene.size());
     report.set("mpi.rows_rank0", bounds[1] - bounds[0]);
     report.set("mpi.streamed", true);
-    RowProvider& provider = rows.provider();
+    RowProvider& provider = rows_.provider();
     // Where this rank's rows wait: its checkpoint shard, or (rank r > 0 without --checkpoint) a
     // spool, a checkpoint in a scratch directory in this node's temporary directory ($TMPDIR, else
     // /tmp: the output's directory may not exist on another node), removed on return and on error.
     std::optional<ScratchDir> spool_dir;
     std::optional<RowCheckpoint> store;
     if (!checkpoint.dir.empty()) {
-        store = open_shard(checkpoint, scene, meta, report);
+        store = open_shard(checkpoint, scene, meta_, report);
     } else if (r != 0) {
-        spool_dir.emplace(std::filesystem::temp_directory_path() / std::filesystem::path(output).filename());
-        store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta));
+        const std::filesystem::path name = std::filesystem::path(output_).filename();
+        spool_dir.emplace(std::filesystem::temp_directory_path() / (name.empty() ? std::filesystem::path("ffcube") : name));
+        store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta_));
     }
     if (store) {
-        compute_into(provider, *store, first, last, progress, rows.obstructed());
+        compute_into(provider, *store, first, last, progress, rows_.obstructed());
         if (r == 0) {  // rank 0's block read back from its shard, bit-identical to the rows as computed
             mpi::RowBlock row;
             for (std::uint32_t i = first; i < last; ++i) {
@@ -221,12 +225,12 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
             bar.add();
         });
     }
-    const RanksFigures figures = reduce_figures(rows, scene, first, last, store ? &*store : nullptr);
+    figures_ = reduce_figures(rows_, scene, first, last, store ? &*store : nullptr);
     if (r != 0) {
         mpi::serve_rows(first, last, [&](std::uint32_t i, mpi::RowBlock& chunk) {
             store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val);
         });
-        return std::nullopt;
+        return;
     }
     std::uint64_t chunks = 0, largest = 0;
     for (int from = 1; from < k; ++from) {
@@ -241,8 +245,16 @@ std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene,
     }
     report.set("mpi.chunks_received", chunks);
     report.set("mpi.largest_chunk_bytes", largest);
-    return figures;
 }
+
+}  // namespace
+
+std::unique_ptr<RowFeed> mpi_row_feed(RowSource& rows, const Scene& scene, const RowOptions& options,
+                                      const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                      const std::string& output, Report& report, bool progress) {
+    return std::make_unique<MpiRowFeed>(rows, scene, options, checkpoint, meta, output, report, progress);
+}
+
 
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& rows) {
     if (!mpi::active()) return nullptr;
@@ -263,14 +275,9 @@ RowOptions mpi_row_options(RowOptions rows) { return rows; }
 bool mpi_root() { return true; }
 int mpi_finish(int code) { return code; }
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report) { return load_and_mesh(options, report); }
-std::optional<CsrMatrix> mpi_compute_matrix(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
-                                            const FfmMetadata&, Report&, bool, RanksFigures*) {
-    throw InternalError("mpi_compute_matrix without MPI");
-}
-std::optional<RanksFigures> mpi_stream_rows(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
-                                            const FfmMetadata&, const std::string&, Report&, bool,
-                                            const std::function<void(std::uint32_t, RowView)>&) {
-    throw InternalError("mpi_stream_rows without MPI");
+std::unique_ptr<RowFeed> mpi_row_feed(RowSource&, const Scene&, const RowOptions&, const CheckpointOptions&,
+                                      const FfmMetadata&, const std::string&, Report&, bool) {
+    throw InternalError("mpi_row_feed without MPI");
 }
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene&, const RowOptions&) { return nullptr; }
 

@@ -10,11 +10,11 @@
 #include <string_view>
 #include <vector>
 
-#include "cli/row_store.hpp"
 #include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/options.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/scene/scene.hpp"
@@ -40,35 +40,17 @@ RowOptions mpi_row_options(RowOptions rows);
 Scene mpi_load_and_mesh(const SceneOptions& options, Report& report);
 
 
-// What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
-// own block only: reduced over the ranks onto rank 0.
-struct RanksFigures {
-    ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
-    // With obstruction-only surfaces (Scene::drawn): every row's obstructed share
-    // (RowSource::obstructed(), or a reused row's from its rank's checkpoint shard), each from the
-    // rank that owns the row; empty without them.
-    std::vector<double> obstructed;
-};
-
-// Every rank computes its block of rows (pipeline/row_partition.hpp), through its own shard of
-// the checkpoint (DIR/rank-R-of-K) when one is given; rank 0 returns the whole matrix (and the
-// ranks' figures in *figures), the other ranks nullopt. For the outputs that need the matrix in
-// memory (.mtx, --ffm-version 1, View3D, Elmer); a .ffm streams (mpi_stream_rows).
-std::optional<CsrMatrix> mpi_compute_matrix(RowSource& rows, const Scene& scene, const RowOptions& options,
-                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            Report& report, bool progress, RanksFigures* figures);
-
-// The streamed form of mpi_compute_matrix (docs/scaling.md, "Output"), in bounded memory on every
-// rank: each rank computes its block into its checkpoint shard (DIR/rank-R-of-K) or, without
-// --checkpoint, a spool in $TMPDIR named after `output` (a checkpoint of its own, removed at the
-// end); rank 0 hands every row to sink in row order, as CsrMatrix's floats: its own block as
-// computed (or read back from its shard), then each other rank's block in chunks it asks for one
-// at a time (mpi::serve_rows). Rank 0 returns the figures; the other ranks return nullopt once rank 0 has
-// every row of theirs (sink is never called there).
-std::optional<RanksFigures> mpi_stream_rows(RowSource& rows, const Scene& scene, const RowOptions& options,
-                                            const CheckpointOptions& checkpoint, const FfmMetadata& meta,
-                                            const std::string& output, Report& report, bool progress,
-                                            const std::function<void(std::uint32_t, RowView)>& sink);
+// The rows of every rank, as a RowFeed (pipeline/form_factors.hpp; docs/scaling.md, "Output"), in
+// bounded memory on every rank: each rank computes its block (pipeline/row_partition.hpp) into its
+// checkpoint shard (DIR/rank-R-of-K) or, without --checkpoint, a spool in $TMPDIR named after
+// `output` (a checkpoint of its own, removed at the end); on rank 0 rows() hands every row to the
+// sink in row order: its own block as computed (or read back from its shard), then each other
+// rank's block in chunks it asks for one at a time (mpi::serve_rows). On the other ranks rows()
+// returns once rank 0 has every row of theirs (the sink is never called there). Collective. The
+// closure evidence and the obstructed shares are every rank's, reduced onto rank 0.
+std::unique_ptr<RowFeed> mpi_row_feed(RowSource& rows, const Scene& scene, const RowOptions& options,
+                                      const CheckpointOptions& checkpoint, const FfmMetadata& meta,
+                                      const std::string& output, Report& report, bool progress);
 
 // The solver's row blocks over the ranks (solver/row_blocks.hpp).
 std::unique_ptr<RowBlocks> mpi_row_blocks(const Scene& scene, const RowOptions& rows);

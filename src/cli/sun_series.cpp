@@ -26,6 +26,7 @@
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/raycast/sky_patches.hpp"
@@ -150,7 +151,9 @@ int run_sun_series(const SunSeriesRequest& q) {
         RowSource rows = make_row_source(scene, resolve_row_method(ro, scene.drawn_scene()));
         for (const std::string& line : describe(rows)) info("{}", line);
         report.set("rows", rows.provider().name());
-        F = compute_all_rows(rows.provider());
+        FormFactorOptions fo;  // the one path (pipeline/form_factors.hpp); no reciprocity check to report
+        fo.reciprocity = false;
+        F = form_factor_matrix(scene, rows, report, fo);
     }
     report.set("time.rows", watch.seconds());
     const auto patch_name = [&scene](std::uint32_t i) {

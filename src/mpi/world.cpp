@@ -128,41 +128,6 @@ std::vector<std::uint32_t> row_blocks(const Scene& scene, const RowOptions& opti
     return bounds;
 }
 
-std::optional<CsrMatrix> gather_rows(std::uint32_t n, std::span<const std::uint32_t> bounds, const RowBlock& mine) {
-    constexpr int kTagCount = 11, kTagNnz = 12, kTagCol = 13, kTagVal = 14;
-    if (g_rank != 0) {
-        const std::uint64_t total = mine.col.size();
-        check(MPI_Send(&total, 1, MPI_UINT64_T, 0, kTagCount, MPI_COMM_WORLD), "MPI_Send");
-        send_all<std::uint32_t>(mine.nnz, 0, kTagNnz);
-        send_all<std::uint32_t>(mine.col, 0, kTagCol);
-        send_all<float>(mine.val, 0, kTagVal);
-        return std::nullopt;
-    }
-    CsrMatrix m(n);
-    const auto append = [&](const RowBlock& b, std::uint32_t rows) {
-        FFCUBE_CHECK(b.nnz.size() == rows);
-        std::size_t at = 0;
-        for (std::uint32_t k = 0; k < rows; ++k) {
-            m.append_row(std::span(b.col).subspan(at, b.nnz[k]), std::span(b.val).subspan(at, b.nnz[k]));
-            at += b.nnz[k];
-        }
-    };
-    append(mine, bounds[1] - bounds[0]);
-    RowBlock other;
-    for (int r = 1; r < g_size; ++r) {
-        std::uint64_t total = 0;
-        check(MPI_Recv(&total, 1, MPI_UINT64_T, r, kTagCount, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
-        other.nnz.resize(bounds[r + 1] - bounds[r]);
-        other.col.resize(total);
-        other.val.resize(total);
-        recv_all<std::uint32_t>(other.nnz, r, kTagNnz);
-        recv_all<std::uint32_t>(other.col, r, kTagCol);
-        recv_all<float>(other.val, r, kTagVal);
-        append(other, bounds[r + 1] - bounds[r]);
-    }
-    return m;
-}
-
 namespace {
 constexpr int kTagAsk = 21, kTagChunk = 22, kTagChunkNnz = 23, kTagChunkCol = 24, kTagChunkVal = 25;
 }  // namespace

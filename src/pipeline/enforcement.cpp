@@ -1,4 +1,4 @@
-// --enforce in memory (apply_enforcement) and out of core (apply_enforcement_streamed).
+// --enforce on the finished rows, out of core (pipeline/form_factors.hpp's one path).
 #include "ffcube/pipeline/enforcement.hpp"
 
 #include <fmt/format.h>
@@ -105,58 +105,34 @@ void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& s
                                  to_string(request), scene.source));
 }
 
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
-                            const ClosureEvidence* evidence, bool progress) {
-    const EnforceRequest request = rows.options().enforce;
-    if (request == EnforceRequest::None) return F;
-    const std::string what(to_string(request));
-    const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) naming_origin(rows.options(), [&] {
-        refuse_enforcement_with_obstructions(request, scene);
-        require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), F);
-    });
-    const std::vector<double> areas = patch_areas(scene);
-    EnforceStats st;
-    Stopwatch watch;
-    Progress rows_bar(fmt::format("--enforce {}: rows with columns (in memory)", what), F.size(), progress);
-    const EnforcedMatrix E =
-        naming_origin(rows.options(), [&] { return enforce(F, areas, mode, st, closure_progress(progress, what), &rows_bar); });
-    report_enforcement(report, what, st, watch.seconds());
-    return E.to_csr();
-}
-
-StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std::filesystem::path& raw,
-                                               const RowStreamChecks& raw_checks,
-                                               std::span<const double> raw_row_sums, const Scene& scene,
-                                               const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
-                                               bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
-                                               Report& report, const ClosureEvidence* evidence) {
-    const EnforceRequest request = rows.options().enforce;
+EnforcementFigures apply_enforcement(const RowOptions& options, const RowPass& raw, const RowStreamChecks& raw_checks,
+                                     std::span<const double> raw_row_sums, const Scene& scene,
+                                     const ClosureEvidence& evidence, const std::filesystem::path& scratch_dir,
+                                     std::uint64_t budget_bytes, bool progress,
+                                     const std::function<void(std::uint32_t, RowView)>& sink, Report& report) {
+    const EnforceRequest request = options.enforce;
     FFCUBE_CHECK(request != EnforceRequest::None);
     const std::string what(to_string(request));
     const EnforceMode mode = enforce_mode(request);
-    if (mode == EnforceMode::Closure) naming_origin(rows.options(), [&] {
+    if (mode == EnforceMode::Closure) naming_origin(options, [&] {
         refuse_enforcement_with_obstructions(request, scene);
-        require_closed_scene(what, evidence ? *evidence : closure_evidence(rows), raw_row_sums);
+        require_closed_scene(what, evidence, raw_row_sums);
     });
     const std::vector<double> areas = patch_areas(scene);
     const auto n = static_cast<std::uint32_t>(scene.size());
     Stopwatch watch;
-    StreamedEnforcement s;
+    EnforcementFigures s;
 
     // 8 bytes per entry of a band (a u32 row and a float value).
     const TransposePlan plan = plan_transpose(raw_checks.col_counts(), std::max<std::uint64_t>(1, budget_bytes / 8));
     s.bands = plan.band_count();
-    FfmReader reader(raw);
     ScratchRows g(scratch_dir / "G", budget_bytes);
     EnforcePasses passes;
     passes.rows_and_columns = [&](const RowColumnFn& f) {
         Progress bar(fmt::format("--enforce {}: rows with columns ({} pass{}, {} band{})", what, plan.passes,
                                  plan.passes == 1 ? "" : "es", s.bands, s.bands == 1 ? "" : "s"),
                      std::uint64_t(n) * plan.passes, progress);
-        const TransposeFigures t = for_each_row_and_column(
-            [&](const std::function<void(std::uint32_t, RowView)>& r) { reader.for_each_row(r); },
-            raw_checks.col_counts(), plan, scratch_dir, f, &bar);
+        const TransposeFigures t = for_each_row_and_column(raw, raw_checks.col_counts(), plan, scratch_dir, f, &bar);
         s.passes += t.passes;
         s.scratch_bytes += t.scratch_bytes;
     };
@@ -197,7 +173,7 @@ StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std:
         sink(i, RowView{col, fval});
     };
     EnforceStats st;
-    naming_origin(rows.options(), [&] { enforce_passes(n, areas, mode, passes, out, st); });
+    naming_origin(options, [&] { enforce_passes(n, areas, mode, passes, out, st); });
     s.g_on_disk = g.on_disk();
     s.scratch_bytes += g.bytes();
     report_enforcement(report, what, st, watch.seconds());

@@ -190,23 +190,16 @@ void write_view3d_file(const SurfaceOutputOptions& o, std::vector<std::vector<do
 
 }  // namespace
 
-CsrMatrix apply_view3d_cutoff(const CsrMatrix& F, const Scene& scene, double max_distance) {
-    FFCUBE_CHECK(F.size() == scene.size() && F.rows_filled() == F.size());
-    CsrMatrix out(F.size());
-    std::vector<std::uint32_t> col;
-    std::vector<float> val;
-    for (std::uint32_t i = 0; i < F.size(); ++i) {
-        const RowView r = F.row(i);
-        col.clear();
-        val.clear();
-        for (std::size_t k = 0; k < r.col.size(); ++k)
-            if (!(glm::length(scene.patches[r.col[k]].centroid - scene.patches[i].centroid) > max_distance)) {
-                col.push_back(r.col[k]);
-                val.push_back(r.val[k]);
-            }
-        out.append_row(col, val);
-    }
-    return out;
+RowView View3dCutoff::operator()(std::uint32_t i, RowView r) {
+    if (max_ <= 0.0) return r;
+    col_.clear();
+    val_.clear();
+    for (std::size_t k = 0; k < r.col.size(); ++k)
+        if (!(glm::length(scene_.patches[r.col[k]].centroid - scene_.patches[i].centroid) > max_)) {
+            col_.push_back(r.col[k]);
+            val_.push_back(r.val[k]);
+        }
+    return RowView{col_, val_};
 }
 
 void write_view3d_output(const std::filesystem::path& path, const CsrMatrix& F, const Scene& scene, int out,
@@ -252,20 +245,6 @@ void write_view3d_output(const std::filesystem::path& path, const CsrMatrix& F, 
     }
     writer.finish();
     report.set("view3d.entries", writer.entries());
-}
-
-namespace {
-
-}  // namespace
-
-void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress, std::span<const double> obstructed, std::span<const float> row_error) {
-    write_sky_and_table(o, sky_view_factors(F), scene, report, obstructed, row_error);
-    if (!o.view3d.empty()) write_view3d_file(o, object_form_factors(F, scene), scene, report);
-    if (!o.elmer.empty()) {
-        Progress bar(fmt::format("writing {} (rows)", o.elmer), F.size(), progress);
-        write_elmer_view_factors(o.elmer, F, o.elmer_format == FileFormat::Binary, &bar);
-    }
 }
 
 std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::uint32_t n) {

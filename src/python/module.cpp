@@ -1,6 +1,6 @@
 // The Python module `ffcube` (pybind11): load_scene, form_factors and solve, over the same
 // composition root as the command line (src/pipeline): load_and_mesh, make_row_source,
-// apply_enforcement, solve_and_report. Keyword arguments are the command line's options with
+// compute_form_factors, solve_and_report. Keyword arguments are the command line's options with
 // dashes as underscores (src/python/kwargs.hpp); their words go through the pipeline's own parsers
 // and validators, so a bad option raises the message the command line prints.
 //
@@ -23,6 +23,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
 #include "ffcube/pipeline/solve.hpp"
@@ -71,15 +72,14 @@ py::object form_factors(const py::object& what, const py::kwargs& kwargs) {
         const std::shared_ptr<const Scene> scene = scene_of(arg, report);
         RowSource rows = make_row_source(*scene, ro);
         for (const std::string& line : describe(rows)) info("{}", line);
-        Stopwatch watch;
-        CsrMatrix computed = compute_all_rows(rows.provider());
-        const double seconds = watch.seconds();
-        F = apply_enforcement(rows, std::move(computed), *scene, report);
+        // The one path of `ffcube formfactors` (pipeline/form_factors.hpp), into memory.
+        FormFactorFigures f;
+        F = form_factor_matrix(*scene, rows, report, {}, &f);
         if (want_report) {  // the keys of `ffcube formfactors --report`, but for writing and checkpoints
-            report.set("seconds", seconds);
-            report_rates(report, rows, scene->size(), seconds);
+            report.set("seconds", f.seconds);
+            report_rates(report, rows, scene->size(), f.seconds);
             report_row_source(report, rows);
-            report_matrix_checks(report, F, *scene, false);
+            report_matrix_stats(report, f.nnz, f.row_sums, f.reciprocity);
             report_json = report.dump();
         }
     }

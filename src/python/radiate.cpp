@@ -18,6 +18,7 @@
 #include "ffcube/core/timer.hpp"
 #include "ffcube/io/csv.hpp"
 #include "ffcube/io/ffm.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
 #include "ffcube/solver/radiate.hpp"
 #include "module.hpp"
@@ -229,7 +230,9 @@ py::tuple radiate(const py::object& what, const py::kwargs& kwargs) {
         } else {
             RowSource rows = make_row_source(*scene, resolve_row_method(ro, scene->drawn_scene()));
             report.set("rows", rows.provider().name());
-            F = compute_all_rows(rows.provider());
+            FormFactorOptions fo;  // the one path (pipeline/form_factors.hpp); no reciprocity check to report
+            fo.reciprocity = false;
+            F = form_factor_matrix(*scene, rows, report, fo);
         }
         report.set("time.rows", watch.seconds());
         std::vector<double> area(scene->size());

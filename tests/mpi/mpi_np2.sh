@@ -25,6 +25,12 @@ mpi formfactors $rows -o two.mtx || fail "mpirun formfactors .mtx"
 cmp one.ffm two.ffm || fail ".ffm differs"
 cmp one.mtx two.mtx || fail ".mtx differs"
 echo "ok: .ffm and .mtx byte-identical at -np 2"
+# Without a matrix file rank 0 holds the rows in memory for the statistics: the same feed.
+"$ffcube" formfactors $rows --groups one-g.csv --sky one-sky.csv || fail "one-process formfactors without -o"
+mpi formfactors $rows --groups two-g.csv --sky two-sky.csv || fail "mpirun formfactors without -o"
+cmp one-g.csv two-g.csv || fail "--groups differs without -o"
+cmp one-sky.csv two-sky.csv || fail "--sky differs without -o"
+echo "ok: --groups and --sky byte-identical at -np 2 without a matrix file"
 # The .ffm goes through the streamed writer under mpirun too: rank 0 takes rank 1's rows in chunks,
 # and no scratch or spool directory is left beside the output.
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['streamed'] and r['mpi']['streamed'], r" \
@@ -48,7 +54,7 @@ printf 'o outside\nv 3 0 0\nv 4 0 0\nv 4 1 0\nv 3 1 0\nf 25 26 27 28\n' >> open.
 rc=$?
 one_err=$(grep "error:" open-one.txt) && grep -q "saw nothing" open-one.txt && [ "$rc" -eq 2 ] && [ ! -e open-one.ffm ] ||
     fail "open scene with --enforce closure, one process: rc $rc, $(cat open-one.txt)"
-# Both forms under mpirun: the streamed .ffm and the matrix gathered to rank 0 (.mtx).
+# Both outputs under mpirun (one path: rank 0 takes the ranks' rows in chunks for either).
 for out in open-two.ffm open-two.mtx; do
     mpi formfactors open.obj --patches 600 --resolution 64 --threads 1 -q -o $out --enforce closure 2> open-two.txt
     rc=$?

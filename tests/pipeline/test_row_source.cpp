@@ -4,13 +4,16 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/form_factors.hpp"
 #include "ffcube/pipeline/row_source.hpp"
+#include "ffcube/scene/patch_areas.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -293,6 +296,12 @@ TEST(RowSource, PlainAndRaycastSources) {
     EXPECT_NE(text.find("\"rays_per_patch\": 64"), std::string::npos) << text;
 }
 
+// Every row through the one path (pipeline/form_factors.hpp), enforced as rows.options() asks,
+// into memory.
+CsrMatrix finished_matrix(RowSource& rows, const Scene& scene, Report& report) {
+    return form_factor_matrix(scene, rows, report);
+}
+
 TEST(RowSource, ClosureIsRefusedForAnOpenScene) {
     // Two facing squares: light escapes at the sides, so closure would hide it.
     const Scene scene = test::make_scene({test::square_z("a", 0, true), test::square_z("b", 1, false)}, 0.5);
@@ -303,20 +312,35 @@ TEST(RowSource, ClosureIsRefusedForAnOpenScene) {
     // Plain hemicubes: the evidence is the pixels that saw nothing.
     o.correct = Correction::None;
     RowSource plain = make_row_source(scene, o);
-    const std::string e1 = error_of([&] { apply_enforcement(plain, compute_all_rows(plain.provider()), scene, r); });
+    const std::string e1 = error_of([&] { finished_matrix(plain, scene, r); });
     EXPECT_NE(e1.find("--enforce closure: hemicube pixels saw nothing"), std::string::npos) << e1;
     // Corrected: here every row is analytic (the far field proves both pairs), no pixel is
     // rendered, and the evidence is the row sum before correction (F = 0.19982 for this pair).
     o.correct = Correction::Near;
     RowSource rows = make_row_source(scene, o);
-    const std::string e2 = error_of([&] { apply_enforcement(rows, compute_all_rows(rows.provider()), scene, r); });
+    const std::string e2 = error_of([&] { finished_matrix(rows, scene, r); });
     EXPECT_NE(e2.find("--enforce closure: a row sums to 0.19982"), std::string::npos) << e2;
-    // Reciprocity needs no closed scene.
+    // Reciprocity needs no closed scene, and makes A_i G_ij = A_j G_ji: G's exchange areas are one
+    // double per pair, each direction then divided by its area and rounded to float (relative
+    // error at most 2^-24 each), so the two products differ by at most 2^-24 of their sum, plus
+    // the double products' own rounding (2^-53 each, far below): 2^-23 of the larger is a bound.
     RowOptions recip = o;
     recip.enforce = EnforceRequest::Reciprocity;
     RowSource rows2 = make_row_source(scene, recip);
-    const CsrMatrix G = apply_enforcement(rows2, compute_all_rows(rows2.provider()), scene, r);
-    EXPECT_EQ(G.size(), scene.size());
+    const CsrMatrix G = finished_matrix(rows2, scene, r);
+    ASSERT_EQ(G.size(), scene.size());
+    const std::vector<double> A = patch_areas(scene);
+    std::size_t pairs = 0;
+    for (std::uint32_t i = 0; i < G.size(); ++i)
+        for (std::uint32_t j = 0; j < G.size(); ++j) {
+            const double a = A[i] * G.at(i, j), b = A[j] * G.at(j, i);
+            if (i != j && a > 0) ++pairs;
+            EXPECT_LE(std::abs(a - b), std::ldexp(std::max(a, b), -23)) << i << " " << j;
+        }
+    EXPECT_GT(pairs, 0u);  // the squares see each other
+    // The report carries the enforcement's figures: before, reciprocity was not exact.
+    const std::string text = r.dump();
+    EXPECT_NE(text.find("\"mode\": \"reciprocity\""), std::string::npos) << text;
 }
 
 }  // namespace

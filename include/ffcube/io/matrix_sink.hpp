@@ -6,6 +6,8 @@
 // (atomic_file.hpp): destroyed before finish(), nothing is left under the file's name.
 #pragma once
 
+#include <utility>
+
 #include "ffcube/formfactor/sparse.hpp"
 
 namespace ffcube {
@@ -19,6 +21,20 @@ public:
     // Needs every row; writes what is left and renames the file into place. IoError when a write
     // fails (disk full).
     virtual void finish() = 0;
+};
+
+// The rows held in memory, as a CsrMatrix: one more sink beside the files (Python's form_factors,
+// `ffcube view3d`). matrix() is complete after finish().
+class CsrMatrixSink final : public MatrixSink {
+public:
+    explicit CsrMatrixSink(std::uint32_t n) : matrix_(n) {}
+    void append_row(RowView row) override { matrix_.append_row(row.col, row.val); }
+    void finish() override;
+    const CsrMatrix& matrix() const { return matrix_; }
+    CsrMatrix take() { return std::move(matrix_); }
+
+private:
+    CsrMatrix matrix_;
 };
 
 }  // namespace ffcube

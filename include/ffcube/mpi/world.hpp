@@ -43,9 +43,6 @@ struct RowBlock {
     std::vector<std::uint32_t> nnz, col;
     std::vector<float> val;
 };
-// Every rank's block, in rank order, into one n × n matrix on rank 0 (nullopt on the others).
-std::optional<CsrMatrix> gather_rows(std::uint32_t n, std::span<const std::uint32_t> bounds, const RowBlock& mine);
-
 // The streamed gather (docs/scaling.md, "Output"): rank 0 takes the blocks in rank order, one
 // chunk of rows at a time, and asks for each chunk before the rank sends it, so rank 0 holds at
 // most two chunks (the one it is using and the one arriving), whatever the matrix's size; a rank

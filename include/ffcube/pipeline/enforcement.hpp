@@ -1,7 +1,7 @@
-// --enforce out of core: for a matrix streamed to a .ffm (`ffcube formfactors -o F.ffm`), never
-// held in memory. apply_enforcement (row_source.hpp) is the in-memory form; both give the same
-// rows, figures and report keys to the last bit (accuracy/enforce.hpp: enforce() is
-// enforce_passes fed from memory).
+// --enforce on the finished rows (pipeline/form_factors.hpp's one path), out of core: the rows as
+// computed are read again by passes (from a scratch .ffm, or from memory when no file is written),
+// never held as a matrix here. The accuracy layer's enforce_passes does the arithmetic
+// (accuracy/enforce.hpp).
 #pragma once
 
 #include <cstdint>
@@ -19,7 +19,7 @@ namespace ffcube {
 
 // Closure cannot hold where obstruction-only (O) surfaces absorb energy without rows or columns
 // (docs/scene-format.md): InputError naming the scene. Called before any row is computed, and by
-// both apply_enforcement forms.
+// apply_enforcement.
 void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& scene);
 
 // What the providers saw of whether the scene is closed (hemicube pixels that saw nothing, the
@@ -27,7 +27,7 @@ void refuse_enforcement_with_obstructions(EnforceRequest request, const Scene& s
 // providers saw only its rows: the ranks' evidence is reduced onto rank 0 (src/cli/mpi_glue.cpp).
 ClosureEvidence closure_evidence(const RowSource& rows);
 
-struct StreamedEnforcement {
+struct EnforcementFigures {
     std::size_t passes = 0;         // over the unenforced rows' file
     std::size_t bands = 0;          // column bands of its transpose
     std::size_t g_passes = 0;       // closure: passes over G (one per iteration, and one more)
@@ -38,19 +38,19 @@ struct StreamedEnforcement {
     double patch_max_abs = 0;
 };
 
-// --enforce (rows.options().enforce, not None) on the rows of `raw`, a version-2 .ffm of the
-// rows as computed; raw_checks and raw_row_sums are from the same rows (RowStreamChecks, and
-// RowView::sum per row: closure is refused for an open scene as apply_enforcement refuses it).
-// Each enforced row goes to sink in row order, as float (what apply_enforcement's matrix holds).
+// --enforce (options.enforce, not None) on the rows `raw` gives (a pass over the rows as computed,
+// in order, any number of times); raw_checks and raw_row_sums are from the same rows
+// (RowStreamChecks, and RowView::sum per row: closure is refused, InputError, for an open scene
+// judged on `evidence`, the closure evidence of every row, and on those sums).
+// Each enforced row goes to sink in row order, as float (the rows are computed in double).
 // Scratch files go to scratch_dir; memory: budget_bytes for a band of the transpose and for G
 // (closure; beyond it G goes to a scratch file, read once per iteration), plus O(n). Report keys
-// as apply_enforcement ("enforce.*"), and "enforce.passes", "enforce.scratch_bytes".
-// evidence: the closure evidence of every row (the MPI ranks'); null: closure_evidence(rows).
-StreamedEnforcement apply_enforcement_streamed(const RowSource& rows, const std::filesystem::path& raw,
-                                               const RowStreamChecks& raw_checks,
-                                               std::span<const double> raw_row_sums, const Scene& scene,
-                                               const std::filesystem::path& scratch_dir, std::uint64_t budget_bytes,
-                                               bool progress, const std::function<void(std::uint32_t, RowView)>& sink,
-                                               Report& report, const ClosureEvidence* evidence = nullptr);
+// "enforce.*": mode, before/after row sums and reciprocity, iterations, seconds, passes, bands,
+// g_passes, scratch_bytes.
+EnforcementFigures apply_enforcement(const RowOptions& options, const RowPass& raw, const RowStreamChecks& raw_checks,
+                                     std::span<const double> raw_row_sums, const Scene& scene,
+                                     const ClosureEvidence& evidence, const std::filesystem::path& scratch_dir,
+                                     std::uint64_t budget_bytes, bool progress,
+                                     const std::function<void(std::uint32_t, RowView)>& sink, Report& report);
 
 }  // namespace ffcube

@@ -106,14 +106,8 @@ void report_row_source(Report& report, const RowSource& rows);
 // `hemicubes_per_second` held the rows' figure.
 void report_rates(Report& report, const RowSource& rows, std::size_t patches, double seconds);
 
-// --enforce on the finished matrix, with before/after figures in the report ("enforce.*").
-// Closure is refused (InputError) for open scenes, judged on the measuring provider's evidence:
-// a hemicube pixel that saw nothing, or an inner row summing below 1 − 1e-3. Returns F unchanged
-// when options.enforce is None. evidence: that of every row, when rows' providers did not make
-// them all (under mpirun, the ranks' reduced: src/cli/mpi_glue.cpp); null: rows'. progress:
-// closure's iteration lines.
-CsrMatrix apply_enforcement(const RowSource& rows, CsrMatrix F, const Scene& scene, Report& report,
-                            const ClosureEvidence* evidence = nullptr, bool progress = false);
+// --enforce on the finished rows: apply_enforcement (pipeline/enforcement.hpp), in the one path of
+// pipeline/form_factors.hpp.
 
 // The checks every front end reports on a finished matrix: "nnz", "row_sums.{min,max,mean}" and
 // "reciprocity.{patch_max_abs,object_max_rel}" (reciprocity with a progress bar when `progress`).

@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/formfactor/sparse.hpp"
@@ -42,14 +43,26 @@ FileFormat parse_file_format(std::string_view text);  // auto | text | binary
 // The keys only `ffcube view3d` acts on (View3dControls::row, col, max_distance): other commands
 // (drop_in = false) warn, naming the line, that they ignore them; `ffcube view3d` (drop_in = true)
 // refuses row and col (View3D's one-row debugging run) naming the line, and applies maxD with
-// apply_view3d_cutoff.
+// View3dCutoff.
 void apply_view3d_controls(const Scene& scene, RowOptions& rows, Report& report, bool drop_in = false);
 
 // The forks' cut-off distance (a .vs3's maxD; uDALES' View3D, view3d.c: a pair of surfaces whose
-// centroids lie more than maxD apart gets no factor): F with every entry F_ij of patches whose
-// centroids lie farther apart than max_distance removed; what they carried counts as sky. With
-// --no-subdivide each patch is one View3D surface (the loader refuses maxD with subsurfaces).
-CsrMatrix apply_view3d_cutoff(const CsrMatrix& F, const Scene& scene, double max_distance);
+// centroids lie more than maxD apart gets no factor), row by row as the rows come: row i with every
+// entry F_ij of a patch j whose centroid lies farther than max_distance from i's removed; what
+// they carried counts as sky. With --no-subdivide each patch is one View3D surface (the loader
+// refuses maxD with subsurfaces). max_distance <= 0: rows unchanged.
+class View3dCutoff {
+public:
+    View3dCutoff(const Scene& scene, double max_distance) : scene_(scene), max_(max_distance) {}
+    // Valid until the next call.
+    RowView operator()(std::uint32_t i, RowView row);
+
+private:
+    const Scene& scene_;
+    double max_;
+    std::vector<std::uint32_t> col_;
+    std::vector<float> val_;
+};
 
 // View3D's file of the finished matrix F in format `out` (0 text, 1 binary, 2 sparse text): the
 // table of view3d_table. With out = 2, no masking surfaces and emit = 0, the object rows are
@@ -68,19 +81,15 @@ View3dTable view3d_table(const CsrMatrix& F, const Scene& scene);
 // of the streamed rows: the same numbers).
 View3dTable view3d_table(std::vector<std::vector<double>> object_factors, const Scene& scene);
 
-// Sky statistics into the report (always), then every file asked for. F is the finished matrix;
-// `obstructed` (RowSource::obstructed(): empty, or per row the share obstruction-only surfaces
-// intercepted) is taken off the sky view factors.
-void write_surface_outputs(const SurfaceOutputOptions& o, const CsrMatrix& F, const Scene& scene, Report& report,
-                           bool progress, std::span<const double> obstructed = {}, std::span<const float> row_error = {});
 // Only what needs each row's sum and the scene: the sky statistics, --sky and --patch-table (what
-// `solve --sky` writes; the overloads here call it too).
+// `solve --sky` writes; write_surface_outputs below calls it too). `obstructed` (empty, or per row
+// the share obstruction-only surfaces intercepted) is taken off the sky view factors.
 void write_sky_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums, const Scene& scene, Report& report,
                        std::span<const double> obstructed = {}, std::span<const float> row_error = {});
-// For a streamed matrix: Elmer's file is written from the rows as they come, by the sink this
-// gives (null when --elmer is not asked) and the caller feeds and finishes; the rest comes from
-// each row's sum and from `checks` (the streamed rows' RowStreamChecks: View3D's object factors),
-// with the same bytes and report keys as the overload above.
+// Elmer's file is written from the rows as they come, by the sink this gives (null when --elmer is
+// not asked) and the caller feeds and finishes; the rest (sky statistics into the report always,
+// then every file asked for) comes from each row's sum and from `checks` (the finished rows'
+// RowStreamChecks: View3D's object factors).
 std::unique_ptr<MatrixSink> open_elmer_sink(const SurfaceOutputOptions& o, std::uint32_t n);
 void write_surface_outputs(const SurfaceOutputOptions& o, std::span<const double> row_sums,
                            const RowStreamChecks& checks, const Scene& scene, Report& report,
