@@ -385,7 +385,8 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
     // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
     // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs
-    // not proven unoccluded.
+    // not proven unoccluded, 6 measured again by rays (above an asked-for tolerance), 7 drawn
+    // again at a finer resolution and no more.
     const std::vector<std::int8_t>& measures = corrected.row_measures();
     r.set_array("corrections.row_measure", std::vector<std::int64_t>(measures.begin(), measures.end()));
     r.set("corrections.seconds", c.seconds);
