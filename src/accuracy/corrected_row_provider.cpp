@@ -27,7 +27,7 @@ namespace {
 // the seconds, which are timings).
 // Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
 // its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 34 * 8, "add the new NearFieldStats field to add_row_stats");
+static_assert(sizeof(NearFieldStats) == 36 * 8, "add the new NearFieldStats field to add_row_stats");
 void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.rows += b.rows;
     a.rows_touched += b.rows_touched;
@@ -51,6 +51,8 @@ void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
     a.far_rows += b.far_rows;
     a.far_entries += b.far_entries;
     a.far_unproven += b.far_unproven;
+    a.cut_sender_entries += b.cut_sender_entries;
+    a.cut_sender_unproven += b.cut_sender_unproven;
     a.rows_analytic += b.rows_analytic;
     a.exact_visibility += b.exact_visibility;
     a.exact_visibility_points += b.exact_visibility_points;
@@ -229,9 +231,31 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
                                   : estimate - noise.l1 +
                                         kNoiseDeviations * std::max(noise.max, std::sqrt(noise.sky * noise.sky + noise.replaced_sum_sq));
         // Accuracy by target: a row above it that its provider did not refine is measured again
-        // by the refiner (refine_with), whose error is measured, and corrected as its row.
-        bool refined = false;
-        if (refiner_ && a.measured_error < 0 && !a.skipped && !(tolerance_estimate <= refine_tolerance_)) {
+        // by the refiners in turn (refine_with) until its estimate meets it: drawn again at a
+        // finer resolution (its noise modelled at that pixel), then by rays, whose error is
+        // measured. Each time the row is corrected as that measure's row.
+        bool by_rays = false, by_redraw = false;
+        const bool drawn = a.measured_error < 0 && !a.skipped && cast_rays == 0;
+        for (const Refiner& refiner : refiners_) {
+            if (a.skipped || a.measured_error >= 0 || tolerance_estimate <= refine_tolerance_) break;
+            const std::uint32_t one[1] = {i};
+            NearFieldStats discarded;  // the row's statistics are its first correction's
+            if (refiner.pixel_delta_ff > 0) {
+                if (!drawn) continue;  // a ray-cast row: no pixels to refine
+                const RowPlan plan[1] = {!sampled        ? RowPlan::centre
+                                         : a.occluder == 2 ? RowPlan::sampled_fine
+                                                           : RowPlan::sampled};
+                refiner.provider->compute_rows_planned(one, plan, [&](std::uint32_t, const SparseRow& r) { row = r; });
+                inner = row;
+                a.pixel_delta_ff = refiner.pixel_delta_ff;
+                noise = RowNoise{};
+                estimate = 0;
+                corrector_.correct(i, row, discarded, *scratch, &estimate, &a, sampled, 0.0, &noise);
+                tolerance_estimate = estimate - noise.l1 +
+                                     kNoiseDeviations * std::max(noise.max, std::sqrt(noise.sky * noise.sky + noise.replaced_sum_sq));
+                by_redraw = true;
+                continue;
+            }
             RowStages again;
             again.exact_entries = [&](std::size_t, std::uint32_t) {
                 return std::span<const std::pair<std::uint32_t, double>>(a.exact);
@@ -240,20 +264,19 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
                 a.measured_error = error;
                 a.measured_rays = rays;
             };
-            const std::uint32_t one[1] = {i};
-            refiner_->compute_rows_staged(one, again, [&](std::uint32_t, const SparseRow& r) { row = r; });
+            refiner.provider->compute_rows_staged(one, again, [&](std::uint32_t, const SparseRow& r) { row = r; });
             FFCUBE_CHECK_MSG(a.measured_error >= 0 && a.measured_rays > 0, "the refiner measured no error");
             inner = row;
-            NearFieldStats discarded;  // the row's statistics are its first correction's
             noise = RowNoise{};
             estimate = 0;
             corrector_.correct(i, row, discarded, *scratch, &estimate, &a, true, a.measured_rays, &noise);
             // Its own modelled noise out, its measured error in (as for the ray caster's rows).
             estimate -= noise.l1;
             tolerance_estimate = estimate + a.measured_error;
-            rows_refined_.fetch_add(1, std::memory_order_relaxed);
-            refined = true;
+            by_rays = true;
         }
+        if (by_redraw) rows_redrawn_.fetch_add(1, std::memory_order_relaxed);
+        if (by_rays) rows_refined_.fetch_add(1, std::memory_order_relaxed);
         if (a.measured_error >= 0) estimate += a.measured_error;
         // The last check before the row leaves the layer: a corrected row out of range (an entry
         // below 0 or above 1, not finite, or a sum above 1 beyond its tolerance) is replaced by
@@ -282,7 +305,8 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
         // One writer per row (i is listed once); both are sized before the stages start.
         row_error_[i] = static_cast<float>(estimate);
         row_tolerance_[i] = static_cast<float>(std::max(tolerance_estimate, 0.0));
-        row_measure_[i] = refined     ? RowMeasure::refined
+        row_measure_[i] = by_rays     ? RowMeasure::refined
+                          : by_redraw ? RowMeasure::redrawn
                           : a.skipped ? RowMeasure::analytic
                           : !sampled ? RowMeasure::centre
                           : a.occluder == 2 ? RowMeasure::sampled_touching

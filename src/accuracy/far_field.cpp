@@ -72,6 +72,7 @@ FarField::FarField(const PatchSet& patches, const SpatialGrid& grid, const NearF
         }
         if (emitting > 0) {
             only_rows_ = emitting;
+            on_ = true;
             make_rules();
             status_ = fmt::format("on for the {} emitting rows only: estimated {:.3g} ms per row, over the budget of "
                                   "{:.3g} ms for every row ({:.0f}% of rows complete)",
@@ -82,12 +83,10 @@ FarField::FarField(const PatchSet& patches, const SpatialGrid& grid, const NearF
             status_ = fmt::format("off: estimated {:.3g} ms per row, over the budget of {:.3g} ms ({:.0f}% of rows "
                                   "complete)",
                                   cost_ * 1e-6, budget * 1e-6, 100 * complete_);
-            planes_.clear();
-            plus_bits_.clear();
-            minus_bits_.clear();
-            return;
+            return;  // the planes stay, for senders cut by a plane (cutting_planes)
         }
     }
+    on_ = true;
     make_rules();
     status_ = std::isnan(cost_)
                   ? fmt::format("on: {} planes", planes_.size())
@@ -121,6 +120,7 @@ bool FarField::group_planes() {
             if (planes_.size() == kMaxPlanes) return false;
             planes_.push_back(Plane{nc, glm::dot(nc, p.centroid), 0, patches_.boxes[i], {}});
         }
+        plane_of_.push_back(static_cast<std::uint32_t>(found));
         Plane& g = planes_[found];
         g.box.lo = glm::min(g.box.lo, patches_.boxes[i].lo);
         g.box.hi = glm::max(g.box.hi, patches_.boxes[i].hi);
@@ -154,6 +154,21 @@ void FarField::mark_sides() {
         }
 }
 
+void FarField::cutting_planes(std::uint32_t i, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    if (planes_.empty()) return;
+    const std::uint64_t* p = &plus_bits_[i * words_];
+    const std::uint64_t* m = &minus_bits_[i * words_];
+    for (std::size_t w = 0; w < words_; ++w) {
+        std::uint64_t c = p[w] & m[w];
+        while (c) {
+            const auto g = static_cast<std::uint32_t>(w * 64 + static_cast<std::size_t>(std::countr_zero(c)));
+            c &= c - 1;
+            if (planes_[g].thickness <= tol_) out.push_back(g);  // a slab's bits say "near", not "cut"
+        }
+    }
+}
+
 void FarField::make_rules() {
     const std::size_t n = patches_.size();
     rules_.resize(n);
@@ -176,19 +191,22 @@ void FarField::make_rules() {
 // hull of the hull's vertices in the plane and of the points where segments between vertices on
 // opposite sides cross it.
 bool FarField::section_meets(std::uint32_t i, std::uint32_t j, std::size_t g, const Box& pair) const {
+    return section_meets(patches_.polys[i].span(), patches_.polys[j].span(), i, j, g, pair, false);
+}
+
+bool FarField::section_meets(std::span<const Vec3> pi, std::span<const Vec3> pj, std::uint32_t i, std::uint32_t j,
+                             std::size_t g, const Box& pair, bool strict) const {
     const Plane& P = planes_[g];
     if (P.thickness > tol_) return true;
     // The section lies in the hull, so in the pair's bounding box: a plane whose members' box
     // misses that box blocks nothing (most conflicts in a room: a block's face plane cuts the
     // room, its face does not come near the pair).
     if (!pair.overlaps(P.box)) return false;
-    const Poly& pi = patches_.polys[i];
-    const Poly& pj = patches_.polys[j];
-    std::array<Vec3, 8> v{};
-    std::array<double, 8> s{};
+    std::array<Vec3, 10> v{};
+    std::array<double, 10> s{};
     std::size_t m = 0;
-    for (std::size_t k = 0; k < pi.n; ++k) v[m++] = pi.v[k];
-    for (std::size_t k = 0; k < pj.n; ++k) v[m++] = pj.v[k];
+    for (const Vec3& x : pi) v[m++] = x;
+    for (const Vec3& x : pj) v[m++] = x;
     for (std::size_t k = 0; k < m; ++k) s[k] = glm::dot(P.n, v[k]) - P.d;
     Box sec{Vec3(INFINITY), Vec3(-INFINITY)};
     const auto add = [&](const Vec3& x) {
@@ -199,6 +217,25 @@ bool FarField::section_meets(std::uint32_t i, std::uint32_t j, std::size_t g, co
         if (std::abs(s[a]) <= tol_) add(v[a]);
         for (std::size_t b = 0; b < m; ++b)
             if (s[a] > tol_ && s[b] < -tol_) add(v[a] + (v[b] - v[a]) * (s[a] / (s[a] - s[b])));
+    }
+    if (strict) {
+        // Members that only touch the section (within the tolerance, along an axis where both
+        // boxes have extent) are let through: the inner corner of an L-shaped room, where the
+        // wall beside the corner meets the receiver's edge, touches the section along that edge.
+        const double t = 2 * tol_;
+        const auto meets = [&](const Box& q) {
+            for (int k = 0; k < 3; ++k) {
+                const bool flat = sec.hi[k] - sec.lo[k] <= t || q.hi[k] - q.lo[k] <= t;
+                if (flat ? (q.lo[k] > sec.hi[k] + t || sec.lo[k] > q.hi[k] + t)
+                         : (q.lo[k] >= sec.hi[k] - t || sec.lo[k] >= q.hi[k] - t))
+                    return false;
+            }
+            return true;
+        };
+        if (!meets(P.box)) return false;
+        for (std::uint32_t q : P.members)
+            if (q != i && q != j && meets(patches_.boxes[q])) return true;
+        return false;
     }
     sec.lo -= Vec3(2 * tol_);
     sec.hi += Vec3(2 * tol_);
@@ -221,13 +258,50 @@ bool FarField::unoccluded(std::uint32_t i, std::uint32_t j) const {
     // The pair's bounding box, widened by the tolerance of touching.
     const Box box = patches_.pair_box(i, j);
     const Box pair{box.lo - Vec3(2 * tol_), box.hi + Vec3(2 * tol_)};
+    // The flat planes of i and j themselves block nothing: a segment from i's front part ends on
+    // j's plane (and starts on i's) without crossing it. Their bits are set only where the other
+    // patch is cut by the plane (a sender cut by its receiver's plane: add_cut_sender_pairs),
+    // and there only the part of it in front exchanges radiation.
+    const auto own = [&](std::uint32_t p, std::size_t w) -> std::uint64_t {
+        const std::uint32_t g = plane_of_[p];
+        return g / 64 == w && planes_[g].thickness <= tol_ ? std::uint64_t{1} << (g % 64) : 0;
+    };
     for (std::size_t w = 0; w < words_; ++w) {
-        std::uint64_t c = (pi[w] | pj[w]) & (mi[w] | mj[w]);
+        std::uint64_t c = (pi[w] | pj[w]) & (mi[w] | mj[w]) & ~(own(i, w) | own(j, w));
         while (c) {
             const std::size_t g = w * 64 + static_cast<std::size_t>(std::countr_zero(c));
             c &= c - 1;
             if (section_meets(i, j, g, pair)) return false;
         }
+    }
+    return true;
+}
+
+bool FarField::unoccluded_front(std::span<const Vec3> front, std::uint32_t i, std::uint32_t j) const {
+    if (planes_.empty() || front.size() < 3 || front.size() > 5) return false;
+    const Poly& pj = patches_.polys[j];
+    Box box{Vec3(INFINITY), Vec3(-INFINITY)};
+    for (const Vec3& x : front) {
+        box.lo = glm::min(box.lo, x);
+        box.hi = glm::max(box.hi, x);
+    }
+    box.lo = glm::min(box.lo, patches_.boxes[j].lo);
+    box.hi = glm::max(box.hi, patches_.boxes[j].hi);
+    const Box pair{box.lo - Vec3(2 * tol_), box.hi + Vec3(2 * tol_)};
+    const std::uint64_t* pjb = &plus_bits_[j * words_];
+    const std::uint64_t* mjb = &minus_bits_[j * words_];
+    for (std::size_t g = 0; g < planes_.size(); ++g) {
+        if (g == plane_of_[j] && planes_[g].thickness <= tol_) continue;  // ends on it: crosses nothing there
+        const Plane& P = planes_[g];
+        const double lim = P.thickness > tol_ ? P.thickness + tol_ : tol_;
+        const bool thick = P.thickness > tol_;
+        bool above = (pjb[g / 64] >> (g % 64)) & 1, below = (mjb[g / 64] >> (g % 64)) & 1;
+        for (const Vec3& x : front) {
+            const double d = glm::dot(P.n, x) - P.d;
+            above = above || d > lim || (thick && d >= -lim);
+            below = below || d < -lim || (thick && d <= lim);
+        }
+        if (above && below && section_meets(front, pj.span(), i, j, g, pair, true)) return false;
     }
     return true;
 }

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -44,20 +45,33 @@ public:
     // (far_field_cost.cpp) and stays off when it is over the budget. Const afterwards.
     FarField(const PatchSet& patches, const SpatialGrid& grid, const NearFieldOptions& options);
 
-    bool on() const { return !planes_.empty(); }
+    bool on() const { return on_; }
     // Whether row i gets far-field values: on, and i emits when only the emitting rows do
     // (NearFieldOptions::far_field_emitters).
     bool applies(std::uint32_t i) const { return on() && (only_.empty() || only_[i] != 0); }
     std::size_t rows_only() const { return only_rows_; }  // emitting rows when only they do; 0: all
-    std::size_t planes() const { return planes_.size(); }
+    std::size_t planes() const { return on_ ? planes_.size() : 0; }  // in use by the far field
     // Whether it is on and why, in words, for the run's report and log.
     const std::string& status() const { return status_; }
     // Estimated cost of a row (ns on one core; NAN when not estimated).
     double cost_ns() const { return cost_; }
+    // The planes (and the plane test, unoccluded) are kept where `auto` turned the far field off
+    // for its cost: senders cut by a receiver's plane still need them (cutting_planes).
+    bool has_planes() const { return !planes_.empty(); }
+    // The planes (flat to the tolerance) that cut patch i: a vertex of i strictly on each side.
+    // A receiver j of such a plane sees only the part of i in front of it, which the sender's
+    // centre may miss altogether (docs/accuracy.md, "Senders cut by a receiver's plane").
+    void cutting_planes(std::uint32_t i, std::vector<std::uint32_t>& out) const;
+    std::span<const std::uint32_t> members(std::uint32_t g) const { return planes_[g].members; }
+    std::uint32_t plane_of(std::uint32_t j) const { return plane_of_[j]; }  // with has_planes()
 
     // No plane that holds patches separates a point of i from a point of j, except where the
     // pair's hull crosses it outside the bounding box of that plane's patches. False when off.
     bool unoccluded(std::uint32_t i, std::uint32_t j) const;
+    // The same for the part `front` of sender i in front of j's plane (a convex polygon of 3 to 5
+    // vertices: i clipped to j's front), for a sender that j's plane cuts: the plane test with
+    // that part in place of i. Costs a pass over the planes.
+    bool unoccluded_front(std::span<const Vec3> front, std::uint32_t i, std::uint32_t j) const;
     // F_ij of an unoccluded facing pair at centroid distance d beyond the near range, and a
     // bound on its error (see kFarPoint3K).
     std::pair<double, double> value(std::uint32_t i, std::uint32_t j, double d) const;
@@ -87,6 +101,9 @@ private:
     void mark_sides();
     void make_rules();
     bool section_meets(std::uint32_t i, std::uint32_t j, std::size_t g, const Box& pair) const;
+    // strict: members that only touch the section do not count (unoccluded_front).
+    bool section_meets(std::span<const Vec3> pi, std::span<const Vec3> pj, std::uint32_t i, std::uint32_t j, std::size_t g,
+                       const Box& pair, bool strict) const;
     // far_field_cost.cpp: the cost per row of a sample of rows, and the share of them every
     // facing pair of which would be proven (rows not measured at all).
     double estimate_cost(double& complete_fraction) const;
@@ -103,6 +120,8 @@ private:
     std::string status_;
     double cost_ = NAN;
     double complete_ = NAN;  // estimated share of rows the far field makes complete
+    bool on_ = false;
+    std::vector<std::uint32_t> plane_of_;  // per patch, its plane
 };
 
 }  // namespace ffcube::accuracy

@@ -57,6 +57,15 @@ struct NearFieldCorrector::Impl {
     bool needs_sub_hemicubes(std::uint32_t i, std::uint32_t j) const;
     void add_near_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
     void add_far_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    void add_cut_sender_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    // F_ij of a facing pair proven unoccluded, each patch clipped to the other's front.
+    double pair_value(std::uint32_t i, std::uint32_t j, double d, NearAnalysis& out, NearFieldScratch::Buffers& b) const;
+    // The plane test for a sender cut by j's plane, on its part in front of j (FarField::unoccluded_front).
+    bool cut_sender_unoccluded(std::uint32_t i, std::uint32_t j, NearFieldScratch::Buffers& b) const {
+        const Patch& pj = patches.scene.patches[j];
+        clip_front(patches.polys[i].span(), pj.centroid, pj.normal, b.front);
+        return far.unoccluded_front(b.front, i, j);
+    }
     enum class Exact { made, refused, over_budget };
     // budget: what is left of the row's (auto mode), or nullptr: no bound.
     Exact exact_visibility(std::uint32_t i, std::uint32_t j, NearAnalysis& out, NearFieldScratch::Buffers& b,
@@ -267,16 +276,56 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
             out.refused_sampled += needs_sub_hemicubes(i, j);
             continue;
         }
-        const double gap = d - patches.radius[i] - patches.radius[j];
-        if (gap >= 2 * std::min(patches.radius[i], patches.radius[j])) {
-            const double f = separated_ff(patches.polys[i], pi, patches.radius[i], patches.polys[j], pj,
-                                          patches.radius[j], b.values);
-            out.exact.emplace_back(j, f);
-            out.far_error += kSeparatedRelativeError * f;  // the 6 × 6 rule's measured worst, 3.6e-10, with margin
-        } else {
-            out.exact.emplace_back(j, exact_ff(patches.polys[i], pi, patches.polys[j], pj));
+        out.exact.emplace_back(j, pair_value(i, j, d, out, b));
+    }
+}
+
+double NearFieldCorrector::Impl::pair_value(std::uint32_t i, std::uint32_t j, double d, NearAnalysis& out,
+                                            NearFieldScratch::Buffers& b) const {
+    const Patch& pi = patches.scene.patches[i];
+    const Patch& pj = patches.scene.patches[j];
+    const double gap = d - patches.radius[i] - patches.radius[j];
+    if (gap >= 2 * std::min(patches.radius[i], patches.radius[j])) {
+        const double f = separated_ff(patches.polys[i], pi, patches.radius[i], patches.polys[j], pj, patches.radius[j], b.values);
+        out.far_error += kSeparatedRelativeError * f;  // the 6 × 6 rule's measured worst, 3.6e-10, with margin
+        return f;
+    }
+    return exact_ff(patches.polys[i], pi, patches.polys[j], pj);
+}
+
+// A sender cut by the plane of receivers beyond the near range (hemicube rows: the sender
+// quadrature's case). Each receiver j of such a plane sees only the part of i in front of it,
+// and the centre, where the hemicube stands, may lie behind it (it then sees nothing of j) or
+// just in front (j at grazing pixels): neither is a midpoint value, and the quadrature's ratio
+// cannot mend an entry the centre did not see. So those pairs get their value with i clipped
+// to j's front where the plane test proves them unoccluded (the L-shaped room's walls beside
+// the inner corner: docs/accuracy.md, "Senders cut by a receiver's plane"); the rest stay as
+// measured and are counted. Merged into out.exact (columns increasing).
+void NearFieldCorrector::Impl::add_cut_sender_pairs(std::uint32_t i, NearAnalysis& out, NearFieldScratch::Buffers& b) const {
+    far.cutting_planes(i, b.cutting);
+    if (b.cutting.empty()) return;
+    const Scene& scene = patches.scene;
+    const Patch& pi = scene.patches[i];
+    b.far.clear();
+    for (const std::uint32_t g : b.cutting) {
+        for (const std::uint32_t j : far.members(g)) {
+            if (j == i || j >= scene.obstruction_first) continue;
+            const Patch& pj = scene.patches[j];
+            const double d = glm::length(pj.centroid - pi.centroid);
+            if (d < options.k * std::max(pi.size, pj.size) || !patches.facing(i, j)) continue;  // near: made above
+            if (!cut_sender_unoccluded(i, j, b)) {
+                ++out.cut_sender_unproven;
+                continue;
+            }
+            b.far.emplace_back(j, pair_value(i, j, d, out, b));
         }
     }
+    if (b.far.empty()) return;
+    std::sort(b.far.begin(), b.far.end());
+    out.cut_sender_entries += b.far.size();
+    b.near_exact.assign(out.exact.begin(), out.exact.end());
+    out.exact.resize(b.near_exact.size() + b.far.size());
+    std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());
 }
 
 // Far field: every other facing pair the plane test proves unoccluded, merged into out.exact
@@ -286,6 +335,8 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
     const Patch& pi = scene.patches[i];
     out.far = true;
     b.far.clear();
+    if (options.sender_quadrature) far.cutting_planes(i, b.cutting);
+    else b.cutting.clear();
     const auto n = static_cast<std::uint32_t>(scene.size());
     for (std::uint32_t j = 0; j < n; ++j) {
         if (j == i) continue;
@@ -294,6 +345,17 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
         if (d < options.k * std::max(pi.size, pj.size) || !patches.facing(i, j)) continue;
         if (j >= scene.obstruction_first && !options.obstruction_receivers) {  // its entry stays as measured
             out.faces_obstruction = true;
+            continue;
+        }
+        if (!b.cutting.empty() && std::find(b.cutting.begin(), b.cutting.end(), far.plane_of(j)) != b.cutting.end()) {
+            // i cut by j's plane: i clipped to j's front (add_cut_sender_pairs)
+            if (!cut_sender_unoccluded(i, j, b)) {
+                ++out.far_unproven;
+                ++out.cut_sender_unproven;
+                continue;
+            }
+            b.far.emplace_back(j, pair_value(i, j, d, out, b));
+            ++out.cut_sender_entries;
             continue;
         }
         if (!far.unoccluded(i, j)) {
@@ -397,6 +459,7 @@ void NearFieldCorrector::analyse(std::uint32_t i, NearAnalysis& out, NearFieldSc
     b.occluder_level = -1;
     impl_->add_near_pairs(i, out, b);
     if (impl_->far.applies(i)) impl_->add_far_pairs(i, out, b);
+    else if (impl_->options.sender_quadrature) impl_->add_cut_sender_pairs(i, out, b);
     if (impl_->automatic()) impl_->resolve_deferred(i, out, b);
     out.seconds = watch.seconds();
     out.done = true;
@@ -441,6 +504,8 @@ void add_analysis_stats(const NearAnalysis& a, NearFieldStats& stats) {
     stats.far_rows += a.far;
     stats.far_entries += a.far_entries;
     stats.far_unproven += a.far_unproven;
+    stats.cut_sender_entries += a.cut_sender_entries;
+    stats.cut_sender_unproven += a.cut_sender_unproven;
     stats.rows_analytic += a.skipped;
     stats.exact_visibility += a.exact_visibility;
     stats.exact_visibility_points += a.exact_visibility_points;
@@ -491,7 +556,9 @@ void NearFieldCorrector::correct(std::uint32_t i, SparseRow& row, NearFieldStats
     const bool quadrature_needed = quadrature && sender_quadrature_needed(im.patches, im.options, i, row.col);
     // A ray-cast row (cast_rays): the rays' noise, no pixels, no quadrature residual.
     const bool cast = sampled_row && cast_rays > 0;
-    const double pixel_delta_ff = cast ? 0.0 : im.options.pixel_delta_ff;
+    const double pixel_delta_ff = cast                          ? 0.0
+                                  : analysis->pixel_delta_ff >= 0 ? analysis->pixel_delta_ff
+                                                                  : im.options.pixel_delta_ff;
     const RowErrorModel error{im.patches.scene, im.patches.scene.patches[i], pixel_delta_ff,
                               cast ? cast_rays : im.options.rays, sampled_row && !cast, quadrature};
     count_small_receivers(row, pixel_delta_ff, stats);

@@ -20,6 +20,8 @@ struct NearFieldScratch::Buffers {
     accuracy::ShaftScratch shaft;                           // the occlusion test's
     accuracy::NearValueScratch values;                      // separated near values'
     std::vector<std::pair<std::uint32_t, double>> far;      // far entries, j increasing
+    std::vector<std::uint32_t> cutting;                     // planes that cut the sender
+    std::vector<Vec3> front;                                // the sender clipped to a receiver's front
     std::vector<std::pair<std::uint32_t, double>> near_exact;  // the near entries while merging
     std::vector<std::uint32_t> deferred;                    // auto exact visibility: refused pairs to try
     std::vector<std::uint32_t> blockers;                    // exact visibility: the shaft's candidates

@@ -77,6 +77,48 @@ private:
 
 }  // namespace
 
+// The hemicube drawn again at a finer resolution, one thread with its own context (each call is
+// one row, from a worker's pool thread of the hemicube provider), made on its first row, after the
+// workers fork. Calls are serialized: a context belongs to one thread at a time, and rows above
+// the target are few. The row is drawn with the plan its first measure had, by sub-hemicubes
+// (never rays: a ray-cast row is not drawn again).
+class LazyHemicubeRefiner final : public RowProvider {
+public:
+    LazyHemicubeRefiner(const Scene& scene, const RowOptions& o, int resolution) : scene_(scene), options_(hemicube_options(o)) {
+        options_.resolution = resolution;
+        options_.threads = 1;
+        options_.worker_processes = false;
+        options_.fine_rows = FineRows::hemicubes;
+    }
+    std::uint32_t size() const override { return static_cast<std::uint32_t>(scene_.size()); }
+    std::string name() const override { return "hemicube"; }
+    bool can_sample_sender() const override { return true; }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override {
+        const std::lock_guard lock(mutex_);
+        provider().compute_rows(rows, sink);
+    }
+    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
+                              const RowSink& sink) override {
+        const std::lock_guard lock(mutex_);
+        provider().compute_rows_planned(rows, plans, sink);
+    }
+    int resolution() const { return options_.resolution; }
+    std::uint64_t hemicubes() const {
+        const std::lock_guard lock(mutex_);
+        return drawer_ ? drawer_->stats().hemicubes : 0;
+    }
+
+private:
+    HemicubeRowProvider& provider() {
+        if (!drawer_) drawer_ = std::make_unique<HemicubeRowProvider>(scene_, options_);
+        return *drawer_;
+    }
+    const Scene& scene_;
+    HemicubeOptions options_;
+    mutable std::mutex mutex_;
+    std::unique_ptr<HemicubeRowProvider> drawer_;
+};
+
 bool refine_hemicube_rows(const RowOptions& o) {
     return o.method == RowMethod::Hemicube && o.correct == Correction::Near && o.tolerance > 0 && o.tolerance_given &&
            !o.rays_given;
@@ -88,8 +130,19 @@ void RowSource::wrap(const Scene& radiating) {
         RowProvider& inner = hemicube_ ? static_cast<RowProvider&>(*hemicube_) : *raycast_;
         corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options_));
         if (hemicube_ && refine_hemicube_rows(options_)) {
+            // Drawn again at 2N and 4N (at most kMaxRefinedResolution), then by rays.
+            std::vector<CorrectedRowProvider::Refiner> refiners;
+            int last = options_.resolution;
+            for (const int factor : {2, 4}) {
+                const int n = std::min(factor * options_.resolution, kMaxRefinedResolution);
+                if (n <= last) continue;
+                last = n;
+                redrawers_.push_back(std::make_unique<LazyHemicubeRefiner>(scene, options_, n));
+                refiners.push_back({redrawers_.back().get(), near_field_options_for_hemicube(n).pixel_delta_ff});
+            }
             refiner_ = std::make_unique<LazyRayRefiner>(scene, options_);
-            corrected_->refine_with(refiner_.get(), options_.tolerance);
+            refiners.push_back({refiner_.get(), 0.0});
+            corrected_->refine_with(std::move(refiners), options_.tolerance);
         }
     }
     if (radiating.drawn) {
@@ -111,6 +164,7 @@ void rebind_row_source(RowSource& rows, const Scene& radiating) {
     rows.leading_.reset();  // the wrappers refer to the provider and the old scene: they go first
     rows.corrected_.reset();
     rows.refiner_.reset();
+    rows.redrawers_.clear();
     rows.hemicube_->set_scene(radiating.drawn_scene());
     rows.wrap(radiating);
     rows.setup_seconds_ = watch.seconds();
@@ -168,7 +222,7 @@ FfmMetadata row_metadata(const RowOptions& o) {
         // Recorded whether or not the rows above it are measured again (the report says which
         // rows meet it); refined rows differ from the drawn ones.
         if (o.tolerance > 0) meta.settings += fmt::format(" tolerance={}", o.tolerance);
-        if (refine_hemicube_rows(o)) meta.settings += " refine=rays";
+        if (refine_hemicube_rows(o)) meta.settings += " refine=redraw,rays";
     }
     // Corrected rows differ from plain ones: checkpoints and matrices must not mix them.
     if (o.correct == Correction::Near) {
@@ -223,7 +277,10 @@ void report_tolerance(Report& r, const CorrectedRowProvider& corrected, const Ro
                           : "--correct none";
     r.set("tolerance.target", o.tolerance);
     r.set("tolerance.rows_refined", refined);
-    if (o.method == RowMethod::Hemicube) r.set("tolerance.rows_measured_again_by_rays", corrected.rows_refined());
+    if (o.method == RowMethod::Hemicube) {
+        r.set("tolerance.rows_drawn_again", corrected.rows_redrawn());
+        r.set("tolerance.rows_measured_again_by_rays", corrected.rows_refined());
+    }
     r.set("tolerance.not_refined_because", why);
     r.set("tolerance.rows", v.size());
     r.set("tolerance.rows_above", above.size());
@@ -295,6 +352,8 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.far_field_rows", c.far_rows);
     r.set("corrections.far_field_entries", c.far_entries);
     r.set("corrections.far_field_pairs_unproven", c.far_unproven);
+    r.set("corrections.cut_sender_entries", c.cut_sender_entries);
+    r.set("corrections.cut_sender_pairs_unproven", c.cut_sender_unproven);
     r.set("corrections.rows_analytic", c.rows_analytic);
     r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
     r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
@@ -326,7 +385,8 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
     // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
     // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs
-    // not proven unoccluded.
+    // not proven unoccluded, 6 measured again by rays (above an asked-for tolerance), 7 drawn
+    // again at a finer resolution and no more.
     const std::vector<std::int8_t>& measures = corrected.row_measures();
     r.set_array("corrections.row_measure", std::vector<std::int64_t>(measures.begin(), measures.end()));
     r.set("corrections.seconds", c.seconds);

@@ -95,70 +95,90 @@ namespace ffcube {
 namespace {
 
 // Accuracy by target for hemicube rows (refine_hemicube_rows): with a target asked for, rows
-// whose estimate is above it are measured again by rays refined to it; without one, the rows are
-// the hemicube's, bit for bit. The scene is the closed box of the test above at N = 128, where
-// some drawn rows are above E = 1e-3 and some within; the reference the same closed forms.
+// whose estimate is above it are drawn again at 2N and 4N, and those still above are measured
+// again by rays refined to it; without one, the rows are the hemicube's, bit for bit. The scene is
+// the closed box of the test above, the reference the same closed forms. At N = 128 some drawn
+// rows are above E = 1e-3 and some within, and drawing again brings every row above within it;
+// at N = 32 every row is above, and some are still above at 4N = 128: those go to the rays.
 TEST(HemicubeTolerance, RowsAboveAnAskedForTargetAreMeasuredAgainByRays) {
     const Scene scene = test::make_scene(test::inward_box(1.0, 1.0, 1.0), 0.1);
     const std::uint32_t n = static_cast<std::uint32_t>(scene.size());
     std::vector<std::uint32_t> rows;
     for (std::uint32_t i = 0; i < n; i += 9) rows.push_back(i);
     const double E = 1e-3;
-    auto run = [&](bool given, std::vector<SparseRow>& got, std::vector<float>& estimate, std::vector<std::int8_t>& measure,
-                   std::uint64_t& refined) {
+    struct Run {
+        std::vector<SparseRow> got;
+        std::vector<float> estimate;
+        std::vector<std::int8_t> measure;
+        std::uint64_t refined = 0, redrawn = 0;
+    };
+    const auto run = [&](bool given, int resolution) {
         RowOptions o;
         o.method = RowMethod::Hemicube;
-        o.resolution = 128;
+        o.resolution = resolution;
         o.threads = 2;
         o.far_field = FarFieldMode::off;
         o.tolerance = E;
         o.tolerance_given = given;
         EXPECT_EQ(refine_hemicube_rows(o), given);
         RowSource source = make_row_source(scene, o);
-        got.assign(n, SparseRow{});
-        source.provider().compute_rows(rows, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
-        estimate = source.corrected()->row_tolerance_estimates();
-        measure = source.corrected()->row_measures();
-        refined = source.corrected()->rows_refined();
+        Run r;
+        r.got.assign(n, SparseRow{});
+        source.provider().compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) { r.got[i] = row; });
+        r.estimate = source.corrected()->row_tolerance_estimates();
+        r.measure = source.corrected()->row_measures();
+        r.refined = source.corrected()->rows_refined();
+        r.redrawn = source.corrected()->rows_redrawn();
+        return r;
     };
-    std::vector<SparseRow> plain, again;
-    std::vector<float> plain_estimate, estimate;
-    std::vector<std::int8_t> plain_measure, measure;
-    std::uint64_t plain_refined = 0, refined = 0;
-    run(false, plain, plain_estimate, plain_measure, plain_refined);
-    run(true, again, estimate, measure, refined);
-    EXPECT_EQ(plain_refined, 0u);
-    std::size_t above_before = 0, above_after = 0, covered = 0, checked = 0, kept = 0;
-    double worst = 0;
-    for (const std::uint32_t i : rows) {
-        const bool was_above = !(plain_estimate[i] <= E);
-        above_before += was_above;
-        above_after += !(estimate[i] <= E);
-        if (!was_above) {
-            // Rows within the target are the drawn rows, bit for bit.
-            EXPECT_NE(measure[i], CorrectedRowProvider::refined) << i;
-            EXPECT_EQ(again[i].col, plain[i].col) << i;
-            EXPECT_EQ(again[i].val, plain[i].val) << i;
-            ++kept;
-            continue;
+    for (const int resolution : {128, 32}) {
+        const Run plain = run(false, resolution), again = run(true, resolution);
+        EXPECT_EQ(plain.refined, 0u);
+        EXPECT_EQ(plain.redrawn, 0u);
+        std::size_t above_before = 0, above_after = 0, covered = 0, checked = 0, kept = 0, by_rays = 0;
+        double worst = 0;
+        for (const std::uint32_t i : rows) {
+            const bool was_above = !(plain.estimate[i] <= E);
+            above_before += was_above;
+            above_after += !(again.estimate[i] <= E);
+            if (!was_above) {
+                // Rows within the target are the drawn rows, bit for bit.
+                EXPECT_NE(again.measure[i], CorrectedRowProvider::refined) << i;
+                EXPECT_NE(again.measure[i], CorrectedRowProvider::redrawn) << i;
+                EXPECT_EQ(again.got[i].col, plain.got[i].col) << i;
+                EXPECT_EQ(again.got[i].val, plain.got[i].val) << i;
+                ++kept;
+                continue;
+            }
+            EXPECT_TRUE(again.measure[i] == CorrectedRowProvider::refined || again.measure[i] == CorrectedRowProvider::redrawn)
+                << i;
+            by_rays += again.measure[i] == CorrectedRowProvider::refined;
+            // The row measured again against the closed forms: its estimate must cover its true error.
+            const double truth = test::unoccluded_row_error(scene, i, again.got[i]);
+            ++checked;
+            covered += truth <= again.estimate[i];
+            worst = std::max(worst, truth / again.estimate[i]);
         }
-        EXPECT_EQ(measure[i], CorrectedRowProvider::refined) << i;
-        // The refined row against the closed forms: its estimate must cover its true error.
-        const double truth = test::unoccluded_row_error(scene, i, again[i]);
-        ++checked;
-        covered += truth <= estimate[i];
-        worst = std::max(worst, truth / estimate[i]);
+        std::printf("N = %d: %zu of %zu rows above E drawn, %zu after measuring again (%llu drawn again, %llu by rays); "
+                    "rows measured again within their estimate: %zu of %zu, worst true/estimate %.2f\n",
+                    resolution, above_before, rows.size(), above_after, static_cast<unsigned long long>(again.redrawn),
+                    static_cast<unsigned long long>(again.refined), covered, checked, worst);
+        EXPECT_EQ(again.redrawn, above_before);  // every row above was drawn (none ray-cast on a box of 6 pieces)
+        EXPECT_EQ(again.refined, by_rays);
+        ASSERT_GT(checked, 10u) << "the test needs drawn rows above the target";
+        if (resolution == 128) {
+            EXPECT_GT(kept, 0u);
+            EXPECT_EQ(by_rays, 0u);
+            EXPECT_EQ(above_after, 0u);
+        } else {
+            EXPECT_GT(by_rays, 0u) << "the test needs rows still above the target at 4N";
+            EXPECT_LT(by_rays, above_before) << "the test needs rows that drawing again brought within the target";
+        }
+        // Rows whose rays' budget (64/E) ran out stay above, counted; the others now meet it.
+        EXPECT_LT(above_after, above_before) << "measuring again brought no row within the target";
+        EXPECT_GE(static_cast<double>(covered), 0.95 * static_cast<double>(checked));
+        EXPECT_LE(worst, 3.0);
     }
-    std::printf("%zu of %zu rows above E drawn, %zu after measuring again (%llu rows by rays); refined rows within their "
-                "estimate: %zu of %zu, worst true/estimate %.2f\n",
-                above_before, rows.size(), above_after, static_cast<unsigned long long>(refined), covered, checked, worst);
-    EXPECT_EQ(refined, above_before);
-    ASSERT_GT(checked, 10u) << "the test needs drawn rows above the target";
-    EXPECT_GT(kept, 0u);
-    // Rows whose rays' budget (64/E) ran out stay above, counted; the others now meet it.
-    EXPECT_LT(above_after, above_before) << "measuring again brought no row within the target";
-    EXPECT_GE(static_cast<double>(covered), 0.95 * static_cast<double>(checked));
-    EXPECT_LE(worst, 3.0);
 }
 
 }  // namespace

@@ -189,6 +189,8 @@ struct NearFieldStats {
     std::uint64_t far_rows = 0;
     std::uint64_t far_entries = 0;
     std::uint64_t far_unproven = 0;
+    std::uint64_t cut_sender_entries = 0;
+    std::uint64_t cut_sender_unproven = 0;
     std::uint64_t rows_analytic = 0;  // rows made wholly of analytic values, not measured at all
     std::uint64_t exact_visibility = 0;        // refused near pairs given the exact value past their occluders
     std::uint64_t exact_visibility_points = 0;  // point-kernel evaluations they took
@@ -231,6 +233,8 @@ struct NearAnalysis {
     std::uint64_t refused_sampled = 0;                    // of which asking for sub-hemicubes
     std::uint64_t far_entries = 0;                        // of `exact`, beyond the near range
     std::uint64_t far_unproven = 0;                       // facing pairs beyond it, not proven
+    std::uint64_t cut_sender_entries = 0;  // of `exact`, beyond the near range, the sender cut by j's plane
+    std::uint64_t cut_sender_unproven = 0;  // such pairs not proven unoccluded (left as measured)
     std::uint64_t exact_visibility = 0;                   // near pairs exact past their occluders
     std::uint64_t exact_visibility_points = 0;
     std::uint64_t exact_visibility_unconverged = 0;
@@ -255,6 +259,9 @@ struct NearAnalysis {
     // to a tolerance: RowProvider::RowStages::measured), −1 when it gave none.
     double measured_error = -1;
     double measured_rays = 0;  // and its rays (0: none given)
+    // The pixel of the hemicube that measured the row, as the ΔF of the largest one, where it was
+    // drawn again at a finer resolution (CorrectedRowProvider::refine_with); −1: the options'.
+    double pixel_delta_ff = -1;
     bool done = false;
 };
 
@@ -359,24 +366,35 @@ public:
         sampled_occluder = 3,   // 2 × 2 sub-hemicubes: an occluder beside the sender
         sampled_touching = 4,   // 4 × 4 sub-hemicubes: an occluder touching the sender
         sampled_unproven = 5,   // 2 × 2 sub-hemicubes: far pairs not proven unoccluded
-        refined = 6,            // measured again by the refiner (refine_with): its estimate was above the target
+        refined = 6,            // measured again by rays (refine_with): its estimate was above the target
+        redrawn = 7,            // drawn again at a finer resolution (refine_with), and no more
     };
     const std::vector<std::int8_t>& row_measures() const { return row_measure_; }
     const NearFieldCorrector& corrector() const { return corrector_; }
     // Accuracy by target for an inner provider that does not refine its rows (the hemicube): a
-    // row measured by it whose tolerance estimate is above `tolerance` is measured again by
-    // `refiner`, which must refine its rows to that tolerance and say what its measuring error
-    // came to through RowStages::measured (the ray caster with RaycastOptions::tolerance); the
-    // row is then corrected as that provider's (its rays' error, no pixels, no quadrature residual).
-    // Called from the inner provider's workers, one row at a time, so the refiner must allow
-    // concurrent single-row calls on its own threads (the ray caster with one thread does).
-    // nullptr: none. The refiner must outlive this.
-    void refine_with(RowProvider* refiner, double tolerance) {
-        refiner_ = refiner;
+    // row measured by it whose tolerance estimate is above `tolerance` is measured again by each
+    // refiner in turn until its estimate meets the tolerance (docs/accuracy.md, "Hemicube rows
+    // above the target"). A refiner with pixel_delta_ff > 0 draws the row again with the same
+    // plan at a finer resolution, whose largest pixel is that ΔF (a hemicube provider that can
+    // sample the sender); the row is corrected again with its noise modelled at that pixel. Rows
+    // the inner provider ray-cast (fine rows) are not drawn again. A refiner with pixel_delta_ff
+    // == 0 must refine its rows to the tolerance and say what its measuring error came to through
+    // RowStages::measured (the ray caster with RaycastOptions::tolerance); the row is then
+    // corrected as that provider's (its rays' error, no pixels, no quadrature residual).
+    // Called from the inner provider's workers, one row at a time, so a refiner must allow
+    // concurrent single-row calls. The refiners must outlive this; empty: none.
+    struct Refiner {
+        RowProvider* provider = nullptr;
+        double pixel_delta_ff = 0;
+    };
+    void refine_with(std::vector<Refiner> refiners, double tolerance) {
+        refiners_ = std::move(refiners);
         refine_tolerance_ = tolerance;
     }
-    // Rows measured again by the refiner so far.
+    // Rows measured again by rays so far, and rows drawn again at a finer resolution (a row drawn
+    // at two finer resolutions counts once).
     std::uint64_t rows_refined() const { return rows_refined_.load(); }
+    std::uint64_t rows_redrawn() const { return rows_redrawn_.load(); }
     // Entries still held by the analyses of rows already handed on (0 after compute_rows: each
     // row's analysis, up to a whole row with the far field, is freed once the row is corrected).
     std::size_t retained_analysis_entries() const {
@@ -398,9 +416,10 @@ private:
     NearFieldStats stats_;
     std::vector<float> row_error_;
     std::vector<float> row_tolerance_;
-    RowProvider* refiner_ = nullptr;
+    std::vector<Refiner> refiners_;
     double refine_tolerance_ = 0;
     std::atomic<std::uint64_t> rows_refined_{0};
+    std::atomic<std::uint64_t> rows_redrawn_{0};
     std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call

@@ -26,6 +26,10 @@
 
 namespace ffcube {
 
+// Hemicube rows above an asked-for tolerance are drawn again at 2N and 4N, at most this (the
+// atlas of a 2048 hemicube is 2048 x 4096 pixels), before the rays.
+inline constexpr int kMaxRefinedResolution = 2048;
+
 // Where rows come from: hemicubes on a GL context, or rays through Embree, wrapped by the
 // near-field correction when it is on. Movable; the scene must outlive it.
 class RowSource {
@@ -63,6 +67,8 @@ private:
     // Hemicube rows above an asked-for tolerance, measured again by rays refined to it
     // (refine_hemicube_rows; built on its first row: the hemicube's workers fork first).
     std::unique_ptr<RowProvider> refiner_;
+    // Before the rays, the same rows drawn again at 2N and 4N (kMaxRefinedResolution at most).
+    std::vector<std::unique_ptr<RowProvider>> redrawers_;
     std::unique_ptr<CorrectedRowProvider> corrected_;
     // With obstruction-only surfaces: the radiating rows, cut to the radiating columns; holds a
     // reference to the providers above, so it is declared after them.
