@@ -1,4 +1,4 @@
-// Senders cut by a facet (gl/exposed_points.hpp, docs/accuracy.md "Senders cut by a facet"): a
+// Senders cut by a facet (accuracy/exposed_points.hpp, docs/accuracy.md "Senders cut by a facet"): a
 // square ground patch half inside a closed box that stands on it. The exposed half's points lie
 // outside the box, their weights integrate the quadratics over that half exactly, and the row
 // measured at them matches the closed form of the exposed half's factor to the box's wall.
@@ -12,7 +12,7 @@
 #include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
-#include "gl/exposed_points.hpp"
+#include "accuracy/exposed_points.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -125,9 +125,14 @@ TEST(ExposedPoints, RowFromTheExposedHalfMatchesTheClosedForm) {
     o.threads = 1;
     HemicubeRowProvider provider(h.scene, o);
     const std::vector<std::uint32_t> rows{h.ground};
-    const std::vector<RowProvider::RowPlan> plans{RowProvider::RowPlan::sampled_fine};
+    // The measure contract: the plan's sender points and weights (the rule's) in the request.
+    std::vector<RowProvider::RowRequest> requests(1);
+    requests[0].plan = RowProvider::RowPlan::sampled_fine;
+    requests[0].points = points;
+    requests[0].weights = weights;
+    requests[0].partly_enclosed = true;
     double f = -1, sum = 0;
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) {
+    provider.compute_rows_requested(rows, requests, [&](std::uint32_t, const SparseRow& r) {
         f = 0;
         for (std::size_t k = 0; k < r.col.size(); ++k) {
             if (r.col[k] == h.west) f = r.val[k];
@@ -230,9 +235,14 @@ TEST(ExposedPoints, PartlyCoveredSenderRowMatchesTheClosedForm) {
     o.threads = 1;
     HemicubeRowProvider provider(h.scene, o);
     const std::vector<std::uint32_t> rows{h.ceiling};
-    const std::vector<RowProvider::RowPlan> plans{RowProvider::RowPlan::sampled_fine};
+    // The measure contract: the plan's sender points and weights (the rule's) in the request.
+    std::vector<RowProvider::RowRequest> requests(1);
+    requests[0].plan = RowProvider::RowPlan::sampled_fine;
+    requests[0].points = points;
+    requests[0].weights = weights;
+    requests[0].partly_enclosed = true;
     double f = -1;
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) {
+    provider.compute_rows_requested(rows, requests, [&](std::uint32_t, const SparseRow& r) {
         f = 0;
         for (std::size_t k = 0; k < r.col.size(); ++k)
             if (r.col[k] == h.floor) f = r.val[k];
