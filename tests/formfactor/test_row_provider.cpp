@@ -137,7 +137,7 @@ TEST(LeadingRowProvider, CutsRowsOnEveryEntryPointAndFinishSeesTheCutRow) {
     EXPECT_EQ(lead.cut()[1], 0.0);
     // Staged: not forwarded (the inner finish would see uncut rows) but planned on this thread.
     std::vector<std::size_t> finished_nnz;
-    RowProvider::RowStages stages{[](std::size_t, std::uint32_t) { return RowPlan::sampled; },
+    RowProvider::RowStages stages{[](std::size_t, std::uint32_t, RowProvider::RowRequest& r) { r.plan = RowPlan::sampled; },
                                   [&](std::size_t, std::uint32_t, SparseRow& r) { finished_nnz.push_back(r.nnz()); }};
     Received s;
     lead.compute_rows_staged(rows, stages, s.sink());

@@ -7,10 +7,13 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "accuracy/exposed_points.hpp"
 #include "support/scenes.hpp"
@@ -252,6 +255,67 @@ TEST(ExposedPoints, PartlyCoveredSenderRowMatchesTheClosedForm) {
     EXPECT_EQ(provider.stats().partly_enclosed_rows, 1u);
     std::printf("closed %.6f, rule on exact point factors %.6f, hemicube %.6f (4 sigma %.1e)\n", closed, exact_points,
                 f, 4 * sigma);
+}
+
+// The plan hands the measure its sender points (the sender rule is accuracy's, gl only measures):
+// through the correction, a sampled row's request carries the points and weights of
+// ExposedPoints::rule where the sender is partly covered (the ceiling over the lamp) and the
+// patch's quadrature points elsewhere, bit for bit; a centre row carries none. The inner
+// provider only records the requests (rows empty: nothing is measured).
+class RecordingRequests final : public RowProvider {
+public:
+    explicit RecordingRequests(std::uint32_t n) : requests(n), seen(n, 0) {}
+    std::uint32_t size() const override { return static_cast<std::uint32_t>(requests.size()); }
+    std::string name() const override { return "recording"; }
+    bool can_sample_sender() const override { return true; }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override {
+        for (const std::uint32_t i : rows) sink(i, SparseRow{});
+    }
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> given,
+                                const RowSink& sink) override {
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            requests[rows[k]] = given[k];
+            seen[rows[k]] = 1;
+            sink(rows[k], SparseRow{});
+        }
+    }
+    std::vector<RowRequest> requests;
+    std::vector<int> seen;
+};
+
+TEST(ExposedPoints, ThePlanHandsTheMeasureTheExposedPoints) {
+    const CoveredCeiling h;
+    RecordingRequests inner(static_cast<std::uint32_t>(h.scene.size()));
+    CorrectedRowProvider corrected(h.scene, inner, near_field_options_for_hemicube(128));
+    compute_all_rows(corrected);
+    const ExposedPoints e(h.scene);
+    std::size_t sampled = 0, exposed = 0;
+    for (std::uint32_t i = 0; i < h.scene.size(); ++i) {
+        ASSERT_TRUE(inner.seen[i]) << "row " << i;
+        const RowProvider::RowRequest& r = inner.requests[i];
+        EXPECT_EQ(r.engine, RowProvider::RowEngine::provider);
+        if (!r.sampled()) {
+            EXPECT_TRUE(r.points.empty()) << "row " << i;
+            continue;
+        }
+        ++sampled;
+        std::vector<Vec3> points;
+        std::vector<double> weights;
+        if (e.rule(i, points, weights)) {
+            ++exposed;
+            EXPECT_TRUE(r.partly_enclosed);
+        } else {
+            const auto v = h.scene.patch_vertices(i);
+            patch_quadrature(std::span<const Vec3>(v.data(), h.scene.patches[i].count),
+                             r.plan == RowProvider::RowPlan::sampled_fine ? 4 : 2, points, weights);
+            EXPECT_FALSE(r.partly_enclosed);
+        }
+        EXPECT_EQ(r.points, points) << "row " << i;
+        EXPECT_EQ(r.weights, weights) << "row " << i;
+    }
+    EXPECT_EQ(inner.requests[h.ceiling].partly_enclosed, true) << "the ceiling is planned sampled, at its exposed strip";
+    EXPECT_GE(sampled, exposed);
+    EXPECT_EQ(exposed, 1u);
 }
 
 }  // namespace

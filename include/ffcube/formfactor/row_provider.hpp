@@ -90,11 +90,6 @@ public:
     struct RowStages {
         std::function<void(std::size_t k, std::uint32_t i, RowRequest& request)> plan;
         std::function<void(std::size_t k, std::uint32_t i, SparseRow& row)> finish;
-        // The driver's second engine: row i measured into `row` when its request says
-        // RowEngine::rays, on the provider's worker thread `worker` (< the provider's thread
-        // count; one scratch per worker), right after plan (with pipelined workers: while the
-        // worker measures the row before). Thread-safe; the row depends on i only.
-        std::function<void(unsigned worker, std::uint32_t i, SparseRow& row)> cast;
         // For a provider that refines each row to a tolerance (the ray caster, accuracy by
         // target). exact_entries: before row i is measured, the entries finish will replace by
         // exact values, (j, F_ij) with j increasing, valid until finish; their measuring error
@@ -102,6 +97,11 @@ public:
         // (each ray's weight is 1/rays), before finish.
         std::function<std::span<const std::pair<std::uint32_t, double>>(std::size_t k, std::uint32_t i)> exact_entries;
         std::function<void(std::size_t k, std::uint32_t i, double error, double rays)> measured;
+        // The driver's second engine: row i measured into `row` when its request says
+        // RowEngine::rays, on the provider's worker thread `worker` (< the provider's thread
+        // count; one scratch per worker), right after plan (with pipelined workers: while the
+        // worker measures the row before). Thread-safe; the row depends on i only.
+        std::function<void(unsigned worker, std::uint32_t i, SparseRow& row)> cast;
     };
     virtual void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                                      const RowSink& sink);
