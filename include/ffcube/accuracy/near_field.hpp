@@ -66,7 +66,7 @@ struct NearFieldOptions {
     double pixel_delta_ff = 0;
     double rays = 0;
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
-    // rows (RowProvider::compute_rows_planned), when it can make them.
+    // rows (a sampled RowProvider::RowRequest), when it can make them.
     bool sub_hemicubes = true;
     // Which refused (possibly occluded) near pairs need sub-hemicubes: those whose centre value
     // may be off by more than 5e-4 (docs/accuracy.md, "Which near pairs need sub-hemicubes").
