@@ -10,6 +10,7 @@
 #include <mutex>
 #include <string>
 
+#include "accuracy/exposed_points.hpp"
 #include "accuracy/rebalance.hpp"
 #include "accuracy/row_range.hpp"
 #include "accuracy/scratch.hpp"
@@ -17,6 +18,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/timer.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 
 namespace ffcube {
 
@@ -144,6 +146,21 @@ CorrectedRowProvider::CorrectedRowProvider(const Scene& scene, RowProvider& inne
 
 CorrectedRowProvider::~CorrectedRowProvider() = default;
 
+// The sender rule of a row measured by sub-hemicubes: for a sender that a facet cuts and partly
+// encloses, points on its exposed part (exposed_points.hpp; the cell grid and its ray scene
+// are made at the first such question, once, and shared by the threads); for every other sender
+// the patch's quadrature points, 2 × 2 (sampled) or 4 × 4 (sampled_fine: an occluder touches it).
+void CorrectedRowProvider::sender_points(std::uint32_t i, RowRequest& request) {
+    std::call_once(exposed_once_, [&] { exposed_ = std::make_unique<ExposedPoints>(scene_); });
+    if (exposed_->rule(i, request.points, request.weights)) {
+        request.partly_enclosed = true;
+        return;
+    }
+    const auto v = scene_.patch_vertices(i);
+    patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[i].count),
+                     request.plan == RowPlan::sampled_fine ? 4 : 2, request.points, request.weights);
+}
+
 
 void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) {
     // Near analysis per listed row (slot k for rows[k]), made when its row is planned or, without
@@ -177,12 +194,16 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     const std::uint64_t cast_fine_rays = inner_.cast_fine_row_rays();
     RowStages stages;
     if (sample) {
-        stages.plan = [&](std::size_t k, std::uint32_t i) {
+        stages.plan = [&](std::size_t k, std::uint32_t i, RowRequest& request) {
             NearAnalysis& a = analyses_[k];
             std::unique_ptr<NearFieldScratch> scratch = pools_->take(a.exact);
-            const RowPlan plan = corrector_.plan_row(i, a, *scratch);
+            request.plan = corrector_.plan_row(i, a, *scratch);
             pools_->give_back(std::move(scratch));
-            return plan;
+            // The sender points of a sampled row, unless it goes to the ray caster (which
+            // samples the whole sender itself).
+            const bool cast = request.plan == RowPlan::sampled_fine && cast_fine_rays > 0;
+            if ((request.plan == RowPlan::sampled || request.plan == RowPlan::sampled_fine) && !cast)
+                sender_points(i, request);
         };
     }
     // A provider that refines rows to a tolerance (the ray caster) asks which entries the
@@ -242,10 +263,11 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
             NearFieldStats discarded;  // the row's statistics are its first correction's
             if (refiner.pixel_delta_ff > 0) {
                 if (!drawn) continue;  // a ray-cast row: no pixels to refine
-                const RowPlan plan[1] = {!sampled        ? RowPlan::centre
-                                         : a.occluder == 2 ? RowPlan::sampled_fine
-                                                           : RowPlan::sampled};
-                refiner.provider->compute_rows_planned(one, plan, [&](std::uint32_t, const SparseRow& r) { row = r; });
+                // The request of its first measure: the same plan and sender points.
+                RowRequest request[1];
+                request[0].plan = !sampled ? RowPlan::centre : a.occluder == 2 ? RowPlan::sampled_fine : RowPlan::sampled;
+                if (sampled) sender_points(i, request[0]);
+                refiner.provider->compute_rows_requested(one, request, [&](std::uint32_t, const SparseRow& r) { row = r; });
                 inner = row;
                 a.pixel_delta_ff = refiner.pixel_delta_ff;
                 noise = RowNoise{};

@@ -13,18 +13,26 @@ void RowProvider::compute_row(std::uint32_t i, SparseRow& out) {
     compute_rows(rows, [&](std::uint32_t, const SparseRow& r) { out = r; });
 }
 
+void RowProvider::compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                         const RowSink& sink) {
+    FFCUBE_CHECK_MSG(requests.size() == rows.size(), "compute_rows_requested: one request per row");
+    compute_rows(rows, sink);
+}
+
 void RowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
                                        const RowSink& sink) {
     FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
-    compute_rows(rows, sink);
+    std::vector<RowRequest> requests(plans.size());
+    for (std::size_t k = 0; k < plans.size(); ++k) requests[k].plan = plans[k];
+    compute_rows_requested(rows, requests, sink);
 }
 
 void RowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                                       const RowSink& sink) {
     const bool planned = stages.plan && can_sample_sender();
-    // Batches bound the plans held at once; a plan's own state (the caller's) is per row anyway.
+    // Batches bound the requests held at once; a plan's own state (the caller's) is per row anyway.
     constexpr std::size_t kBatch = 64;
-    std::vector<RowPlan> plans;
+    std::vector<RowRequest> requests;
     // The row as finish works on it: this thread's, kept from call to call (no allocation per
     // call once it has grown to the longest row).
     thread_local SparseRow row;
@@ -42,9 +50,16 @@ void RowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const
     for (std::size_t begin = 0; begin < rows.size(); begin += kBatch) {
         const std::span<const std::uint32_t> batch = rows.subspan(begin, std::min(kBatch, rows.size() - begin));
         if (planned) {
-            plans.resize(batch.size());
-            for (std::size_t p = 0; p < batch.size(); ++p) plans[p] = stages.plan(begin + p, batch[p]);
-            compute_rows_planned(batch, plans, finish);
+            requests.resize(batch.size());
+            for (std::size_t p = 0; p < batch.size(); ++p) {
+                requests[p].reset();
+                stages.plan(begin + p, batch[p], requests[p]);
+                // This path has no second engine: the driver hands rows for the ray caster only to a
+                // provider that runs the stages itself (HemicubeRowProvider).
+                FFCUBE_CHECK_MSG(requests[p].engine == RowEngine::provider,
+                                 "RowProvider::compute_rows_staged: a row for the ray caster on the default path");
+            }
+            compute_rows_requested(batch, requests, finish);
         } else {
             compute_rows(batch, finish);
         }
@@ -69,9 +84,9 @@ void ObservingRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     inner_.compute_rows(rows, observing(sink));
 }
 
-void ObservingRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                                                const RowSink& sink) {
-    inner_.compute_rows_planned(rows, plans, observing(sink));
+void ObservingRowProvider::compute_rows_requested(std::span<const std::uint32_t> rows,
+                                                  std::span<const RowRequest> requests, const RowSink& sink) {
+    inner_.compute_rows_requested(rows, requests, observing(sink));
 }
 
 void ObservingRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,

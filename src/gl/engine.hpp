@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "ffcube/formfactor/sparse.hpp"
@@ -17,16 +18,19 @@ class Engine {
 public:
     virtual ~Engine() = default;
     virtual void start() = 0;  // on the worker thread, before the first request
-    // Row p into out (sub_points ≥ 2: the average of sub-hemicubes at sub_points × sub_points
-    // quadrature points; 0: one hemicube at the centre); the work done is added to st.
-    // Errors are thrown as the class they were raised as, wherever that was (core/error.hpp).
-    virtual void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) = 0;
+    // The measure contract: row p into out, from these sender points with these weights (the
+    // weighted sum of sub-hemicubes at half the resolution, each point with its own visibility)
+    // or, with no points, from one hemicube at the centroid at the full resolution; the work
+    // done is added to st. Which points is the caller's rule (accuracy's plan). Errors are thrown
+    // as the class they were raised as, wherever that was (core/error.hpp).
+    virtual void row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+                     HemicubeStats& st) = 0;
     // row() in two halves, for engines that compute elsewhere (pipelined() true): submit asks for
     // row p and returns at once; collect waits for the oldest row submitted and not collected.
     // The thread can then plan and send the next row, and finish the last one, while the engine
     // computes (HemicubeRowProvider keeps one row waiting at each worker process).
     virtual bool pipelined() const { return false; }
-    virtual void submit(std::uint32_t p, int sub_points);
+    virtual void submit(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights);
     virtual void collect(SparseRow& out, HemicubeStats& st);
     virtual void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) = 0;
     virtual void stop() = 0;  // on the worker thread, after the last request

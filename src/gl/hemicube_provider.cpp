@@ -19,15 +19,15 @@
 #include "ffcube/formfactor/ordered_pool.hpp"
 #include "ffcube/hemicube/layout.hpp"
 #include "ffcube/hemicube/pieces.hpp"
-#include "ffcube/io/scene_blob.hpp"
-#include "ffcube/raycast/raycast_provider.hpp"
+#include "ffcube/geometry/quadrature.hpp"
+#include "ffcube/scene/scene_blob.hpp"
 #include "gl/engine.hpp"
 #include "gl/hemicube_worker.hpp"
 #include "gl/process_engine.hpp"
 
 namespace ffcube {
 
-void Engine::submit(std::uint32_t, int) { FFCUBE_CHECK_MSG(false, "Engine::submit on an engine that is not pipelined"); }
+void Engine::submit(std::uint32_t, std::span<const Vec3>, std::span<const double>) { FFCUBE_CHECK_MSG(false, "Engine::submit on an engine that is not pipelined"); }
 void Engine::collect(SparseRow&, HemicubeStats&) {
     FFCUBE_CHECK_MSG(false, "Engine::collect on an engine that is not pipelined");
 }
@@ -77,17 +77,7 @@ struct HemicubeRowProvider::Impl {
     std::unique_ptr<OrderedRowPool> pool;  // after engines: destroyed first
     mutable std::mutex stats_mutex;
     HemicubeStats stats;
-    // HemicubeOptions::fine_rows, resolved for the current scene; the ray caster is built when the
-    // first such row comes (its Embree scene: a fraction of a second on 23k triangles), and one
-    // scratch per pool thread.
-    bool fine_by_rays = false;
-    std::mutex caster_mutex;
-    std::unique_ptr<RaycastRowProvider> caster;
-    std::vector<RaycastRowProvider::RowScratch> cast_scratch;
-
-    Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {
-        resolve_fine_rows();
-    }
+    Impl(const Scene& s, const HemicubeOptions& o) : scene(&s), opt(o), layout(o.resolution), pieces(prepare_pieces(s.grids)) {}
     ~Impl() {
         pool.reset();
         // Every worker process told at once, then each reaped (as the engines go): they wind
@@ -95,58 +85,61 @@ struct HemicubeRowProvider::Impl {
         for (auto& e : engines) e->hang_up();
     }
 
-    // HemicubeOptions::fine_row_rays, or its default: max(N²/2, min(2 N², 32,768)).
-    std::uint64_t fine_rays() const {
-        return opt.fine_row_rays ? opt.fine_row_rays : HemicubeOptions::default_fine_row_rays(opt.resolution);
-    }
-    void resolve_fine_rows() {
-        const bool obstructions = scene->obstruction_first < scene->patches.size();
-        const std::size_t n_pieces = pieces.first.empty() ? 0 : pieces.first.size() - 1;
-        switch (opt.fine_rows) {
-            case HemicubeOptions::FineRows::hemicubes: fine_by_rays = false; break;
-            case HemicubeOptions::FineRows::rays:
-                if (obstructions)
-                    throw InputError("--fine-rows rays: the scene has obstruction-only surfaces, which the ray caster "
-                                     "credits on either side (use --fine-rows hemicubes or auto)");
-                fine_by_rays = true;
-                break;
-            case HemicubeOptions::FineRows::automatic:
-                fine_by_rays = !obstructions && HemicubeOptions::rays_preferred(n_pieces, scene->patches.size());
-                break;
-        }
-        caster.reset();  // built on the next scene when it is needed
-    }
-    // Row i cast by rays on pool thread w, into out; returns the seconds it took.
-    double cast(unsigned w, std::uint32_t i, SparseRow& out) {
-        const RaycastRowProvider* c = nullptr;
-        {
-            const std::lock_guard lock(caster_mutex);
-            if (!caster) {
-                RaycastOptions ro;
-                ro.rays = fine_rays();
-                ro.threads = 1;
-                ro.seed = opt.seed;
-                caster = std::make_unique<RaycastRowProvider>(*scene, ro);
-                cast_scratch.resize(engines.size());
-            }
-            c = caster.get();
-        }
-        Stopwatch watch;
-        c->cast_row(i, out, cast_scratch[w]);
-        return watch.seconds();
+    // A sampled request without points: the engine's own rule, the patch's quadrature points
+    // (2 or 4 per axis: sampled or sampled_fine), into `scratch`. Returns the points to send.
+    std::pair<std::span<const Vec3>, std::span<const double>> sender_points(std::uint32_t i, const RowProvider::RowRequest& r,
+                                                                            RowProvider::RowRequest& scratch) const {
+        using RowPlan = RowProvider::RowPlan;
+        if (!r.sampled()) return {};
+        if (!r.points.empty() || r.partly_enclosed) return {r.points, r.weights};
+        const auto v = scene->patch_vertices(i);
+        patch_quadrature(std::span<const Vec3>(v.data(), scene->patches[i].count), r.plan == RowPlan::sampled_fine ? 4 : 2,
+                         scratch.points, scratch.weights);
+        return {scratch.points, scratch.weights};
     }
 
-    // Rows through the pool; 'plans' (compute_rows_planned's, or empty: every row centre) says
-    // how to make each row, unless the stages (compute_rows_staged's) plan and finish them.
-    void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowPlan> plans,
+    // Rows through the pool; 'given' (compute_rows_requested's, or empty: every row centre) says
+    // how to measure each row, unless the stages (compute_rows_staged's) plan and finish them.
+    // A request for the ray caster (RowEngine::rays, the driver's choice) is measured by the
+    // stages' cast on the pool thread; every other row by the thread's engine.
+    void run(std::span<const std::uint32_t> rows, std::span<const RowProvider::RowRequest> given,
              const RowProvider::RowStages* stages, const RowSink& sink) {
         using RowPlan = RowProvider::RowPlan;
-        const auto plan_of = [&](std::size_t k, std::uint32_t i) {
-            RowPlan plan = plans.empty() ? RowPlan::centre : plans[k];
-            if (stages && stages->plan) plan = stages->plan(k, i);
-            return plan;
+        using RowEngine = RowProvider::RowEngine;
+        using RowRequest = RowProvider::RowRequest;
+        const bool planned = stages && stages->plan;
+        // One request being planned per pool thread (its vectors' capacity kept from row to row),
+        // and one for the default quadrature points.
+        std::vector<RowRequest> own(planned ? engines.size() : 0), quadrature(engines.size());
+        const auto plan_of = [&](unsigned w, std::size_t k, std::uint32_t i) -> const RowRequest& {
+            if (!planned) {
+                static const RowRequest centre;
+                return given.empty() ? centre : given[k];
+            }
+            RowRequest& r = own[w];
+            r.reset();
+            stages->plan(k, i, r);
+            FFCUBE_CHECK_MSG(r.engine == RowEngine::provider || stages->cast,
+                             "HemicubeRowProvider: a row for the ray caster, and no ray caster");
+            return r;
         };
-        const auto points = [](RowPlan plan) { return plan == RowPlan::sampled ? 2 : plan == RowPlan::sampled_fine ? 4 : 0; };
+        // The row measured by the other engine (stages->cast) on pool thread w; returns its seconds.
+        const auto cast = [&](unsigned w, std::uint32_t i, SparseRow& out) {
+            Stopwatch watch;
+            stages->cast(w, i, out);
+            return watch.seconds();
+        };
+        // What a request counts before its row is measured.
+        const auto count = [](const RowRequest& r, HemicubeStats& local) {
+            if (r.plan == RowPlan::skip) {
+                ++local.skipped_rows;
+            } else if (r.engine == RowEngine::rays) {
+                local.fine_rows_cast = 1;
+            } else if (r.plan != RowPlan::centre) {
+                ++local.sampled_rows;
+                if (r.partly_enclosed) ++local.partly_enclosed_rows;
+            }
+        };
         const auto finish = [&](std::size_t k, std::uint32_t i, SparseRow& out, const HemicubeStats& local) {
             {
                 // Merged before the row is handed on: the sink sees stats that include its row.
@@ -159,31 +152,33 @@ struct HemicubeRowProvider::Impl {
             // Worker processes: row k + 1 is planned and sent before row k's reply is read, so the
             // child starts it as soon as it has sent row k, and this thread plans and finishes
             // rows (the correction's analysis, exact values and sender quadrature) while the
-            // child draws. The plan of a row in flight waits here, one slot per listed row.
-            // A row to be ray-cast (fine_by_rays) is cast when it is planned, while the child
+            // child draws. What a row in flight needs at its collection waits here, one slot per
+            // listed row. A row for the ray caster is cast when it is planned, while the child
             // draws the row before it, and kept until its turn to be collected.
-            std::vector<RowPlan> planned(rows.size());
-            std::vector<SparseRow> cast_rows(fine_by_rays ? rows.size() : 0);
-            std::vector<double> cast_seconds(fine_by_rays ? rows.size() : 0);
+            std::vector<HemicubeStats> counted(rows.size());
+            std::vector<std::uint8_t> sent(rows.size());
+            std::vector<SparseRow> cast_rows(stages && stages->cast ? rows.size() : 0);
             const OrderedRowPool::Submit submit = [&](unsigned w, std::size_t k, std::uint32_t i) {
-                planned[k] = plan_of(k, i);
-                if (planned[k] == RowPlan::sampled_fine && fine_by_rays)
-                    cast_seconds[k] = cast(w, i, cast_rows[k]);
-                else if (planned[k] != RowPlan::skip)
-                    engines[w]->submit(i, points(planned[k]));
+                const RowRequest& r = plan_of(w, k, i);
+                count(r, counted[k]);
+                if (r.empty()) return;
+                if (r.engine == RowEngine::rays) {
+                    counted[k].cast_seconds = cast(w, i, cast_rows[k]);
+                    return;
+                }
+                const auto [points, weights] = sender_points(i, r, quadrature[w]);
+                engines[w]->submit(i, points, weights);
+                sent[k] = 1;
             };
             const OrderedRowPool::Compute collect = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
-                HemicubeStats local;
-                if (planned[k] == RowPlan::skip) {
-                    out.clear();
-                    ++local.skipped_rows;
-                } else if (planned[k] == RowPlan::sampled_fine && fine_by_rays) {
+                HemicubeStats& local = counted[k];
+                if (sent[k]) {
+                    engines[w]->collect(out, local);
+                } else if (local.fine_rows_cast) {
                     out = std::move(cast_rows[k]);
                     cast_rows[k] = SparseRow{};  // its storage goes with the row
-                    local.cast_seconds = cast_seconds[k];
-                    local.fine_rows_cast = 1;
                 } else {
-                    engines[w]->collect(out, local);
+                    out.clear();  // skipped, or no part of the sender exposed
                 }
                 finish(k, i, out, local);
             };
@@ -192,15 +187,15 @@ struct HemicubeRowProvider::Impl {
         }
         const OrderedRowPool::Compute compute = [&](unsigned w, std::size_t k, std::uint32_t i, SparseRow& out) {
             HemicubeStats local;
-            const RowPlan plan = plan_of(k, i);
-            if (plan == RowPlan::skip) {
+            const RowRequest& r = plan_of(w, k, i);
+            count(r, local);
+            if (r.empty()) {
                 out.clear();
-                ++local.skipped_rows;
-            } else if (plan == RowPlan::sampled_fine && fine_by_rays) {
+            } else if (r.engine == RowEngine::rays) {
                 local.cast_seconds = cast(w, i, out);
-                local.fine_rows_cast = 1;
             } else {
-                engines[w]->row(i, out, local, points(plan));
+                const auto [points, weights] = sender_points(i, r, quadrature[w]);
+                engines[w]->row(i, points, weights, out, local);
             }
             finish(k, i, out, local);
         };
@@ -253,11 +248,13 @@ void HemicubeRowProvider::compute_rows(std::span<const std::uint32_t> rows, cons
     impl_->run(rows, {}, nullptr, sink);
 }
 
-void HemicubeRowProvider::compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                                               const RowSink& sink) {
+void HemicubeRowProvider::compute_rows_requested(std::span<const std::uint32_t> rows,
+                                                 std::span<const RowRequest> requests, const RowSink& sink) {
     for (std::uint32_t i : rows) FFCUBE_CHECK_MSG(i < size(), "row index out of range");
-    FFCUBE_CHECK_MSG(plans.size() == rows.size(), "compute_rows_planned: one plan per row");
-    impl_->run(rows, plans, nullptr, sink);
+    FFCUBE_CHECK_MSG(requests.size() == rows.size(), "compute_rows_requested: one request per row");
+    for (const RowRequest& r : requests)
+        FFCUBE_CHECK_MSG(r.engine == RowEngine::provider, "compute_rows_requested: a row for the ray caster");
+    impl_->run(rows, requests, nullptr, sink);
 }
 
 void HemicubeRowProvider::compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
@@ -296,7 +293,6 @@ void HemicubeRowProvider::set_scene(const Scene& scene) {
     } else {
         for (auto& e : im.engines) e->set_scene(scene, im.pieces);
     }
-    im.resolve_fine_rows();
     std::lock_guard lock(im.stats_mutex);
     im.stats = HemicubeStats{};
 }
@@ -318,7 +314,5 @@ std::size_t HemicubeRowProvider::enclosure_pieces() const {
 std::string HemicubeRowProvider::workers() const { return impl_->processes ? "processes" : "threads"; }
 
 int HemicubeRowProvider::resolution() const { return impl_->layout.resolution(); }
-bool HemicubeRowProvider::fine_rows_by_rays() const { return impl_->fine_by_rays; }
-std::uint64_t HemicubeRowProvider::fine_row_rays() const { return impl_->fine_rays(); }
 
 }  // namespace ffcube

@@ -13,7 +13,6 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/timer.hpp"
-#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/hemicube/frame.hpp"
 #include "ffcube/hemicube/outcode.hpp"
 #include "ffcube/hemicube/runs.hpp"
@@ -276,22 +275,19 @@ void Worker::render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st)
     st.hemicubes += 1;
 }
 
-// Row p: one hemicube at the centroid, or the average of sub-hemicubes at the patch's 2 × 2
-// quadrature points (geometry/quadrature.hpp, the points the near-field correction's sender
-// quadrature uses; 4 × 4 for a sender with an occluder touching it), each with its own visibility.
-void Worker::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
+// Row p: one hemicube at the centroid (no points), or the weighted sum of sub-hemicubes at the
+// sender points the request gives (the patch's quadrature points, or points on the exposed part
+// of a cut sender: the caller's rule), each with its own visibility.
+void Worker::row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+                 HemicubeStats& st) {
     if (test_fail_ != 0) fail_for_test(test_fail_, p);
-    if (sub_points >= 2 && sample_exposed(p, st)) {
-        take_row(out, st);
-        return;
-    }
-    if (sub_points < 2) {
+    if (points.empty()) {
         hemicube_row(p, scene_.patches[p].centroid, Res::full, out, st);
         return;
     }
+    FFCUBE_CHECK_MSG(points.size() == weights.size(), "Worker::row: one weight per sender point");
     begin_row();
-    sample(p, sub_points, st);
-    ++st.sampled_rows;
+    accumulate_points(p, points, weights, Res::half, st);
     take_row(out, st);
 }
 
@@ -307,30 +303,15 @@ void Worker::hemicube_row(std::uint32_t p, const Vec3& at, Res res, SparseRow& o
     take_row(out, st);
 }
 
-void Worker::sample(std::uint32_t p, int sub_points, HemicubeStats& st) {
-    const auto v = scene_.patch_vertices(p);
-    patch_quadrature(std::span<const Vec3>(v.data(), scene_.patches[p].count), sub_points, points_, weights_);
-    accumulate_points(p, Res::half, st);
-}
-
-// The weighted sum of half-resolution hemicubes at points_ (weights_) into acc_: four of them cost
-// about one full hemicube, and their average has about the pixel noise of one (each has twice the
+// The weighted sum of half-resolution hemicubes at the points into acc_: four of them cost about
+// one full hemicube, and their average has about the pixel noise of one (each has twice the
 // relative noise).
-void Worker::accumulate_points(std::uint32_t p, Res res, HemicubeStats& st) {
-    for (std::size_t q = 0; q < points_.size(); ++q) {
-        render(p, points_[q], res, st);
-        accumulate(p, weights_[q], res, st);
+void Worker::accumulate_points(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, Res res,
+                               HemicubeStats& st) {
+    for (std::size_t q = 0; q < points.size(); ++q) {
+        render(p, points[q], res, st);
+        accumulate(p, weights[q], res, st);
     }
-}
-
-bool Worker::sample_exposed(std::uint32_t p, HemicubeStats& st) {
-    if (!exposed_) exposed_ = std::make_unique<ExposedPoints>(scene_);
-    if (!exposed_->rule(p, points_, weights_)) return false;
-    begin_row();
-    accumulate_points(p, Res::half, st);
-    ++st.sampled_rows;
-    ++st.partly_enclosed_rows;
-    return true;
 }
 
 // The row made in acc_ over touched_, sorted by column. A dense row (m touched of n columns, m
@@ -478,8 +459,9 @@ Worker& LocalEngine::worker() {
     return *worker_;
 }
 
-void LocalEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
-    worker().row(p, out, st, sub_points);
+void LocalEngine::row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+                      HemicubeStats& st) {
+    worker().row(p, points, weights, out, st);
 }
 
 void LocalEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {

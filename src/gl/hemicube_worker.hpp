@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "ffcube/formfactor/sparse.hpp"
@@ -15,7 +16,6 @@
 #include "ffcube/hemicube/pieces.hpp"
 #include "ffcube/scene/scene.hpp"
 #include "gl/engine.hpp"
-#include "gl/exposed_points.hpp"
 #include "gl/objects.hpp"
 
 namespace ffcube {
@@ -46,9 +46,10 @@ public:
     // Which atlas a hemicube is drawn into: the row's resolution or half_resolution.
     enum class Res { full, half };
     void render(std::uint32_t p, const Vec3& at, Res res, HemicubeStats& st);
-    // Row p: one hemicube at the centroid (sub_points 0), or the average of sub-hemicubes at the
-    // patch's sub_points × sub_points quadrature points (2 or 4), each with its own visibility.
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points = 0);
+    // Row p: one hemicube at the centroid (no points), or the weighted sum of sub-hemicubes at
+    // the given sender points (at half_resolution), each with its own visibility.
+    void row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+             HemicubeStats& st);
     const std::vector<std::uint32_t>& ids() const { return ids_; }
 
 private:
@@ -60,17 +61,13 @@ private:
         bool occluder = false;  // drawn first by occlude()
     };
     void accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& st);
-    // The sub-hemicubes at sub_points × sub_points points into acc_/touched_ (this epoch_).
-    void sample(std::uint32_t p, int sub_points, HemicubeStats& st);
-    // The sub-hemicubes of a sender cut by a facet and partly enclosed, at points on its exposed
-    // part (gl/exposed_points.hpp); false (nothing done) for any other sender.
-    bool sample_exposed(std::uint32_t p, HemicubeStats& st);
     void take_row(SparseRow& out, HemicubeStats& st);
     template <class F>
     void for_each_id_run(const std::vector<std::uint32_t>& ids, const HemicubeLayout& lay, F&& f);
     // A new row in acc_/touched_: a new epoch_, nothing touched.
     void begin_row();
-    void accumulate_points(std::uint32_t p, Res res, HemicubeStats& st);
+    void accumulate_points(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, Res res,
+                           HemicubeStats& st);
     std::uint32_t column_of(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // id − 1, checked
     [[noreturn]] void bad_id(std::uint32_t p, std::size_t k, std::uint32_t id) const;  // column_of's failure
     void touch(std::uint32_t j);        // column j enters the row being made (epoch_) at 0
@@ -144,9 +141,6 @@ private:
     std::vector<std::uint64_t> run_bits_;  // accumulate(): where runs of one id start in a line
     std::vector<std::uint32_t> stamp_, touched_;
     std::uint32_t epoch_ = 0;
-    std::vector<Vec3> points_;  // sub-hemicube points and weights of the current row
-    std::vector<double> weights_;
-    std::unique_ptr<ExposedPoints> exposed_;  // made at the first row of sub-hemicubes
 };
 
 // A worker in this process: the context is made current on the worker thread (start).
@@ -157,7 +151,8 @@ public:
         : ctx_(std::move(ctx)), scene_(&scene), pieces_(&pieces), layout_(layout), opt_(opt) {}
     ~LocalEngine() override { ctx_.reset(); }
     void start() override;
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
+    void row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+             HemicubeStats& st) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
     void stop() override;
     // The Worker is rebuilt on this engine's thread (where its context is current) at the next request.

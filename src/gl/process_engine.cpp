@@ -21,7 +21,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/error_transport.hpp"
 #include "ffcube/gl/context.hpp"
-#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/scene/scene_blob.hpp"
 #include "gl/gl_api.hpp"
 #include "gl/hemicube_worker.hpp"
 
@@ -29,9 +29,11 @@ namespace ffcube {
 
 // The wire protocol between a ProcessEngine and its child: fixed-size headers and raw arrays
 // over a Unix socket pair (both ends are the same binary).
-// SetScene: a std::uint64_t byte count and that many bytes of io/scene_blob.hpp follow; the reply
-// has no payload.
-enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2, SampledFineRow = 3, SetScene = 4 };
+// SampledRow: a std::uint64_t point count m, then m Vec3 (the sender points) and m doubles (their
+// weights) follow, bit for bit. SetScene: a std::uint64_t byte count and that many bytes of
+// scene/scene_blob.hpp follow; the reply has no payload.
+enum class Request : std::uint32_t { Row = 0, ItemBuffer = 1, SampledRow = 2, SetScene = 4 };
+static_assert(sizeof(Vec3) == 3 * sizeof(double), "sender points go over the socket as three doubles each");
 struct RequestMsg {
     Request kind;
     std::uint32_t patch;
@@ -148,6 +150,8 @@ void send_current_error(int fd) {
         send_all(fd, &h, sizeof h);
         send_all(fd, hello.data(), hello.size());
         SparseRow row;
+        std::vector<Vec3> points;
+        std::vector<double> weights;
         RequestMsg req{};
         while (recv_all(fd, &req, sizeof req)) {
             try {
@@ -168,9 +172,19 @@ void send_current_error(int fd) {
                     send_all(fd, &r, sizeof r);
                 } else if (!worker) {
                     throw IoError("hemicube worker: no scene (the last scene sent could not be taken)");
-                } else if (req.kind == Request::Row || req.kind == Request::SampledRow || req.kind == Request::SampledFineRow) {
-                    worker->row(req.patch, row, r.stats,
-                               req.kind == Request::SampledRow ? 2 : req.kind == Request::SampledFineRow ? 4 : 0);
+                } else if (req.kind == Request::Row || req.kind == Request::SampledRow) {
+                    points.clear();
+                    weights.clear();
+                    if (req.kind == Request::SampledRow) {
+                        std::uint64_t m = 0;
+                        if (!recv_all(fd, &m, sizeof m)) break;
+                        FFCUBE_CHECK_MSG(m > 0 && m <= 4096, "hemicube worker: a sampled row without a sane point count");
+                        points.resize(m);
+                        weights.resize(m);
+                        if (!recv_all(fd, points.data(), m * sizeof(Vec3)) || !recv_all(fd, weights.data(), m * sizeof(double)))
+                            break;
+                    }
+                    worker->row(req.patch, points, weights, row, r.stats);
                     r.count = row.nnz();
                     std::array<iovec, 3> parts{{{&r, sizeof r},
                                                 {row.col.data(), row.col.size() * sizeof(std::uint32_t)},
@@ -264,17 +278,32 @@ std::pair<std::string, std::string> ProcessEngine::hello() {
     return {text.substr(0, nl), nl == std::string::npos ? std::string() : text.substr(nl + 1)};
 }
 
-void ProcessEngine::row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) {
-    submit(p, sub_points);
+void ProcessEngine::row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+                        HemicubeStats& st) {
+    submit(p, points, weights);
     collect(out, st);
 }
 
 // The child serves requests in the order sent, so replies come back in that order: collect reads
-// the oldest row's.
-void ProcessEngine::submit(std::uint32_t p, int sub_points) {
-    const Request kind = sub_points >= 4 ? Request::SampledFineRow : sub_points >= 2 ? Request::SampledRow : Request::Row;
-    const RequestMsg req{kind, p};
-    send_or_throw(&req, sizeof req);
+// the oldest row's. A sampled row's points go with it in the same message.
+void ProcessEngine::submit(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights) {
+    FFCUBE_CHECK_MSG(points.size() == weights.size(), "ProcessEngine::submit: one weight per sender point");
+    if (points.empty()) {
+        const RequestMsg req{Request::Row, p};
+        send_or_throw(&req, sizeof req);
+        return;
+    }
+    RequestMsg req{Request::SampledRow, p};
+    std::uint64_t m = points.size();
+    std::array<iovec, 4> parts{{{&req, sizeof req},
+                                {&m, sizeof m},
+                                {const_cast<Vec3*>(points.data()), m * sizeof(Vec3)},
+                                {const_cast<double*>(weights.data()), m * sizeof(double)}}};
+    try {
+        send_parts(fd_, parts);
+    } catch (const PeerGone&) {
+        child_gone();
+    }
 }
 
 void ProcessEngine::collect(SparseRow& out, HemicubeStats& st) {

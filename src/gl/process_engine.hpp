@@ -38,16 +38,17 @@ public:
     std::pair<std::string, std::string> hello();
     void start() override {}
     void stop() override {}
-    void row(std::uint32_t p, SparseRow& out, HemicubeStats& st, int sub_points) override;
+    void row(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights, SparseRow& out,
+             HemicubeStats& st) override;
     bool pipelined() const override { return true; }
-    void submit(std::uint32_t p, int sub_points) override;
+    void submit(std::uint32_t p, std::span<const Vec3> points, std::span<const double> weights) override;
     void collect(SparseRow& out, HemicubeStats& st) override;
     void item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) override;
     // Sends the scene and waits for the child to rebuild its pieces and Worker (a child keeps
     // its GL context across scenes). `pieces` is not sent: the child prepares its own.
     void set_scene(const Scene& scene, const ScenePieces& pieces) override;
     // The same in two halves, so that the children of one provider rebuild at the same time:
-    // send_scene with the serialized scene (io/scene_blob.hpp), then await_scene for the reply.
+    // send_scene with the serialized scene (scene/scene_blob.hpp), then await_scene for the reply.
     void send_scene(std::span<const std::uint8_t> blob);
     void await_scene();
 

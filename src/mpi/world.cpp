@@ -10,7 +10,7 @@
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/gl/context.hpp"
-#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/scene/scene_blob.hpp"
 #include "ffcube/pipeline/row_partition.hpp"
 
 namespace ffcube::mpi {

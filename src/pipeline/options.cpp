@@ -101,25 +101,25 @@ RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn) {
     r.method_auto = false;
     const bool obstructions = drawn.obstruction_first < drawn.patches.size();
     const std::size_t pieces = drawn.grids.size(), patches = drawn.patches.size();
-    const bool mesh = HemicubeOptions::rays_preferred(pieces, patches);
+    const bool mesh = rays_preferred(pieces, patches);
     r.auto_raycast = mesh && !obstructions && o.fine_rows != FineRows::hemicubes;
     const auto why_mesh = [&] {
-        return pieces >= HemicubeOptions::kFineRowsByRaysMinPieces
-                   ? fmt::format(", {} or more", HemicubeOptions::kFineRowsByRaysMinPieces)
+        return pieces >= kFineRowsByRaysMinPieces
+                   ? fmt::format(", {} or more", kFineRowsByRaysMinPieces)
                    : fmt::format(" of {} patches, {} or more of at most {} patches each", patches,
-                                 HemicubeOptions::kRaysMinMeshPieces, HemicubeOptions::kRaysMaxPatchesPerPiece);
+                                 kRaysMinMeshPieces, kRaysMaxPatchesPerPiece);
     };
     r.method_choice = fmt::format("auto: {} pieces{}", pieces,
                                   !mesh ? fmt::format(" of {} patches: rays need {} pieces, or {} of at most {} patches each",
-                                                      patches, HemicubeOptions::kFineRowsByRaysMinPieces,
-                                                      HemicubeOptions::kRaysMinMeshPieces,
-                                                      HemicubeOptions::kRaysMaxPatchesPerPiece)
+                                                      patches, kFineRowsByRaysMinPieces,
+                                                      kRaysMinMeshPieces,
+                                                      kRaysMaxPatchesPerPiece)
                                   : obstructions    ? ", obstruction-only surfaces"
                                   : !r.auto_raycast ? ", --fine-rows hemicubes"
                                                     : why_mesh());
     r.method = r.auto_raycast ? RowMethod::Raycast : RowMethod::Hemicube;
     if (r.auto_raycast && !o.rays_given)
-        r.rays = o.fine_row_rays ? o.fine_row_rays : HemicubeOptions::default_fine_row_rays(o.resolution);
+        r.rays = o.fine_row_rays ? o.fine_row_rays : default_fine_row_rays(o.resolution);
     return r;
 }
 
@@ -182,8 +182,6 @@ HemicubeOptions hemicube_options(const RowOptions& o) {
     h.rotate = o.rotate;
     h.seed = o.seed;
     h.worker_processes = o.worker_processes;
-    h.fine_rows = o.fine_rows;
-    h.fine_row_rays = o.fine_row_rays;
     h.occlusion_culling = o.occlusion_culling;
     h.enclosure_without_depth = o.enclosure_without_depth;
     return h;

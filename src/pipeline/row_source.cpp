@@ -21,7 +21,7 @@ RowSource::~RowSource() = default;
 RowProvider& RowSource::provider() {
     if (leading_) return *leading_;
     if (corrected_) return *corrected_;
-    if (hemicube_) return *hemicube_;
+    if (driver_) return *driver_;
     FFCUBE_CHECK_MSG(raycast_ != nullptr, "RowSource::provider() on a source that was never made");
     return *raycast_;
 }
@@ -75,8 +75,6 @@ private:
     std::unique_ptr<RaycastRowProvider> caster_;
 };
 
-}  // namespace
-
 // The hemicube drawn again at a finer resolution, one thread with its own context (each call is
 // one row, from a worker's pool thread of the hemicube provider), made on its first row, after the
 // workers fork. Calls are serialized: a context belongs to one thread at a time, and rows above
@@ -88,7 +86,6 @@ public:
         options_.resolution = resolution;
         options_.threads = 1;
         options_.worker_processes = false;
-        options_.fine_rows = FineRows::hemicubes;
     }
     std::uint32_t size() const override { return static_cast<std::uint32_t>(scene_.size()); }
     std::string name() const override { return "hemicube"; }
@@ -97,15 +94,10 @@ public:
         const std::lock_guard lock(mutex_);
         provider().compute_rows(rows, sink);
     }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                              const RowSink& sink) override {
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                const RowSink& sink) override {
         const std::lock_guard lock(mutex_);
-        provider().compute_rows_planned(rows, plans, sink);
-    }
-    int resolution() const { return options_.resolution; }
-    std::uint64_t hemicubes() const {
-        const std::lock_guard lock(mutex_);
-        return drawer_ ? drawer_->stats().hemicubes : 0;
+        provider().compute_rows_requested(rows, requests, sink);
     }
 
 private:
@@ -115,9 +107,11 @@ private:
     }
     const Scene& scene_;
     HemicubeOptions options_;
-    mutable std::mutex mutex_;
+    std::mutex mutex_;
     std::unique_ptr<HemicubeRowProvider> drawer_;
 };
+
+}  // namespace
 
 bool refine_hemicube_rows(const RowOptions& o) {
     return o.method == RowMethod::Hemicube && o.correct == Correction::Near && o.tolerance > 0 && o.tolerance_given &&
@@ -126,8 +120,12 @@ bool refine_hemicube_rows(const RowOptions& o) {
 
 void RowSource::wrap(const Scene& radiating) {
     const Scene& scene = radiating.drawn_scene();
+    // The hemicube's rows go through the driver, which gives the rows planned for the ray caster
+    // to it (engine_for_row; it refuses a --fine-rows choice the scene rules out).
+    if (hemicube_)
+        driver_ = std::make_unique<RowDriver>(scene, *hemicube_, options_.fine_rows, options_.fine_row_rays, options_.seed);
     if (options_.correct == Correction::Near) {
-        RowProvider& inner = hemicube_ ? static_cast<RowProvider&>(*hemicube_) : *raycast_;
+        RowProvider& inner = driver_ ? static_cast<RowProvider&>(*driver_) : *raycast_;
         corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options_));
         if (hemicube_ && refine_hemicube_rows(options_)) {
             // Drawn again at 2N and 4N (at most kMaxRefinedResolution), then by rays.
@@ -147,7 +145,7 @@ void RowSource::wrap(const Scene& radiating) {
     }
     if (radiating.drawn) {
         RowProvider& inner = corrected_ ? static_cast<RowProvider&>(*corrected_)
-                             : hemicube_ ? static_cast<RowProvider&>(*hemicube_)
+                             : driver_   ? static_cast<RowProvider&>(*driver_)
                                          : *raycast_;
         leading_ = std::make_unique<LeadingRowProvider>(inner, static_cast<std::uint32_t>(radiating.size()));
     }
@@ -165,6 +163,7 @@ void rebind_row_source(RowSource& rows, const Scene& radiating) {
     rows.corrected_.reset();
     rows.refiner_.reset();
     rows.redrawers_.clear();
+    rows.driver_.reset();
     rows.hemicube_->set_scene(radiating.drawn_scene());
     rows.wrap(radiating);
     rows.setup_seconds_ = watch.seconds();
@@ -198,9 +197,9 @@ std::vector<std::string> describe(const RowSource& rows) {
         if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
             lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
                                         m.source, m.pixel_ns, m.cpu_scale));
-        if (const HemicubeRowProvider* h = rows.hemicube(); h && h->fine_rows_by_rays())
+        if (const RowDriver* d = rows.driver(); d && d->fine_rows_by_rays())
             lines.push_back(fmt::format("rows an occluder touches (planned at 4 x 4 sub-hemicubes) ray-cast, {} rays "
-                                        "each{}", h->fine_row_rays(),
+                                        "each{}", d->fine_row_rays(),
                                         rows.options().fine_rows == FineRows::automatic
                                             ? " (--fine-rows auto: a scene of 1000 pieces or more; --fine-rows "
                                               "hemicubes draws them)"
@@ -394,7 +393,7 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("corrections.quadrature_seconds", c.quadrature_seconds);
 }
 
-void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
+void report_hemicube(Report& r, const HemicubeRowProvider& provider, const RowDriver& driver) {
     const HemicubeStats st = provider.stats();
     r.set("backend", provider.backend());
     r.set("renderer", provider.renderer());
@@ -435,8 +434,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider) {
     // Senders cut by a facet and partly inside it (a ground triangle under a building).
     r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
     // Rows planned at 4 × 4 ray-cast instead (--fine-rows), their rays and CPU-seconds.
-    r.set("fine_rows.by", provider.fine_rows_by_rays() ? "rays" : "hemicubes");
-    r.set("fine_rows.rays_per_row", provider.fine_row_rays());
+    r.set("fine_rows.by", driver.fine_rows_by_rays() ? "rays" : "hemicubes");
+    r.set("fine_rows.rays_per_row", driver.fine_row_rays());
     r.set("fine_rows.cast", st.fine_rows_cast);
     r.set("time.fine_row_rays", st.cast_seconds);
     r.set("upload.vertex_bytes", st.upload_vertex_bytes);
@@ -497,7 +496,7 @@ void report_row_source(Report& r, const RowSource& rows) {
         r.set("rays_traced", rc->rays_traced());
         r.set("threads", rc->threads());
     }
-    if (const HemicubeRowProvider* h = rows.hemicube()) report_hemicube(r, *h);
+    if (const HemicubeRowProvider* h = rows.hemicube()) report_hemicube(r, *h, *rows.driver());
 }
 
 void report_matrix_stats(Report& report, std::uint64_t nnz, const RowSumStats& row_sums,

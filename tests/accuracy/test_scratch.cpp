@@ -109,10 +109,10 @@ public:
         }
     }
     bool can_sample_sender() const override { return true; }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plan,
-                              const RowSink& sink) override {
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                const RowSink& sink) override {
         for (std::size_t pos = 0; pos < rows.size(); ++pos) {
-            const RowPlan p = plan[pos];
+            const RowPlan p = requests[pos].plan;
             if (p == RowPlan::skip) {
                 buffer_.clear();
             } else {

@@ -41,15 +41,19 @@ public:
         calls.push_back("rows");
         for (const std::uint32_t i : rows) sink(i, row(i));
     }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans, const RowSink& sink) override {
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                const RowSink& sink) override {
         calls.push_back("planned");
-        seen_plans.assign(plans.begin(), plans.end());
+        seen_plans.clear();
+        for (const RowRequest& r : requests) seen_plans.push_back(r.plan);
         for (const std::uint32_t i : rows) sink(i, row(i));
     }
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override {
         calls.push_back("staged");
         for (std::size_t k = 0; k < rows.size(); ++k) {
-            seen_plans.push_back(stages.plan(k, rows[k]));
+            RowRequest request;
+            stages.plan(k, rows[k], request);
+            seen_plans.push_back(request.plan);
             SparseRow r = row(rows[k]);
             stages.finish(k, rows[k], r);
             sink(rows[k], r);
@@ -102,7 +106,7 @@ TEST(ObservingRowProvider, ForwardsEveryEntryPointAndObservesEveryRowOnce) {
     EXPECT_EQ(inner.seen_plans, plans);
     inner.seen_plans.clear();
     std::vector<std::uint32_t> finished;
-    RowProvider::RowStages stages{[&](std::size_t k, std::uint32_t) { return plans[k]; },
+    RowProvider::RowStages stages{[&](std::size_t k, std::uint32_t, RowProvider::RowRequest& r) { r.plan = plans[k]; },
                                   [&](std::size_t, std::uint32_t i, SparseRow&) { finished.push_back(i); }};
     c.compute_rows_staged(kRows, stages, s.sink());
     // Each call reached the inner provider through the same entry point, once.
@@ -133,7 +137,7 @@ TEST(LeadingRowProvider, CutsRowsOnEveryEntryPointAndFinishSeesTheCutRow) {
     EXPECT_EQ(lead.cut()[1], 0.0);
     // Staged: not forwarded (the inner finish would see uncut rows) but planned on this thread.
     std::vector<std::size_t> finished_nnz;
-    RowProvider::RowStages stages{[](std::size_t, std::uint32_t) { return RowPlan::sampled; },
+    RowProvider::RowStages stages{[](std::size_t, std::uint32_t, RowProvider::RowRequest& r) { r.plan = RowPlan::sampled; },
                                   [&](std::size_t, std::uint32_t, SparseRow& r) { finished_nnz.push_back(r.nnz()); }};
     Received s;
     lead.compute_rows_staged(rows, stages, s.sink());

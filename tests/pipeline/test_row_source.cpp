@@ -63,7 +63,7 @@ TEST(PipelineOptions, OneResolutionRule) {
     EXPECT_NE(error_of([&] { validate(o); }).find("--rays 0"), std::string::npos);
 }
 
-// --method auto: the ray caster where HemicubeOptions::rays_preferred (here separate tiles, one
+// --method auto: the ray caster where rays_preferred (pipeline/row_engine.hpp) (here separate tiles, one
 // piece each: 1,000 or more pieces, or 100 or more of at most 4 patches each), at the fine-row
 // ray count for the resolution unless --rays or --fine-row-rays says otherwise; the hemicube
 // below that, with obstruction-only surfaces, or with --fine-rows hemicubes; options without
@@ -77,7 +77,7 @@ TEST(PipelineOptions, MethodAutoFollowsThePieces) {
         }
         return test::make_scene(polys, edge * (1 + 1e-9));
     };
-    const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
+    const std::size_t min = kFineRowsByRaysMinPieces;
     RowOptions o;
     set_row_method("auto", o);
     EXPECT_TRUE(o.method_auto);
@@ -101,7 +101,7 @@ TEST(PipelineOptions, MethodAutoFollowsThePieces) {
     given = o;
     given.fine_rows = FineRows::hemicubes;
     EXPECT_EQ(resolve_row_method(given, many).method, RowMethod::Hemicube);
-    const std::size_t mesh = HemicubeOptions::kRaysMinMeshPieces;
+    const std::size_t mesh = kRaysMinMeshPieces;
     EXPECT_EQ(resolve_row_method(o, tiles(mesh - 1)).method, RowMethod::Hemicube);
     const RowOptions small_mesh = resolve_row_method(o, tiles(mesh, 0.5));  // 4 patches a piece
     EXPECT_EQ(small_mesh.method, RowMethod::Raycast);
@@ -203,9 +203,9 @@ public:
     std::string name() const override { return h_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override { h_.compute_rows(rows, sink); }
     bool can_sample_sender() const override { return true; }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                              const RowSink& sink) override {
-        h_.compute_rows_planned(rows, plans, sink);
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                const RowSink& sink) override {
+        h_.compute_rows_requested(rows, requests, sink);
     }
 
 private:
@@ -276,7 +276,9 @@ TEST(RowSource, PlainAndRaycastSources) {
     o.correct = Correction::None;
     RowSource plain = make_row_source(scene, o);
     EXPECT_EQ(plain.corrected(), nullptr);
-    EXPECT_EQ(&plain.provider(), plain.hemicube());
+    // The hemicube's rows through the driver (which engine measures each row): the same rows.
+    ASSERT_NE(plain.driver(), nullptr);
+    EXPECT_EQ(&plain.provider(), plain.driver());
     HemicubeRowProvider hemi(scene, hemicube_options(o));
     expect_same_rows(compute_all_rows(plain.provider()), compute_all_rows(hemi));
 

@@ -30,6 +30,7 @@
 #include <cmath>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,8 @@
 #include "ffcube/scene/scene.hpp"
 
 namespace ffcube {
+
+class ExposedPoints;  // accuracy/exposed_points.hpp
 
 struct NearFieldOptions {
     double k = 3.0;  // near: centroid distance < k × max(size_i, size_j); k > 0
@@ -63,7 +66,7 @@ struct NearFieldOptions {
     double pixel_delta_ff = 0;
     double rays = 0;
     // Rows with a near pair that may be occluded are asked of the inner provider as sub-hemicube
-    // rows (RowProvider::compute_rows_planned), when it can make them.
+    // rows (a sampled RowProvider::RowRequest), when it can make them.
     bool sub_hemicubes = true;
     // Which refused (possibly occluded) near pairs need sub-hemicubes: those whose centre value
     // may be off by more than 5e-4 (docs/accuracy.md, "Which near pairs need sub-hemicubes").
@@ -409,6 +412,8 @@ public:
 private:
     std::string out_of_range_message(std::uint32_t i, const SparseRow& row, bool analytic) const;
     void warn_out_of_range();
+    // The sender points and weights of sampled row i into request (the plan's sender rule).
+    void sender_points(std::uint32_t i, RowRequest& request);
 
     RowProvider& inner_;
     const Scene& scene_;
@@ -428,6 +433,10 @@ private:
     // corrected at once on the inner provider's threads (corrected_row_provider.cpp).
     struct Pools;
     std::unique_ptr<Pools> pools_;
+    // Points on the exposed part of cut senders (accuracy/exposed_points.hpp), made at the first
+    // sampled row.
+    std::once_flag exposed_once_;
+    std::unique_ptr<ExposedPoints> exposed_;
 };
 
 }  // namespace ffcube

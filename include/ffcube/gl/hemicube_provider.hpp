@@ -42,45 +42,6 @@ struct HemicubeOptions {
     // with the depth test (docs/architecture.md, "Culling"). The item buffers are the same bits
     // either way (tested); false: every piece depth-tested.
     bool enclosure_without_depth = true;
-    // Rows planned at 4 × 4 sub-hemicubes (RowPlan::sampled_fine: an occluder touches the
-    // sender) ray-cast instead (docs/accuracy.md, "Rows an occluder touches, by rays"): the
-    // worker's thread casts fine_row_rays rays from the whole sender through Embree
-    // (RaycastRowProvider::cast_row, seeded by `seed`), which samples the sender as the
-    // sub-hemicubes do, but at a cost that follows the rays and not the scene's pieces × 16
-    // hemicubes. 0: max(N², min(4 N², 65,536)): 16,384 at N = 64, 65,536 at N = 128 and 256
-    // (where it measured as accurate as the 16 sub-hemicubes or more: docs/benchmarks.md), N²
-    // beyond. automatic: where rays_preferred (below: a mesh of kFineRowsByRaysMinPieces
-    // facets or more, or of kRaysMinMeshPieces with one patch a facet or nearly), where the rays
-    // cost no more than the 16 sub-hemicubes on llvmpipe and are the more accurate. Never on a
-    // scene with obstruction-only surfaces (the ray caster credits either side of them; hemicubes the
-    // facing one): automatic keeps hemicubes there, rays is an InputError.
-    enum class FineRows { hemicubes, rays, automatic };
-    FineRows fine_rows = FineRows::hemicubes;
-    std::uint64_t fine_row_rays = 0;
-    static constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
-    // Rays also for a mesh of kRaysMinMeshPieces pieces or more with at most
-    // kRaysMaxPatchesPerPiece patches a piece on average (one patch a facet, as --no-subdivide
-    // makes): on cities of 100, 300 and 600 facets the rays were faster and about twice as
-    // accurate, and the drawn 4 × 4 rows biased towards sky (a wall standing on the sender is a
-    // near-singular integrand that sixteen points miss); a scene of few pieces and many patches
-    // (the Cornell box, 170 a piece) keeps hemicubes, whose rows there are the more accurate
-    // (docs/benchmarks.md, "Rays in coherent packets, and --method auto").
-    static constexpr std::size_t kRaysMinMeshPieces = 100;
-    static constexpr std::size_t kRaysMaxPatchesPerPiece = 4;
-    // Whether rows of a scene of these pieces and patches are better cast than drawn (on
-    // llvmpipe; obstruction-only surfaces are the caller's to rule out).
-    static bool rays_preferred(std::size_t pieces, std::size_t patches) {
-        return pieces >= kFineRowsByRaysMinPieces ||
-               (pieces >= kRaysMinMeshPieces && patches <= kRaysMaxPatchesPerPiece * pieces);
-    }
-    // fine_row_rays' default at resolution N: max(N²/2, min(2 N², 32,768)): 32,768 at N = 128
-    // and 256. Half the count of the padded stratified sampler it replaced: the scrambled Sobol'
-    // rays (raycast/sampling.hpp) are as accurate at half the rays (the 22,881-facet city: row L2
-    // error 1.43e-3 at 32,768 against 1.46e-3 at 65,536 before; docs/benchmarks.md).
-    static std::uint64_t default_fine_row_rays(int resolution) {
-        const auto n = static_cast<std::uint64_t>(resolution > 0 ? resolution : 0);
-        return std::max(n * n / 2, std::min<std::uint64_t>(2 * n * n, 32768));
-    }
 };
 
 // What the provider did, summed over all hemicubes so far. Times are summed over workers
@@ -112,16 +73,17 @@ struct HemicubeStats {
     double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
     double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
     std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
-    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (compute_rows_planned)
+    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (a sampled RowRequest)
     std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
     // Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at
-    // points on its exposed part only (gl/exposed_points.hpp).
+    // points on its exposed part only (RowRequest::partly_enclosed; accuracy/exposed_points.hpp).
     std::uint64_t partly_enclosed_rows = 0;
     // Bytes sent to the GL per hemicube, summed: vertex data (the eye and frame) and the index lists.
     std::uint64_t upload_vertex_bytes = 0;
     std::uint64_t upload_index_bytes = 0;
-    // Rows planned at 4 × 4 that were ray-cast instead (HemicubeOptions::fine_rows), and the
-    // CPU-seconds their rays took (on the workers' threads in this process).
+    // Rows the driver had ray-cast instead (RowEngine::rays: rows planned at 4 × 4 on a scene
+    // where rays are preferred, pipeline/row_engine.hpp), through RowStages::cast on the
+    // workers' threads in this process, and the CPU-seconds their rays took.
     std::uint64_t fine_rows_cast = 0;
     double cast_seconds = 0;
 };
@@ -136,16 +98,19 @@ public:
     std::uint32_t size() const override;
     std::string name() const override { return "hemicube"; }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
-    // Sub-hemicubes: a flagged row is the average of hemicubes at the patch's 2 × 2 quadrature
-    // points (3 on a triangle), weights by area, each with its own visibility, rendered at half
-    // the resolution (when that is even and ≥ 8): about the cost and pixel noise of one hemicube.
+    // Sub-hemicubes: a sampled row is the weighted sum of hemicubes at the request's sender
+    // points (without points: the patch's 2 × 2 or 4 × 4 quadrature points, weights by area),
+    // each with its own visibility, rendered at half the resolution (when that is even and ≥ 8):
+    // with 2 × 2, about the cost and pixel noise of one hemicube. Requests name this engine
+    // (RowEngine::provider) only.
     bool can_sample_sender() const override { return true; }
-    std::uint64_t cast_fine_row_rays() const override { return fine_rows_by_rays() ? fine_row_rays() : 0; }
-    void compute_rows_planned(std::span<const std::uint32_t> rows, std::span<const RowPlan> plans,
-                              const RowSink& sink) override;
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> requests,
+                                const RowSink& sink) override;
     // The stages run on the worker's thread in the calling process, around its row: plan, the
-    // hemicube (in the worker process, or on the thread's own context), finish; so one worker's
-    // finish overlaps the others' drawing, and the calling thread only hands rows on.
+    // hemicube (in the worker process, or on the thread's own context) or the stages' cast (a
+    // row the plan gave to the ray caster, cast while the worker process draws the row before),
+    // finish; so one worker's finish overlaps the others' drawing, and the calling thread only
+    // hands rows on.
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                              const RowSink& sink) override;
 
@@ -154,7 +119,7 @@ public:
     std::vector<std::uint32_t> item_buffer(std::uint32_t i);
 
     // Makes the workers draw another scene (the next adaptive level's elements) without
-    // restarting them: forked workers are sent the scene (io/scene_blob.hpp) and rebuild their
+    // restarting them: forked workers are sent the scene (scene/scene_blob.hpp) and rebuild their
     // pieces and GL state; thread workers rebuild theirs on their own thread before their next
     // row. Rows are then the same bits as a new provider's on `scene` (tested). The counters
     // (stats()) start again from zero. Not while a compute_rows call runs; `scene` must outlive
@@ -175,10 +140,6 @@ public:
     // hemicube/pieces.hpp): its planes and pieces, 0 when off or when the scene has none.
     std::size_t enclosure_planes() const;
     std::size_t enclosure_pieces() const;
-    // Whether rows planned at 4 × 4 are ray-cast on this scene (HemicubeOptions::fine_rows,
-    // automatic resolved), and with how many rays each.
-    bool fine_rows_by_rays() const;
-    std::uint64_t fine_row_rays() const;
 
     // Where the eye sits above the patch and where the near plane lies, as fractions of the
     // patch's longest edge (relative, never absolute units).

@@ -31,7 +31,7 @@ unsigned local_size();  // ranks on this node (at least 1)
 int finish(int code);
 void barrier();
 
-// Rank 0's scene (given there, nullopt elsewhere) on every rank, bit for bit (io/scene_blob.hpp).
+// Rank 0's scene (given there, nullopt elsewhere) on every rank, bit for bit (scene/scene_blob.hpp).
 Scene broadcast_scene(std::optional<Scene> scene);
 
 // The row blocks of pipeline/row_partition.hpp, computed on rank 0 and broadcast: rank r owns

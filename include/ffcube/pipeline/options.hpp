@@ -14,6 +14,7 @@
 #include "ffcube/gl/context.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/pipeline/cost_model.hpp"
+#include "ffcube/pipeline/row_engine.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/obj_loader.hpp"
 #include "ffcube/scene/load_model.hpp"
@@ -43,7 +44,6 @@ struct SceneOptions {
 enum class RowMethod { Hemicube, Raycast };
 enum class Correction { None, Near };
 using FarFieldMode = NearFieldOptions::FarField;
-using FineRows = HemicubeOptions::FineRows;
 // --enforce: both = closure (which implies reciprocity); kept apart for the record.
 enum class EnforceRequest { None, Reciprocity, Closure, Both };
 
@@ -75,7 +75,7 @@ struct RowOptions {
     // commands set false. Rows do not depend on it.
     bool worker_processes = true;
     // Ray caster: rays per patch (≥ 1). rays_given: set by --rays (else --method auto's ray caster
-    // casts the fine-row count, HemicubeOptions::default_fine_row_rays).
+    // casts the fine-row count, default_fine_row_rays in pipeline/row_engine.hpp).
     std::uint64_t rays = 4096;
     bool rays_given = false;
     // Accuracy by target (--tolerance E, docs/accuracy.md): the largest error a row may keep in
@@ -101,9 +101,9 @@ struct RowOptions {
     std::size_t exact_visibility_occluders = 0;
     FarFieldMode far_field = FarFieldMode::automatic;
     bool exact_visibility_auto = true;  // `--exact-visibility auto` (above); a number or `off` clears it
-    // HemicubeOptions::fine_rows, fine_row_rays (--fine-rows auto|hemicubes|rays, --fine-row-rays R;
-    // 0: max(N²/2, min(2 N², 32,768))): rows planned at 4 × 4 ray-cast instead, automatically on
-    // scenes of many pieces.
+    // --fine-rows auto|hemicubes|rays, --fine-row-rays R (0: max(N²/2, min(2 N², 32,768))): rows
+    // planned at 4 × 4 ray-cast instead, automatically on scenes of many pieces (the driver's
+    // engine_for_row, pipeline/row_engine.hpp).
     FineRows fine_rows = FineRows::automatic;
     std::uint64_t fine_row_rays = 0;
     // HemicubeOptions::occlusion_culling (--occlusion-culling on|off): the same rows either way;
@@ -146,12 +146,12 @@ const char* to_string(ContactCuts c);
 std::string_view to_string(RowMethod m);
 
 // --method auto, resolved for the scene whose rows are made (its drawn scene): the ray caster
-// where HemicubeOptions::rays_preferred (a mesh of 1,000 facets or more, or of 100 or more with
+// where rays_preferred (pipeline/row_engine.hpp: a mesh of 1,000 facets or more, or of 100 or more with
 // one patch a facet or nearly), no obstruction-only surfaces (the ray caster credits either side of them) and
 // --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays cost a third of one
 // hemicube that draws the whole city and is more accurate (docs/accuracy.md, "Rows by rays on a
 // mesh of many pieces"; docs/benchmarks.md, "Rays in coherent packets"). Its rays: --rays if given, else --fine-row-rays, else
-// HemicubeOptions::default_fine_row_rays(--resolution). Everywhere else the hemicube. Options
+// default_fine_row_rays(--resolution). Everywhere else the hemicube. Options
 // without method_auto come back as they are.
 RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn);
 std::string_view to_string(Correction c);

@@ -21,6 +21,7 @@
 #include "ffcube/io/ffm.hpp"
 #include "ffcube/io/report.hpp"
 #include "ffcube/pipeline/options.hpp"
+#include "ffcube/pipeline/row_engine.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -44,6 +45,8 @@ public:
     const RowOptions& options() const { return options_; }
     // The parts; null where the options did not ask for them.
     HemicubeRowProvider* hemicube() const { return hemicube_.get(); }
+    // Around the hemicube: which engine measures each row (pipeline/row_engine.hpp).
+    RowDriver* driver() const { return driver_.get(); }
     RaycastRowProvider* raycast() const { return raycast_.get(); }
     CorrectedRowProvider* corrected() const { return corrected_.get(); }
     // Per row, the share of its energy that obstruction-only surfaces intercept (Scene::drawn;
@@ -64,6 +67,7 @@ private:
     // declared last (destroyed first).
     std::unique_ptr<HemicubeRowProvider> hemicube_;
     std::unique_ptr<RaycastRowProvider> raycast_;
+    std::unique_ptr<RowDriver> driver_;  // with hemicube_; refers to it and to the scene
     // Hemicube rows above an asked-for tolerance, measured again by rays refined to it
     // (refine_hemicube_rows; built on its first row: the hemicube's workers fork first).
     std::unique_ptr<RowProvider> refiner_;

@@ -75,9 +75,10 @@ public:
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages,
                              const RowSink& sink) override;
 
-    // One row on the calling thread, for a caller with its own threads (the hemicube provider
-    // casts the rows it would draw as 4 × 4 sub-hemicubes: HemicubeOptions::fine_rows). The same
-    // row compute_rows makes. Thread-safe: any number at once, each with its own scratch.
+    // One row on the calling thread, for a caller with its own threads (the driver casts, on the
+    // hemicube's worker threads, the rows planned at 4 × 4 sub-hemicubes: RowDriver,
+    // pipeline/row_engine.hpp). The same row compute_rows makes. Thread-safe: any number at
+    // once, each with its own scratch.
     struct RowScratch {
         std::vector<double> acc;  // one per patch, all zero between rows
         std::vector<std::uint32_t> touched, points, sorted, start, order;

@@ -1,4 +1,4 @@
-// Senders cut by a facet (gl/exposed_points.hpp, docs/accuracy.md "Senders cut by a facet"): a
+// Senders cut by a facet (accuracy/exposed_points.hpp, docs/accuracy.md "Senders cut by a facet"): a
 // square ground patch half inside a closed box that stands on it. The exposed half's points lie
 // outside the box, their weights integrate the quadratics over that half exactly, and the row
 // measured at them matches the closed form of the exposed half's factor to the box's wall.
@@ -7,12 +7,15 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 #include <vector>
 
 #include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
+#include "ffcube/accuracy/near_field.hpp"
+#include "ffcube/geometry/quadrature.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
-#include "gl/exposed_points.hpp"
+#include "accuracy/exposed_points.hpp"
 #include "support/scenes.hpp"
 
 namespace ffcube {
@@ -125,9 +128,14 @@ TEST(ExposedPoints, RowFromTheExposedHalfMatchesTheClosedForm) {
     o.threads = 1;
     HemicubeRowProvider provider(h.scene, o);
     const std::vector<std::uint32_t> rows{h.ground};
-    const std::vector<RowProvider::RowPlan> plans{RowProvider::RowPlan::sampled_fine};
+    // The measure contract: the plan's sender points and weights (the rule's) in the request.
+    std::vector<RowProvider::RowRequest> requests(1);
+    requests[0].plan = RowProvider::RowPlan::sampled_fine;
+    requests[0].points = points;
+    requests[0].weights = weights;
+    requests[0].partly_enclosed = true;
     double f = -1, sum = 0;
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) {
+    provider.compute_rows_requested(rows, requests, [&](std::uint32_t, const SparseRow& r) {
         f = 0;
         for (std::size_t k = 0; k < r.col.size(); ++k) {
             if (r.col[k] == h.west) f = r.val[k];
@@ -230,9 +238,14 @@ TEST(ExposedPoints, PartlyCoveredSenderRowMatchesTheClosedForm) {
     o.threads = 1;
     HemicubeRowProvider provider(h.scene, o);
     const std::vector<std::uint32_t> rows{h.ceiling};
-    const std::vector<RowProvider::RowPlan> plans{RowProvider::RowPlan::sampled_fine};
+    // The measure contract: the plan's sender points and weights (the rule's) in the request.
+    std::vector<RowProvider::RowRequest> requests(1);
+    requests[0].plan = RowProvider::RowPlan::sampled_fine;
+    requests[0].points = points;
+    requests[0].weights = weights;
+    requests[0].partly_enclosed = true;
     double f = -1;
-    provider.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) {
+    provider.compute_rows_requested(rows, requests, [&](std::uint32_t, const SparseRow& r) {
         f = 0;
         for (std::size_t k = 0; k < r.col.size(); ++k)
             if (r.col[k] == h.floor) f = r.val[k];
@@ -242,6 +255,67 @@ TEST(ExposedPoints, PartlyCoveredSenderRowMatchesTheClosedForm) {
     EXPECT_EQ(provider.stats().partly_enclosed_rows, 1u);
     std::printf("closed %.6f, rule on exact point factors %.6f, hemicube %.6f (4 sigma %.1e)\n", closed, exact_points,
                 f, 4 * sigma);
+}
+
+// The plan hands the measure its sender points (the sender rule is accuracy's, gl only measures):
+// through the correction, a sampled row's request carries the points and weights of
+// ExposedPoints::rule where the sender is partly covered (the ceiling over the lamp) and the
+// patch's quadrature points elsewhere, bit for bit; a centre row carries none. The inner
+// provider only records the requests (rows empty: nothing is measured).
+class RecordingRequests final : public RowProvider {
+public:
+    explicit RecordingRequests(std::uint32_t n) : requests(n), seen(n, 0) {}
+    std::uint32_t size() const override { return static_cast<std::uint32_t>(requests.size()); }
+    std::string name() const override { return "recording"; }
+    bool can_sample_sender() const override { return true; }
+    void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override {
+        for (const std::uint32_t i : rows) sink(i, SparseRow{});
+    }
+    void compute_rows_requested(std::span<const std::uint32_t> rows, std::span<const RowRequest> given,
+                                const RowSink& sink) override {
+        for (std::size_t k = 0; k < rows.size(); ++k) {
+            requests[rows[k]] = given[k];
+            seen[rows[k]] = 1;
+            sink(rows[k], SparseRow{});
+        }
+    }
+    std::vector<RowRequest> requests;
+    std::vector<int> seen;
+};
+
+TEST(ExposedPoints, ThePlanHandsTheMeasureTheExposedPoints) {
+    const CoveredCeiling h;
+    RecordingRequests inner(static_cast<std::uint32_t>(h.scene.size()));
+    CorrectedRowProvider corrected(h.scene, inner, near_field_options_for_hemicube(128));
+    compute_all_rows(corrected);
+    const ExposedPoints e(h.scene);
+    std::size_t sampled = 0, exposed = 0;
+    for (std::uint32_t i = 0; i < h.scene.size(); ++i) {
+        ASSERT_TRUE(inner.seen[i]) << "row " << i;
+        const RowProvider::RowRequest& r = inner.requests[i];
+        EXPECT_EQ(r.engine, RowProvider::RowEngine::provider);
+        if (!r.sampled()) {
+            EXPECT_TRUE(r.points.empty()) << "row " << i;
+            continue;
+        }
+        ++sampled;
+        std::vector<Vec3> points;
+        std::vector<double> weights;
+        if (e.rule(i, points, weights)) {
+            ++exposed;
+            EXPECT_TRUE(r.partly_enclosed);
+        } else {
+            const auto v = h.scene.patch_vertices(i);
+            patch_quadrature(std::span<const Vec3>(v.data(), h.scene.patches[i].count),
+                             r.plan == RowProvider::RowPlan::sampled_fine ? 4 : 2, points, weights);
+            EXPECT_FALSE(r.partly_enclosed);
+        }
+        EXPECT_EQ(r.points, points) << "row " << i;
+        EXPECT_EQ(r.weights, weights) << "row " << i;
+    }
+    EXPECT_EQ(inner.requests[h.ceiling].partly_enclosed, true) << "the ceiling is planned sampled, at its exposed strip";
+    EXPECT_GE(sampled, exposed);
+    EXPECT_EQ(exposed, 1u);
 }
 
 }  // namespace

@@ -1,4 +1,4 @@
-// The scene as bytes (io/scene_blob.hpp), as `mpirun … ffcube` broadcasts it: every field comes
+// The scene as bytes (scene/scene_blob.hpp), as `mpirun … ffcube` broadcasts it: every field comes
 // back bit for bit; a damaged blob is refused with an InputError, never read out of bounds.
 #include <gtest/gtest.h>
 
@@ -6,7 +6,7 @@
 #include <string>
 
 #include "ffcube/core/error.hpp"
-#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/scene/scene_blob.hpp"
 #include "ffcube/scene/builtin.hpp"
 #include "ffcube/scene/mesher.hpp"
 

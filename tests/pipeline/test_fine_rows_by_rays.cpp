@@ -1,8 +1,9 @@
-// Rows planned at 4 × 4 sub-hemicubes ray-cast instead (HemicubeOptions::fine_rows, --fine-rows;
-// docs/accuracy.md, "Rows an occluder touches, by rays"): such a row is the ray caster's row, the
-// same bits, on either kind of worker; other rows are the hemicube's, untouched; the automatic
-// choice follows the scene's pieces and keeps hemicubes where obstruction-only surfaces are; and
-// through the correction the rows are as close to an independent reference as sub-hemicubes.
+// Rows planned at 4 × 4 sub-hemicubes ray-cast instead (the driver's engine_for_row,
+// pipeline/row_engine.hpp; --fine-rows; docs/accuracy.md, "Rows an occluder touches, by rays"):
+// such a row is the ray caster's row, the same bits, on either kind of worker; other rows are the
+// hemicube's, untouched; the automatic choice follows the scene's pieces and keeps hemicubes
+// where obstruction-only surfaces are; and through the correction the rows are as close to an
+// independent reference as sub-hemicubes.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -15,6 +16,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/formfactor/checks.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/pipeline/row_engine.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/mesher.hpp"
 #include "ffcube/scene/polygons.hpp"
@@ -24,7 +26,6 @@ namespace ffcube {
 namespace {
 
 using Plan = RowProvider::RowPlan;
-using FineRows = HemicubeOptions::FineRows;
 
 Scene make(const std::vector<NamedPolygon>& polys, double edge) {
     MeshOptions mo;
@@ -39,10 +40,13 @@ Scene corner() {
                 0.25);
 }
 
-std::vector<SparseRow> planned_rows(HemicubeRowProvider& p, const std::vector<std::uint32_t>& rows,
-                                    const std::vector<Plan>& plans) {
+// The rows under these plans, as the correction's plan stage hands them to the provider (here
+// without sender points: the hemicube's own quadrature points).
+std::vector<SparseRow> planned_rows(RowProvider& p, const std::vector<std::uint32_t>& rows, const std::vector<Plan>& plans) {
     std::vector<SparseRow> out;
-    p.compute_rows_planned(rows, plans, [&](std::uint32_t, const SparseRow& r) { out.push_back(r); });
+    RowProvider::RowStages stages;
+    stages.plan = [&](std::size_t k, std::uint32_t, RowProvider::RowRequest& r) { r.plan = plans[k]; };
+    p.compute_rows_staged(rows, stages, [&](std::uint32_t, const SparseRow& r) { out.push_back(r); });
     return out;
 }
 
@@ -68,15 +72,17 @@ TEST(FineRowsByRays, AFineRowIsTheRayCastersRowAndOtherRowsTheHemicubes) {
         o.worker_processes = processes;
         o.seed = 77;
         HemicubeRowProvider drawn(s, o);
-        const std::vector<SparseRow> ref = planned_rows(drawn, rows, plans);
-        o.fine_rows = FineRows::rays;
-        o.fine_row_rays = 1000;
-        HemicubeRowProvider hybrid(s, o);
+        RowDriver drawn_driver(s, drawn, FineRows::hemicubes, 0, o.seed);
+        const std::vector<SparseRow> ref = planned_rows(drawn_driver, rows, plans);
+        HemicubeRowProvider hybrid_hemicube(s, o);
+        RowDriver hybrid(s, hybrid_hemicube, FineRows::rays, 1000, o.seed);
         if (!processes) {
-            EXPECT_EQ(hybrid.workers(), "threads");
+            EXPECT_EQ(hybrid_hemicube.workers(), "threads");
         }
         EXPECT_TRUE(hybrid.fine_rows_by_rays());
         EXPECT_EQ(hybrid.fine_row_rays(), 1000u);
+        EXPECT_EQ(hybrid.cast_fine_row_rays(), 1000u);
+        EXPECT_EQ(drawn_driver.cast_fine_row_rays(), 0u);
         const std::vector<SparseRow> got = planned_rows(hybrid, rows, plans);
         ASSERT_EQ(got.size(), rows.size());
         for (const std::size_t k : {0u, 3u}) {
@@ -87,18 +93,48 @@ TEST(FineRowsByRays, AFineRowIsTheRayCastersRowAndOtherRowsTheHemicubes) {
             EXPECT_EQ(got[k].col, ref[k].col) << threads << " thread(s), row " << k;
             EXPECT_EQ(got[k].val, ref[k].val) << threads << " thread(s), row " << k;
         }
-        const HemicubeStats st = hybrid.stats();
+        const HemicubeStats st = hybrid_hemicube.stats();
         EXPECT_EQ(st.fine_rows_cast, 2u);
         EXPECT_EQ(st.hemicubes, drawn.stats().hemicubes - 2 * 16);  // the two rows' 16 sub-hemicubes each
     }
 }
 
-// automatic: rays where HemicubeOptions::rays_preferred (kFineRowsByRaysMinPieces pieces or more,
-// or kRaysMinMeshPieces of one patch each), hemicubes below; never
-// where the scene has obstruction-only surfaces (the ray caster credits either side of those),
-// where an explicit `rays` is refused. The default ray count follows the resolution.
+// automatic: rays where rays_preferred (kFineRowsByRaysMinPieces pieces or more, or
+// kRaysMinMeshPieces of one patch each), hemicubes below; never where the scene has
+// obstruction-only surfaces (the ray caster credits either side of those), where an explicit
+// `rays` is refused. Only rows planned at 4 × 4 go to the rays. The default ray count follows the
+// resolution. engine_for_row is pure: the scene's facts alone decide, as here by hand.
 TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions) {
-    const auto tiles = [](std::size_t n) {  // n separate unit tiles on the ground: n pieces
+    using Engine = RowProvider::RowEngine;
+    const auto engine = [](FineRows f, const SceneFacts& facts, Plan plan = Plan::sampled_fine) {
+        return engine_for_row(f, 0, facts, plan).engine;
+    };
+    SceneFacts facts;
+    facts.resolution = 64;
+    facts.pieces = kRaysMinMeshPieces - 1;
+    facts.patches = facts.pieces;
+    EXPECT_EQ(engine(FineRows::automatic, facts), Engine::provider);
+    facts.pieces = kRaysMinMeshPieces;  // one patch a piece
+    facts.patches = facts.pieces;
+    EXPECT_EQ(engine(FineRows::automatic, facts), Engine::rays);
+    facts.patches = kRaysMaxPatchesPerPiece * facts.pieces + 1;  // more than 4 patches a piece
+    EXPECT_EQ(engine(FineRows::automatic, facts), Engine::provider);
+    facts.pieces = kFineRowsByRaysMinPieces;
+    facts.patches = 100 * facts.pieces;
+    EXPECT_EQ(engine(FineRows::automatic, facts), Engine::rays);
+    for (const Plan p : {Plan::centre, Plan::sampled, Plan::skip})
+        EXPECT_EQ(engine(FineRows::automatic, facts, p), Engine::provider);
+    EXPECT_EQ(engine(FineRows::hemicubes, facts), Engine::provider);
+    EXPECT_EQ(engine_for_row(FineRows::automatic, 0, facts, Plan::sampled_fine).rays, 8192u);  // max(N²/2, min(2 N², 32,768)), N = 64
+    EXPECT_EQ(engine_for_row(FineRows::automatic, 500, facts, Plan::sampled_fine).rays, 500u);
+    EXPECT_EQ(default_fine_row_rays(256), 32768u);
+    EXPECT_EQ(default_fine_row_rays(512), 131072u);
+    facts.obstructions = true;
+    EXPECT_EQ(engine(FineRows::automatic, facts), Engine::provider);
+    EXPECT_THROW(engine(FineRows::rays, facts), InputError);
+
+    // The same through the driver, from a scene: separate unit tiles on the ground, one piece each.
+    const auto tiles = [](std::size_t n) {
         std::vector<NamedPolygon> polys;
         for (std::size_t k = 0; k < n; ++k) {
             const double x = static_cast<double>(k % 40) * 1.5, y = static_cast<double>(k / 40) * 1.5;
@@ -109,29 +145,21 @@ TEST(FineRowsByRays, AutomaticFollowsThePiecesAndKeepsHemicubesWithObstructions)
     HemicubeOptions o;
     o.resolution = 64;
     o.threads = 1;
-    o.fine_rows = FineRows::automatic;
-    const std::size_t min = HemicubeOptions::kFineRowsByRaysMinPieces;
     {
-        const Scene few = tiles(HemicubeOptions::kRaysMinMeshPieces - 1);
-        EXPECT_FALSE(HemicubeRowProvider(few, o).fine_rows_by_rays());
-        const Scene mesh = tiles(HemicubeOptions::kRaysMinMeshPieces);  // one patch a piece
-        EXPECT_TRUE(HemicubeRowProvider(mesh, o).fine_rows_by_rays());
+        const Scene few = tiles(kRaysMinMeshPieces - 1);
+        HemicubeRowProvider h(few, o);
+        EXPECT_FALSE(RowDriver(few, h, FineRows::automatic, 0, o.seed).fine_rows_by_rays());
+        const Scene mesh = tiles(kRaysMinMeshPieces);
+        HemicubeRowProvider hm(mesh, o);
+        const RowDriver d(mesh, hm, FineRows::automatic, 0, o.seed);
+        EXPECT_TRUE(d.fine_rows_by_rays());
+        EXPECT_EQ(d.fine_row_rays(), 8192u);
     }
-    Scene many = tiles(min);
-    {
-        HemicubeRowProvider p(many, o);
-        EXPECT_TRUE(p.fine_rows_by_rays());
-        EXPECT_EQ(p.fine_row_rays(), 8192u);  // max(N²/2, min(2 N², 32,768)) at N = 64
-    }
-    o.resolution = 256;
-    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 32768u);
-    o.resolution = 512;
-    EXPECT_EQ(HemicubeRowProvider(many, o).fine_row_rays(), 131072u);
-    o.resolution = 64;
-    many.obstruction_first = static_cast<std::uint32_t>(many.size() - 1);  // the last tile: an obstruction
-    EXPECT_FALSE(HemicubeRowProvider(many, o).fine_rows_by_rays());
-    o.fine_rows = FineRows::rays;
-    EXPECT_THROW(HemicubeRowProvider(many, o), InputError);
+    Scene obstructed = tiles(kRaysMinMeshPieces);
+    obstructed.obstruction_first = static_cast<std::uint32_t>(obstructed.size() - 1);  // the last tile: an obstruction
+    HemicubeRowProvider ho(obstructed, o);
+    EXPECT_FALSE(RowDriver(obstructed, ho, FineRows::automatic, 0, o.seed).fine_rows_by_rays());
+    EXPECT_THROW(RowDriver(obstructed, ho, FineRows::rays, 0, o.seed), InputError);
 }
 
 // Through the correction, on a sender an occluder touches: a floor and a wall, 4 × 4 patches
@@ -145,9 +173,9 @@ TEST(FineRowsByRays, ThroughTheCorrectionAsCloseToTheReferenceAsSubHemicubes) {
     HemicubeOptions o;
     o.resolution = 128;
     o.threads = 2;
-    o.fine_rows = FineRows::rays;
     HemicubeRowProvider hemi(s, o);
-    CorrectedRowProvider corrected(s, hemi, near_field_options_for_hemicube(o.resolution));
+    RowDriver driver(s, hemi, FineRows::rays, 0, o.seed);
+    CorrectedRowProvider corrected(s, driver, near_field_options_for_hemicube(o.resolution));
     const double value = object_form_factors(compute_all_rows(corrected), s)[0][1];
     EXPECT_GT(corrected.stats().rows_sampled_fine, 0u);
     EXPECT_EQ(hemi.stats().fine_rows_cast, corrected.stats().rows_sampled_fine);
@@ -171,12 +199,11 @@ TEST(FineRowsByRays, ACastRowsErrorEstimateDoesNotFollowThePixels) {
         HemicubeOptions o;
         o.resolution = k == 0 ? 64 : 256;
         o.threads = 2;
-        o.fine_rows = FineRows::rays;
-        o.fine_row_rays = 16384;
         HemicubeRowProvider hemi(s, o);
+        RowDriver driver(s, hemi, FineRows::rays, 16384, o.seed);
         NearFieldOptions nf = near_field_options_for_hemicube(o.resolution);
         nf.far_field = NearFieldOptions::FarField::off;
-        CorrectedRowProvider corrected(s, hemi, nf);
+        CorrectedRowProvider corrected(s, driver, nf);
         compute_all_rows(corrected);
         estimate[k] = corrected.row_error_estimates();
         measure = corrected.row_measures();

@@ -1,4 +1,4 @@
-// The GL layer's sender rule for a sender cut by a facet (issue 14, generated cities: the ground
+// The accuracy layer's sender rule for a sender cut by a facet (issue 14, generated cities: the ground
 // grid's triangles run on under buildings). A row measured by sub-hemicubes puts its points on
 // the sender by a fixed rule; a point that falls inside a building sees the building's back
 // faces, which says nothing about the exposed part of the sender. For such a sender the points

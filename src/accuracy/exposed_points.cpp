@@ -1,4 +1,4 @@
-#include "gl/exposed_points.hpp"
+#include "accuracy/exposed_points.hpp"
 
 #include <glm/geometric.hpp>
 

@@ -1,4 +1,4 @@
-#include "ffcube/io/scene_blob.hpp"
+#include "ffcube/scene/scene_blob.hpp"
 
 #include <fmt/format.h>
 
