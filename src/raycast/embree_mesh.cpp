@@ -6,14 +6,14 @@
 
 namespace ffcube {
 
-void build_embree_mesh(const Scene& scene, EmbreeMesh& out, const char* who) {
+void build_embree_mesh(const Scene& scene, EmbreeMesh& out, const char* who, const char* config) {
     // Centre and scale the scene to unit size before converting to float: a scene offset by
     // 1e5 or scaled by 1e-4 then keeps float's full relative precision.
     out.center = 0.5 * (scene.bbox_min + scene.bbox_max);
     const double ext = scene.extent();
     out.scale = ext > 0 ? 1.0 / ext : 1.0;
     EmbreeHandles& embree = out.embree;
-    embree.device = rtcNewDevice(nullptr);
+    embree.device = rtcNewDevice(config);
     if (!embree.device)
         throw InternalError(fmt::format("{}: Embree device could not be created (error {})", who,
                                         static_cast<int>(rtcGetDeviceError(nullptr))));

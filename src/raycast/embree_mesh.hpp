@@ -36,7 +36,8 @@ struct EmbreeMesh {
 
 // Builds and commits the mesh of a non-empty scene. Throws InternalError when Embree cannot
 // start or build; `who` names the caller in the message.
-void build_embree_mesh(const Scene& scene, EmbreeMesh& out, const char* who);
+// `config`: Embree's device configuration (rtcNewDevice), e.g. "threads=1"; nullptr: its defaults.
+void build_embree_mesh(const Scene& scene, EmbreeMesh& out, const char* who, const char* config = nullptr);
 
 inline constexpr std::uint32_t kNoPatch = std::numeric_limits<std::uint32_t>::max();
 

@@ -10,7 +10,10 @@ struct RayScene::Impl {
     const Scene& scene;
     EmbreeMesh mesh;
     explicit Impl(const Scene& s) : scene(s) {
-        if (scene.size() != 0) build_embree_mesh(scene, mesh, "ray scene");
+        // One thread: the scene is built where the hemicube's workers may still have to be
+        // forked (the plan's exposed points, in the main process), and Embree's own threads
+        // outlive its device: with them this process could no longer fork workers.
+        if (scene.size() != 0) build_embree_mesh(scene, mesh, "ray scene", "threads=1");
     }
 };
 
