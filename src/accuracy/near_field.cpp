@@ -280,6 +280,13 @@ void NearFieldCorrector::Impl::add_near_pairs(std::uint32_t i, NearAnalysis& out
     }
 }
 
+// b.far (columns increasing) merged into out.exact, which stays in increasing columns.
+static void merge_far_into_exact(NearAnalysis& out, NearFieldScratch::Buffers& b) {
+    b.near_exact.assign(out.exact.begin(), out.exact.end());
+    out.exact.resize(b.near_exact.size() + b.far.size());
+    std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());
+}
+
 double NearFieldCorrector::Impl::pair_value(std::uint32_t i, std::uint32_t j, double d, NearAnalysis& out,
                                             NearFieldScratch::Buffers& b) const {
     const Patch& pi = patches.scene.patches[i];
@@ -323,9 +330,7 @@ void NearFieldCorrector::Impl::add_cut_sender_pairs(std::uint32_t i, NearAnalysi
     if (b.far.empty()) return;
     std::sort(b.far.begin(), b.far.end());
     out.cut_sender_entries += b.far.size();
-    b.near_exact.assign(out.exact.begin(), out.exact.end());
-    out.exact.resize(b.near_exact.size() + b.far.size());
-    std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());
+    merge_far_into_exact(out, b);
 }
 
 // Far field: every other facing pair the plane test proves unoccluded, merged into out.exact
@@ -368,9 +373,7 @@ void NearFieldCorrector::Impl::add_far_pairs(std::uint32_t i, NearAnalysis& out,
     }
     out.far_entries = b.far.size();
     out.complete = known_without_measuring(out);
-    b.near_exact.assign(out.exact.begin(), out.exact.end());
-    out.exact.resize(b.near_exact.size() + b.far.size());
-    std::merge(b.near_exact.begin(), b.near_exact.end(), b.far.begin(), b.far.end(), out.exact.begin());
+    merge_far_into_exact(out, b);
 }
 
 NearFieldCorrector::NearFieldCorrector(const Scene& scene, const NearFieldOptions& options) {
