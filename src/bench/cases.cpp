@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "ffcube/reference/closed_forms.hpp"
+#include "ffcube/reference/l_room.hpp"
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/scene/mesher.hpp"
@@ -160,6 +161,51 @@ BenchCase occluded_cross() {
     return c;
 }
 
+// View3D's L-shaped room (examples/l_shaped_room.vs3: the manual's example, Pinney & Bean test 4):
+// twelve walls, floors and ceilings whose ceiling and floor parts combine (View3D's cmb) into
+// eight objects; the re-entrant corner hides part of each arm from the other. Exact values:
+// reference/l_room.hpp (closed forms, and the point factor integrated on the pieces where the
+// corner hides; exact to 1e-12), combined by area as View3D combines them.
+BenchCase l_shaped_room() {
+    BenchCase c{"l_shaped_room", "occlusion",
+                "View3D's L-shaped room (Pinney & Bean test 4): 12 surfaces as 8 objects, a re-entrant corner", {}, 0, {}};
+    // S1..S12 of the .vs3 → objects: S9, S10 join S7 (the ceiling), S11, S12 join S8 (the floor).
+    static const char* const object[12] = {"srf-1", "srf-2", "srf-3", "srf-4", "srf-5", "srf-6",
+                                           "srf-7", "srf-8", "srf-7", "srf-7", "srf-8", "srf-8"};
+    // Whole surfaces, as the .vs3 gives them to the mesher (the reference splits two walls at
+    // the corner's planes: each whole wall is the union of its parts, one rectangle).
+    std::vector<l_room::AxisRect> whole(12);
+    std::vector<bool> seen(12, false);
+    for (const l_room::RoomPart& p : l_room::l_room_parts()) {
+        l_room::AxisRect& w = whole[static_cast<std::size_t>(p.surface)];
+        if (!seen[static_cast<std::size_t>(p.surface)]) {
+            w = p.rect;
+            seen[static_cast<std::size_t>(p.surface)] = true;
+        }
+        for (int k = 0; k < 2; ++k) {
+            w.lo[k] = std::min(w.lo[k], p.rect.lo[k]);
+            w.hi[k] = std::max(w.hi[k], p.rect.hi[k]);
+        }
+    }
+    std::vector<double> surface_area(12, 0.0);
+    for (std::size_t i = 0; i < 12; ++i) {
+        c.polygons.push_back({object[i], whole[i].polygon()});
+        surface_area[i] = whole[i].area();
+    }
+    // Object k in the order first named (srf-1 … srf-8), as measure_errors orders them.
+    const auto index = [](const char* name) { return static_cast<std::size_t>(name[4] - '1'); };
+    const auto F = l_room::l_room_reference(16);
+    std::vector<double> area(8, 0.0);
+    c.exact.assign(8, std::vector<double>(8, 0.0));
+    for (std::size_t i = 0; i < 12; ++i) {
+        area[index(object[i])] += surface_area[i];
+        for (std::size_t j = 0; j < 12; ++j) c.exact[index(object[i])][index(object[j])] += surface_area[i] * F[i][j];
+    }
+    for (std::size_t a = 0; a < 8; ++a)
+        for (double& x : c.exact[a]) x /= area[a];
+    return c;
+}
+
 std::vector<BenchCase> all_cases() {
     std::vector<BenchCase> cs;
     const double pi = std::numbers::pi;
@@ -251,6 +297,7 @@ std::vector<BenchCase> all_cases() {
     cs.push_back(occluded_half_wall());
     cs.push_back(occluded_full_shadow());
     cs.push_back(occluded_cross());
+    cs.push_back(l_shaped_room());
     return cs;
 }
 
@@ -265,7 +312,7 @@ std::vector<BenchCase> bench_cases(bool quick) {
     // Default: about 144 patches on each case's largest object; quick: about 36, and one or two
     // cases per group.
     static const char* const quick_cases[] = {"parallel_d1", "perpendicular_1x1", "cube", "edge_60", "far_apart",
-                                              "half_wall"};
+                                              "half_wall", "l_shaped_room"};
     std::vector<BenchCase> out;
     for (BenchCase& c : all_cases()) {
         if (quick && std::find(std::begin(quick_cases), std::end(quick_cases), c.name) == std::end(quick_cases))

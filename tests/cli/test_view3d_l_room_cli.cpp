@@ -1,6 +1,6 @@
 // View3D's own L-shaped-room example (examples/l_shaped_room.vs3: black surfaces, the floor and
 // ceiling each combined from three parts with cmb), against references made without ffcube's
-// machinery (cli/l_room_reference.hpp): closed forms for the pairs that see each other whole,
+// machinery (ffcube/reference/l_room.hpp): closed forms for the pairs that see each other whole,
 // Lambert's exact point factor to the visible part integrated over the sender for the pairs
 // that the re-entrant corner partly hides.
 #include <gtest/gtest.h>
@@ -13,7 +13,7 @@
 
 #include "cli/cli_util.hpp"
 #include "support/view3d_text.hpp"
-#include "cli/l_room_reference.hpp"
+#include "ffcube/reference/l_room.hpp"
 
 namespace ffcube {
 namespace {
@@ -49,15 +49,15 @@ std::vector<std::vector<double>> combined(const std::vector<std::vector<double>>
 TEST(LRoomReference, IsExactToRounding) {
     // The closed forms of the unhidden pairs against the contour integral (a different formula
     // for the same integral): they agree to rounding (1e-12 with room to spare).
-    for (const test::RoomPart& p : test::l_room_parts())
-        for (const test::RoomPart& q : test::l_room_parts()) {
-            if (p.surface == q.surface || (p.arm == test::Arm::x && q.arm == test::Arm::y) ||
-                (p.arm == test::Arm::y && q.arm == test::Arm::x))
+    for (const l_room::RoomPart& p : l_room::l_room_parts())
+        for (const l_room::RoomPart& q : l_room::l_room_parts()) {
+            if (p.surface == q.surface || (p.arm == l_room::Arm::x && q.arm == l_room::Arm::y) ||
+                (p.arm == l_room::Arm::y && q.arm == l_room::Arm::x))
                 continue;
-            EXPECT_NEAR(test::unhidden_factor(p.rect, q.rect), ff_polygon_polygon(p.rect.polygon(), q.rect.polygon()), 1e-12)
+            EXPECT_NEAR(l_room::unhidden_factor(p.rect, q.rect), ff_polygon_polygon(p.rect.polygon(), q.rect.polygon()), 1e-12)
                 << p.surface << " " << q.surface;
         }
-    const auto F16 = test::l_room_reference(16), F32 = test::l_room_reference(32);
+    const auto F16 = l_room::l_room_reference(16), F32 = l_room::l_room_reference(32);
     for (std::size_t i = 0; i < 12; ++i) {
         double sum = 0.0;
         for (std::size_t j = 0; j < 12; ++j) {
@@ -74,11 +74,11 @@ TEST(LRoomReference, IsExactToRounding) {
     }
     // The partial hiding is real: srf-1 sees srf-6 whole only within 1.5 of the corner (Pinney
     // and Bean's test; View3D's manual), so the value lies below the unhidden closed form.
-    const auto parts = test::l_room_parts();
-    EXPECT_LT(F32[0][5], (parts[0].rect.area() * test::unhidden_factor(parts[0].rect, parts[6].rect) +
-                          parts[1].rect.area() * test::unhidden_factor(parts[1].rect, parts[7].rect) +
-                          parts[0].rect.area() * test::unhidden_factor(parts[0].rect, parts[7].rect) +
-                          parts[1].rect.area() * test::unhidden_factor(parts[1].rect, parts[6].rect)) /
+    const auto parts = l_room::l_room_parts();
+    EXPECT_LT(F32[0][5], (parts[0].rect.area() * l_room::unhidden_factor(parts[0].rect, parts[6].rect) +
+                          parts[1].rect.area() * l_room::unhidden_factor(parts[1].rect, parts[7].rect) +
+                          parts[0].rect.area() * l_room::unhidden_factor(parts[0].rect, parts[7].rect) +
+                          parts[1].rect.area() * l_room::unhidden_factor(parts[1].rect, parts[6].rect)) /
                              9.0 -
                          1e-3);
 }
@@ -91,7 +91,7 @@ void view3d_file_error(const std::string& path, double tolerance, double& worst)
     EXPECT_EQ(f.emit, 0);
     const std::size_t n = f.n;
     ASSERT_EQ(n, kGroups.size());
-    const auto ref = combined(test::l_room_reference(16));
+    const auto ref = combined(l_room::l_room_reference(16));
     for (std::size_t g = 0; g < n; ++g) {
         double expected = 0.0;
         for (const int i : kGroups[g]) expected += kArea[static_cast<std::size_t>(i)];
@@ -172,7 +172,7 @@ TEST(LRoomCli, NoSubdivideAtTheDefaultsWithin2e5OfTheReference) {
     ASSERT_EQ(o.code, 0) << o.output;
     double worst_off = 0.0;
     const test::View3dText f = test::read_view3d(read_text(dir / "o.txt"));
-    const auto ref = combined(test::l_room_reference(16));
+    const auto ref = combined(l_room::l_room_reference(16));
     for (std::size_t g = 0; g < f.n; ++g)
         for (std::size_t h = 0; h < f.n; ++h) worst_off = std::max(worst_off, std::abs(f.F[g][h] - ref[g][h]));
     EXPECT_GT(worst_off, 1e-3);

@@ -1,13 +1,13 @@
 // The exact factor past a few convex occluders (geometry/visible_ff.hpp), against closed forms
 // (nothing hidden, everything hidden, half hidden by symmetry) and against the L-shaped room's
-// reference (cli/l_room_reference.hpp: the visible part cut by the plane through the re-entrant
+// reference (ffcube/reference/l_room.hpp: the visible part cut by the plane through the re-entrant
 // corner, integrated by Gauss rules split at the kinks: a different method for the same integral).
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "cli/l_room_reference.hpp"
+#include "ffcube/reference/l_room.hpp"
 #include "ffcube/reference/closed_forms.hpp"
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/visible_ff.hpp"
@@ -85,10 +85,10 @@ TEST(VisibleFF, LShapedRoomAgainstTheReference) {
     // them. The reference integrates the same point factor by a different construction (the
     // visible part is cut by the plane through the corner line; Gauss rules on the pieces where
     // it is smooth), exact to 1e-12 (LRoomReference.IsExactToRounding).
-    const auto parts = test::l_room_parts();
+    const auto parts = l_room::l_room_parts();
     auto whole = [&](int surface) {
         double lo0 = 1e9, hi0 = -1e9, lo1 = 1e9, hi1 = -1e9;
-        test::AxisRect rect{};
+        l_room::AxisRect rect{};
         for (const auto& part : parts)
             if (part.surface == surface) {
                 rect = part.rect;
@@ -102,7 +102,7 @@ TEST(VisibleFF, LShapedRoomAgainstTheReference) {
         return rect.polygon();
     };
     const std::vector<std::vector<Vec3>> corner{whole(2), whole(3)};
-    const auto ref = test::l_room_reference(16);
+    const auto ref = l_room::l_room_reference(16);
     VisibleFFOptions o;
     o.tolerance = 1e-7;
     o.max_points = 200000;

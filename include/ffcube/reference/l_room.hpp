@@ -8,6 +8,9 @@
 //    factor (Lambert's contour formula, ff_point_polygon) to the part of the receiver that the
 //    point sees, integrated over the sender by Gauss–Legendre rules on pieces where that
 //    integrand is smooth (see partly_hidden_af).
+// Used by the tests (tests/cli/test_view3d_l_room_cli.cpp checks it: exact to rounding) and by
+// `ffcube bench` (its case l_shaped_room). Lambert's point factor is geometry's ff_point_polygon,
+// a formula, not the engine's rows.
 // Plan of the room: x ∈ [0,3] × y ∈ [0,1] (the x arm) ∪ x ∈ [0,1] × y ∈ [0,3] (the y arm), 3
 // high. Both arms are convex boxes, so the only pairs that may be hidden are between a surface
 // in the x arm beyond x = 1 and one in the y arm beyond y = 1.
@@ -23,7 +26,7 @@
 #include "ffcube/geometry/analytic.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 
-namespace ffcube::test {
+namespace ffcube::l_room {
 
 // An axis-aligned rectangle: normal along `axis` (0 x, 1 y, 2 z) with sign `facing`, in the plane
 // coordinate `c`, spanning [lo, hi] on the other two axes in increasing order.
@@ -253,4 +256,4 @@ inline std::vector<std::vector<double>> l_room_reference(int n) {
     return af;
 }
 
-}  // namespace ffcube::test
+}  // namespace ffcube::l_room
