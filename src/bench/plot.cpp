@@ -57,16 +57,26 @@ struct Curve {
     std::string method, group;
     std::vector<std::pair<double, double>> points;  // (seconds, error), in setting order
     std::vector<std::string> labels;                // the setting value, e.g. "256"
-    std::vector<double> estimates;                  // raycast@tolerance: the largest row estimate (else empty)
+    std::vector<double> estimates;                  // runs to a target: the largest row estimate (else empty)
 };
 
 // Errors and times are clamped to these floors so that a zero stays on a log axis.
 constexpr double kMinError = 1e-8, kMinSeconds = 1e-4;
 
+// The groups drawn: the exact cases' groups, then "scene" (run_scene_sweep) when present.
+std::vector<std::string> plot_groups(const std::vector<BenchResult>& results) {
+    std::vector<std::string> groups = bench_groups();
+    if (std::any_of(results.begin(), results.end(), [](const BenchResult& r) { return r.group == "scene"; }))
+        groups.push_back("scene");
+    return groups;
+}
+
+bool to_target(const std::string& method) { return method == "raycast@tolerance" || method == "auto@tolerance"; }
+
 std::vector<Curve> make_curves(const std::vector<BenchResult>& results) {
     std::vector<Curve> curves;
-    for (const char* method : {"hemicube", "hemicube+near", "raycast", "raycast@tolerance"})
-        for (const std::string& group : bench_groups()) {
+    for (const char* method : {"hemicube", "hemicube+near", "raycast", "raycast@tolerance", "auto@tolerance"})
+        for (const std::string& group : plot_groups(results)) {
             // setting value → (Σ seconds, max error), and the largest estimate
             std::map<double, std::pair<double, double>> by_setting;
             std::map<double, double> estimate;
@@ -123,14 +133,15 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     cv.line(kLeft, kTop, kLeft, kTop + ph, axis, 1.5, false);
     cv.text(kLeft + pw / 2, kHeight - 22, "wall seconds of the row computation (sum over the group's cases)", 13,
             Anchor::Middle);
-    cv.text(24, kTop + ph / 2, "max |F - F_exact| (object level, worst case of the group)", 13, Anchor::Middle, true);
+    cv.text(24, kTop + ph / 2, "max |F - F_exact| (object level, worst case of the group; scene: rows)", 13,
+            Anchor::Middle, true);
     cv.text(kLeft + pw / 2, 24, "ffcube bench: error against run time", 15, Anchor::Middle);
 
     for (const Curve& c : curves) {
         const Rgb col = group_color(c.group);
-        const bool ray = c.method == "raycast" || c.method == "raycast@tolerance";
+        const bool ray = c.method == "raycast" || to_target(c.method);
         // corrected: the thick solid line; rows refined to a target: the thick dashed one
-        const double width = c.method == "hemicube+near" || c.method == "raycast@tolerance" ? 4 : 2;
+        const double width = c.method == "hemicube+near" || to_target(c.method) ? 4 : 2;
         for (std::size_t k = 0; k + 1 < c.points.size(); ++k)
             cv.line(X(c.points[k].first), Y(c.points[k].second), X(c.points[k + 1].first), Y(c.points[k + 1].second), col,
                     width, ray);
@@ -150,9 +161,9 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     // Legend: groups by colour, methods by line style.
     double ly = kTop + 10;
     const double lx = kWidth - kRight + 20;
-    for (const std::string& g : bench_groups()) {
+    for (const std::string& g : plot_groups(results)) {
         cv.line(lx, ly, lx + 28, ly, group_color(g), 3, false);
-        cv.text(lx + 36, ly + 4, g, 12, Anchor::Start);
+        cv.text(lx + 36, ly + 4, g == "scene" ? "scene (sampled rows)" : g, 12, Anchor::Start);
         ly += 20;
     }
     ly += 10;
@@ -169,7 +180,7 @@ void draw_plot(Canvas& cv, const std::vector<BenchResult>& results) {
     cv.line(lx, ly, lx + 28, ly, axis, 2, true);
     cv.marker(lx + 14, ly, true, axis);
     cv.text(lx + 36, ly + 4, "raycast (rays)", 12, Anchor::Start);
-    if (std::any_of(curves.begin(), curves.end(), [](const Curve& c) { return c.method == "raycast@tolerance"; })) {
+    if (std::any_of(curves.begin(), curves.end(), [](const Curve& c) { return to_target(c.method); })) {
         ly += 20;
         cv.line(lx, ly, lx + 28, ly, axis, 4, true);
         cv.marker(lx + 14, ly, true, axis);

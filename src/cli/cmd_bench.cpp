@@ -8,6 +8,8 @@
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/io/report.hpp"
+#include "ffcube/pipeline/scene_loading.hpp"
 
 namespace ffcube::cli {
 namespace {
@@ -24,6 +26,7 @@ struct Options {
     std::uint64_t seed = 0x5eed;
     bool quiet = false;
     bool no_correct = false;
+    std::string scene;
 };
 
 int run(const Options& o) {
@@ -53,12 +56,30 @@ int run(const Options& o) {
     if (ec || !std::filesystem::is_directory(dir))
         throw IoError(fmt::format("--out {}: cannot create the directory: {}", o.out, ec ? ec.message() : "not a directory"));
 
-    const std::vector<BenchCase> cases = bench_cases(o.quick);
-    const auto results = run_bench(cases, b, [](std::size_t done, std::size_t total, const BenchResult& r) {
+    const auto line = [](std::size_t done, std::size_t total, const BenchResult& r) {
         info("[{}/{}] {:<18} {:<9} {:<11} {:>9.3f} s  max abs err {:.3e}  rel {:.3e}{}", done, total, r.case_name, r.method,
              r.setting, r.seconds, r.errors.max_abs_error, r.errors.max_rel_error,
              std::isnan(r.estimate) ? std::string() : fmt::format("  estimate {:.3e}", r.estimate));
-    });
+    };
+    std::vector<BenchResult> results;
+    if (!o.scene.empty()) {
+        // A scene of the user's: one patch a face (as View3D, and as --no-subdivide makes a city),
+        // the tolerance sweep on sampled rows against the ray caster with many rays.
+        SceneOptions so;
+        so.path = o.scene;
+        so.subdivide = false;
+        Report report;
+        const Scene scene = load_and_mesh(so, report);
+        SceneSweepOptions sw;
+        sw.tolerances = b.tolerances;
+        sw.threads = o.threads;
+        sw.seed = o.seed;
+        info("--scene {}: {} patches; {} sampled rows against the ray caster at {} rays each", o.scene, scene.size(),
+             sweep_sample(static_cast<std::uint32_t>(scene.size()), sw.sample_rows).size(), sw.reference_rays);
+        results = run_scene_sweep(scene, std::filesystem::path(o.scene).stem().string(), sw, line);
+    } else {
+        results = run_bench(bench_cases(o.quick), b, line);
+    }
     write_bench_csv(dir / "results.csv", results);
     write_bench_json(dir / "results.json", results, b);
     write_bench_plot_svg(dir / "error_vs_time.svg", results);
@@ -78,6 +99,9 @@ void add_bench_command(CLI::App& app, std::function<int()>& action) {
     sub->add_option("--tolerances", opts->tolerances,
                     "accuracy targets of the ray caster refined to each (--tolerance), default 1e-2,1e-3,1e-4")
         ->delimiter(',');
+    sub->add_option("--scene", opts->scene,
+                    "instead of the exact cases: the tolerance sweep (--tolerances) on this scene, one patch a face, its sampled "
+                    "rows against the ray caster with many rays (docs/commands.md)");
     sub->add_flag("--quick", opts->quick, "fewer cases, coarser meshes, two settings per method (about a minute)");
     sub->add_option("--out", opts->out, "directory for results.csv, results.json, error_vs_time.svg/.png")
         ->default_val("bench-results");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -228,6 +229,58 @@ TEST(BenchRun, ToleranceRunsCarryTheirEstimateAndMeetIt) {
     EXPECT_THROW(run_bench(one, o), InputError);
     o.tolerances = {1.0};
     EXPECT_THROW(run_bench(one, o), InputError);
+}
+
+// The sample of a scene sweep: evenly spaced, distinct, in range; every row of a small scene.
+TEST(BenchScene, SampleRowsAreEvenlySpacedAndDistinct) {
+    const auto all = sweep_sample(5, 64);
+    ASSERT_EQ(all.size(), 5u);
+    for (std::uint32_t i = 0; i < 5; ++i) EXPECT_EQ(all[i], i);
+    const auto s = sweep_sample(1000, 8);
+    ASSERT_EQ(s.size(), 8u);
+    for (std::size_t k = 0; k < s.size(); ++k) {
+        EXPECT_LT(s[k], 1000u);
+        if (k) {
+            EXPECT_EQ(s[k] - s[k - 1], 125u);  // n / count apart: the middles of 8 equal blocks
+        }
+    }
+    EXPECT_EQ(s[0], 62u);
+    EXPECT_TRUE(sweep_sample(0, 8).empty());
+}
+
+// The sweep on a scene without exact values (`ffcube bench --scene`): rows made as `formfactors
+// --tolerance E` makes them, against the ray caster with many rays. On the L-shaped room (a
+// scene whose rows the tests know well) at E = 1e-2, each sampled row's true error is at most 3
+// times the run's estimate (the bound for an honest estimate, met by at least 95% of rows
+// within 1×: docs/accuracy.md), so the sample's largest error is at most 3 × the largest estimate
+// plus the reference's own error: plain Monte Carlo at R rays, an entry or a sum of value p
+// within 5 √(p(1−p)/R) ≤ 2.5/√R (5σ, p = ½ the worst).
+TEST(BenchScene, SweepCarriesEstimatesThatBoundTheErrorAgainstManyRays) {
+    const auto cs = bench_cases(true);
+    const Scene scene = build_bench_scene(find_case(cs, "l_shaped_room"));
+    SceneSweepOptions o;
+    o.tolerances = {1e-2};
+    o.sample_rows = 6;
+    o.reference_rays = std::uint64_t{1} << 20;
+    o.threads = 2;
+    const auto results = run_scene_sweep(scene, "room", o);
+    ASSERT_EQ(results.size(), 1u);
+    const BenchResult& r = results[0];
+    EXPECT_EQ(r.case_name, "room");
+    EXPECT_EQ(r.group, "scene");
+    EXPECT_EQ(r.method, "auto@tolerance");
+    EXPECT_EQ(r.setting, "E=0.01");
+    EXPECT_EQ(r.patches, scene.size());
+    EXPECT_GT(r.seconds, 0.0);
+    EXPECT_GT(r.estimate, 0.0);
+    EXPECT_GT(r.errors.max_abs_error, 0.0);  // rows measured, not copied from the reference
+    EXPECT_LE(r.errors.mean_abs_error, r.errors.max_abs_error);
+    std::printf("room at E = 1e-2: largest row error %.3e, mean %.3e, estimate %.3e\n", r.errors.max_abs_error,
+                r.errors.mean_abs_error, r.estimate);
+    EXPECT_LE(r.errors.max_abs_error, 3 * r.estimate + 2.5 / std::sqrt(static_cast<double>(o.reference_rays)));
+    EXPECT_NE(bench_plot_svg(results).find("scene (sampled rows)"), std::string::npos);
+    o.tolerances = {2.0};
+    EXPECT_THROW(run_scene_sweep(scene, "room", o), InputError);
 }
 
 TEST(BenchRun, UnknownSuiteAndBadSettingsAreInputErrors) {

@@ -93,6 +93,32 @@ struct BenchResult {
 std::vector<BenchResult> run_bench(const std::vector<BenchCase>& cases, const BenchOptions& options,
                                    const std::function<void(std::size_t, std::size_t, const BenchResult&)>& progress = {});
 
+// A scene of the user's (`ffcube bench --scene FILE`), which has no exact values: each target E
+// of the sweep is run as `ffcube formfactors --tolerance E` makes its rows (--method auto, the
+// default correction) on a sample of rows, and each sampled row is compared with the ray
+// caster's at reference_rays rays (plain rows, another seed). A row's error is the larger of its
+// largest |entry error| and its |sum error| (what its estimate bounds); a result's
+// max_abs_error and mean_abs_error are their max and mean over the sample (no object factors),
+// its estimate the sample's largest row estimate, and its seconds the sample's wall time scaled
+// to every row (n / sample). The sample: sample_rows rows evenly spaced over the scene's rows.
+struct SceneSweepOptions {
+    std::vector<double> tolerances;     // each in [kMinTolerance, 1)
+    std::size_t sample_rows = 64;       // rows compared (all of them if the scene has fewer)
+    // The reference's rays per row (Owen-scrambled Sobol' rays, as every ray-cast row): on a
+    // city their error falls about as R^-0.63 (docs/accuracy.md), so 2^22 is about 3 times more
+    // accurate than rows refined to 1e-4 at their budget of 64/E = 640,000 rays, the issue's
+    // requirement for a reference; below 1e-4 it is not (say so beside such results).
+    std::uint64_t reference_rays = std::uint64_t{1} << 22;
+    unsigned threads = 0;
+    std::uint64_t seed = 0x5eed;
+};
+// Rows of `scene` compared as above; case_name `name`, group "scene", method "auto@tolerance".
+// Throws InputError for a bad target or an empty scene.
+std::vector<BenchResult> run_scene_sweep(const Scene& scene, const std::string& name, const SceneSweepOptions& options,
+                                         const std::function<void(std::size_t, std::size_t, const BenchResult&)>& progress = {});
+// The rows a sweep samples: `count` rows evenly spaced over 0..n−1 (all of them when n ≤ count).
+std::vector<std::uint32_t> sweep_sample(std::uint32_t n, std::size_t count);
+
 // Outputs, each written atomically.
 void write_bench_csv(const std::filesystem::path& path, const std::vector<BenchResult>& results);
 void write_bench_json(const std::filesystem::path& path, const std::vector<BenchResult>& results,
