@@ -50,16 +50,19 @@ int run(const Options& o) {
     b.tolerances = !o.tolerances.empty() ? o.tolerances
                    : o.quick            ? std::vector<double>{1e-2, 1e-3}
                                         : std::vector<double>{1e-2, 1e-3, 1e-4};
-    const std::filesystem::path dir(o.out);
-    std::error_code ec;
-    std::filesystem::create_directories(dir, ec);
-    if (ec || !std::filesystem::is_directory(dir))
-        throw IoError(fmt::format("--out {}: cannot create the directory: {}", o.out, ec ? ec.message() : "not a directory"));
 
     const auto line = [](std::size_t done, std::size_t total, const BenchResult& r) {
         info("[{}/{}] {:<18} {:<9} {:<11} {:>9.3f} s  max abs err {:.3e}  rel {:.3e}{}", done, total, r.case_name, r.method,
              r.setting, r.seconds, r.errors.max_abs_error, r.errors.max_rel_error,
              std::isnan(r.estimate) ? std::string() : fmt::format("  estimate {:.3e}", r.estimate));
+    };
+    // The output directory, made once the inputs are known good (a bad --scene leaves nothing).
+    const std::filesystem::path dir(o.out);
+    const auto make_dir = [&] {
+        std::error_code ec;
+        std::filesystem::create_directories(dir, ec);
+        if (ec || !std::filesystem::is_directory(dir))
+            throw IoError(fmt::format("--out {}: cannot create the directory: {}", o.out, ec ? ec.message() : "not a directory"));
     };
     std::vector<BenchResult> results;
     if (!o.scene.empty()) {
@@ -70,6 +73,7 @@ int run(const Options& o) {
         so.subdivide = false;
         Report report;
         const Scene scene = load_and_mesh(so, report);
+        make_dir();
         SceneSweepOptions sw;
         sw.tolerances = b.tolerances;
         sw.threads = o.threads;
@@ -78,6 +82,7 @@ int run(const Options& o) {
              sweep_sample(static_cast<std::uint32_t>(scene.size()), sw.sample_rows).size(), sw.reference_rays);
         results = run_scene_sweep(scene, std::filesystem::path(o.scene).stem().string(), sw, line);
     } else {
+        make_dir();
         results = run_bench(bench_cases(o.quick), b, line);
     }
     write_bench_csv(dir / "results.csv", results);
