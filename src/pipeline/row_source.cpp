@@ -196,8 +196,9 @@ std::vector<std::string> describe(const RowSource& rows) {
                 : "",
             c->corrector().far_field_status()));
         if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
-            lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
-                                        m.source, m.pixel_ns, m.cpu_scale));
+            lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {}, {} ns a piece, {} ns a ray "
+                                        "(built-in: 5 ns, x 1, 500 ns, 60 ns)",
+                                        m.source, m.pixel_ns, m.cpu_scale, m.piece_ns, m.ray_ns));
         if (const RowDriver* d = rows.driver(); d && d->fine_rows_by_rays())
             lines.push_back(fmt::format("rows an occluder touches (planned at 4 x 4 sub-hemicubes) ray-cast, {} rays "
                                         "each{}", d->fine_row_rays(),
