@@ -458,15 +458,17 @@ void report_rates(Report& r, const RowSource& rows, std::size_t patches, double 
 void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     if (!rows.options().method_choice.empty()) r.set("method_choice", rows.options().method_choice);
-    // With a --cost-model file, --method auto's choice per row class and the costs weighed (ms of
-    // one worker a row; pipeline/row_engine.hpp): the whole scene's, then the 4 × 4 rows' in a
+    // With a --cost-model file, the engine per row class and the costs weighed (ms of one worker a
+    // row; pipeline/row_engine.hpp): --method auto's whole-scene choice, then the 4 × 4 rows' in a
     // hemicube run. Centre and 2 × 2 rows are drawn in a hemicube run, cast in a ray-cast one.
-    if (const RowOptions& o = rows.options(); !o.method_choice.empty() && !o.cost_model.builtin()) {
-        const MethodCosts& c = o.method_costs;
+    if (const RowOptions& o = rows.options(); !o.cost_model.builtin()) {
         r.set("method_cost.model", o.cost_model.source);
-        r.set("method_cost.scene_row_hemicubes", c.hemicubes);
-        r.set("method_cost.scene_row_hemicube_ms", 1e-6 * c.hemicube_ns);
-        r.set("method_cost.scene_row_rays_ms", 1e-6 * c.rays_ns);
+        if (!o.method_choice.empty()) {  // --method auto's whole-scene choice
+            const MethodCosts& c = o.method_costs;
+            r.set("method_cost.scene_row_hemicubes", c.hemicubes);
+            r.set("method_cost.scene_row_hemicube_ms", 1e-6 * c.hemicube_ns);
+            r.set("method_cost.scene_row_rays_ms", 1e-6 * c.rays_ns);
+        }
         const bool cast = o.method == RowMethod::Raycast;
         r.set("method_cost.rows_centre", cast ? "rays" : "hemicube");
         r.set("method_cost.rows_2x2", cast ? "rays" : "hemicube");
@@ -487,6 +489,8 @@ void report_row_source(Report& r, const RowSource& rows) {
             r.set("cost_model.source", m.builtin() ? std::string("built-in") : m.source);
             r.set("cost_model.pixel_ns", m.pixel_ns);
             r.set("cost_model.cpu_scale", m.cpu_scale);
+            r.set("cost_model.piece_ns", m.piece_ns);
+            r.set("cost_model.ray_ns", m.ray_ns);
         }
         report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size(),
                           rows.options());
