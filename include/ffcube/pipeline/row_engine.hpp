@@ -38,7 +38,8 @@ enum class FineRows { hemicubes, rays, automatic };
 // near-singular integrand that sixteen points miss); a scene of few pieces and many patches (the
 // Cornell box, 170 a piece) keeps hemicubes, whose rows there are the more accurate
 // (docs/benchmarks.md, "Rays in coherent packets, and --method auto"). --method auto casts every
-// row on such a mesh (resolve_row_method).
+// row on such a mesh (resolve_row_method). This is the built-in cost model's rule; a --cost-model
+// file's costs replace it (scene_method_costs, engine_for_row).
 inline constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
 inline constexpr std::size_t kRaysMinMeshPieces = 100;
 inline constexpr std::size_t kRaysMaxPatchesPerPiece = 4;
