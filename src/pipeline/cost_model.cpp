@@ -19,6 +19,10 @@ void check_cost_model(const CostModel& m, const std::string& where) {
         throw InputError(fmt::format("{}: cpu_scale {} is outside 1e-3..1e3 (the CPU's time against the "
                                      "development machine's)",
                                      where, m.cpu_scale));
+    if (!std::isfinite(m.piece_ns) || m.piece_ns < 1e-3 || m.piece_ns > 1e7)
+        throw InputError(fmt::format("{}: piece_ns {} is outside 1e-3..1e7 (ns per piece per hemicube)", where, m.piece_ns));
+    if (!std::isfinite(m.ray_ns) || m.ray_ns < 1e-2 || m.ray_ns > 1e6)
+        throw InputError(fmt::format("{}: ray_ns {} is outside 1e-2..1e6 (CPU ns per ray)", where, m.ray_ns));
 }
 
 CostModel read_cost_model(const std::string& path) {
@@ -44,6 +48,13 @@ CostModel read_cost_model(const std::string& path) {
         if (!it->is_number()) throw InputError(fmt::format("--cost-model {}: \"{}\" is not a number", path, key));
         *value = it->get<double>();
     }
+    // Keys a file from before `--method auto` followed the costs lacks: the built-in values.
+    for (auto [key, value] : {std::pair<const char*, double*>{"piece_ns", &m.piece_ns}, {"ray_ns", &m.ray_ns}}) {
+        const auto it = j.find(key);
+        if (it == j.end()) continue;
+        if (!it->is_number()) throw InputError(fmt::format("--cost-model {}: \"{}\" is not a number", path, key));
+        *value = it->get<double>();
+    }
     m.source = path;
     check_cost_model(m, fmt::format("--cost-model {}", path));
     return m;
@@ -54,11 +65,14 @@ void write_cost_model(const std::string& path, const CostModel& m, const std::st
     nlohmann::json j;
     j["pixel_ns"] = m.pixel_ns;
     j["cpu_scale"] = m.cpu_scale;
+    j["piece_ns"] = m.piece_ns;
+    j["ray_ns"] = m.ray_ns;
     j["measured_on"] = measured_on;
     j["resolution"] = resolution;
     j["cpu_workload_seconds"] = cpu_seconds;
     j["cpu_workload_reference_seconds"] = reference_cpu_seconds;
-    j["built_in"] = {{"pixel_ns", CostModel{}.pixel_ns}, {"cpu_scale", CostModel{}.cpu_scale}};
+    const CostModel b;
+    j["built_in"] = {{"pixel_ns", b.pixel_ns}, {"cpu_scale", b.cpu_scale}, {"piece_ns", b.piece_ns}, {"ray_ns", b.ray_ns}};
     write_file_atomically(path, [&](std::ostream& out) { out << j.dump(2) << '\n'; });
 }
 

@@ -101,25 +101,42 @@ RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn) {
     r.method_auto = false;
     const bool obstructions = drawn.obstruction_first < drawn.patches.size();
     const std::size_t pieces = drawn.grids.size(), patches = drawn.patches.size();
-    const bool mesh = rays_preferred(pieces, patches);
-    r.auto_raycast = mesh && !obstructions && o.fine_rows != FineRows::hemicubes;
-    const auto why_mesh = [&] {
-        return pieces >= kFineRowsByRaysMinPieces
-                   ? fmt::format(", {} or more", kFineRowsByRaysMinPieces)
-                   : fmt::format(" of {} patches, {} or more of at most {} patches each", patches,
-                                 kRaysMinMeshPieces, kRaysMaxPatchesPerPiece);
-    };
-    r.method_choice = fmt::format("auto: {} pieces{}", pieces,
-                                  !mesh ? fmt::format(" of {} patches: rays need {} pieces, or {} of at most {} patches each",
-                                                      patches, kFineRowsByRaysMinPieces,
-                                                      kRaysMinMeshPieces,
-                                                      kRaysMaxPatchesPerPiece)
-                                  : obstructions    ? ", obstruction-only surfaces"
-                                  : !r.auto_raycast ? ", --fine-rows hemicubes"
-                                                    : why_mesh());
+    // The rays a ray-cast scene's rows would cast: --rays, else --fine-row-rays or its default,
+    // refined to the tolerance unless --rays fixes the count.
+    const std::uint64_t rays = o.rays_given ? o.rays : o.fine_row_rays ? o.fine_row_rays : default_fine_row_rays(o.resolution);
+    if (!o.cost_model.builtin()) {
+        // A measured cost model (--cost-model): the cheaper engine for this mesh's typical row.
+        const SceneFacts facts = scene_facts(drawn, o.resolution, o.cost_model);
+        const MethodCosts c = scene_method_costs(facts, expected_row_rays(rays_refined(o) ? o.tolerance : 0.0, rays));
+        r.auto_raycast = c.rays_cheaper() && !obstructions && o.fine_rows != FineRows::hemicubes;
+        r.method_costs = c;
+        r.method_choice = fmt::format(
+            "auto by {}: a row of {} hemicube{} ({} pieces, N = {}) {:.3g} ms against rays {:.3g} ms{}", o.cost_model.source,
+            c.hemicubes, c.hemicubes == 1 ? "" : "s", pieces, o.resolution, 1e-6 * c.hemicube_ns, 1e-6 * c.rays_ns,
+            !c.rays_cheaper()   ? ""
+            : obstructions      ? ", but obstruction-only surfaces"
+            : !r.auto_raycast   ? ", but --fine-rows hemicubes"
+                                : "");
+    } else {
+        const bool mesh = rays_preferred(pieces, patches);
+        r.auto_raycast = mesh && !obstructions && o.fine_rows != FineRows::hemicubes;
+        const auto why_mesh = [&] {
+            return pieces >= kFineRowsByRaysMinPieces
+                       ? fmt::format(", {} or more", kFineRowsByRaysMinPieces)
+                       : fmt::format(" of {} patches, {} or more of at most {} patches each", patches,
+                                     kRaysMinMeshPieces, kRaysMaxPatchesPerPiece);
+        };
+        r.method_choice = fmt::format("auto: {} pieces{}", pieces,
+                                      !mesh ? fmt::format(" of {} patches: rays need {} pieces, or {} of at most {} patches each",
+                                                          patches, kFineRowsByRaysMinPieces,
+                                                          kRaysMinMeshPieces,
+                                                          kRaysMaxPatchesPerPiece)
+                                      : obstructions    ? ", obstruction-only surfaces"
+                                      : !r.auto_raycast ? ", --fine-rows hemicubes"
+                                                        : why_mesh());
+    }
     r.method = r.auto_raycast ? RowMethod::Raycast : RowMethod::Hemicube;
-    if (r.auto_raycast && !o.rays_given)
-        r.rays = o.fine_row_rays ? o.fine_row_rays : default_fine_row_rays(o.resolution);
+    if (r.auto_raycast && !o.rays_given) r.rays = rays;
     return r;
 }
 

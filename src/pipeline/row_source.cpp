@@ -123,7 +123,8 @@ void RowSource::wrap(const Scene& radiating) {
     // The hemicube's rows go through the driver, which gives the rows planned for the ray caster
     // to it (engine_for_row; it refuses a --fine-rows choice the scene rules out).
     if (hemicube_)
-        driver_ = std::make_unique<RowDriver>(scene, *hemicube_, options_.fine_rows, options_.fine_row_rays, options_.seed);
+        driver_ = std::make_unique<RowDriver>(scene, *hemicube_, options_.fine_rows, options_.fine_row_rays, options_.seed,
+                                             options_.cost_model);
     if (options_.correct == Correction::Near) {
         RowProvider& inner = driver_ ? static_cast<RowProvider&>(*driver_) : *raycast_;
         corrected_ = std::make_unique<CorrectedRowProvider>(scene, inner, near_field_options(options_));
@@ -195,8 +196,9 @@ std::vector<std::string> describe(const RowSource& rows) {
                 : "",
             c->corrector().far_field_status()));
         if (const CostModel& m = rows.options().cost_model; !m.builtin() && rows.hemicube())
-            lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {} (built-in: 5 ns, x 1)",
-                                        m.source, m.pixel_ns, m.cpu_scale));
+            lines.push_back(fmt::format("cost model from {}: {} ns per hemicube pixel, CPU x {}, {} ns a piece, {} ns a ray "
+                                        "(built-in: 5 ns, x 1, 500 ns, 60 ns)",
+                                        m.source, m.pixel_ns, m.cpu_scale, m.piece_ns, m.ray_ns));
         if (const RowDriver* d = rows.driver(); d && d->fine_rows_by_rays())
             lines.push_back(fmt::format("rows an occluder touches (planned at 4 x 4 sub-hemicubes) ray-cast, {} rays "
                                         "each{}", d->fine_row_rays(),
@@ -246,8 +248,10 @@ FfmMetadata row_metadata(const RowOptions& o) {
             meta.settings += fmt::format(" fine_row_rays={}", o.fine_row_rays);
         // A cost model moves the automatic choices (far field, exact visibility): recorded when
         // it is not the built-in one.
+        // With the method by costs (auto), piece_ns and ray_ns too: the 4 × 4 rows' engine.
         if (o.method == RowMethod::Hemicube && !o.cost_model.builtin())
-            meta.settings += fmt::format(" cost_model={}/{}", o.cost_model.pixel_ns, o.cost_model.cpu_scale);
+            meta.settings += fmt::format(" cost_model={}/{}/{}/{}", o.cost_model.pixel_ns, o.cost_model.cpu_scale,
+                                         o.cost_model.piece_ns, o.cost_model.ray_ns);
     }
     return meta;
 }
@@ -454,6 +458,30 @@ void report_rates(Report& r, const RowSource& rows, std::size_t patches, double 
 void report_row_source(Report& r, const RowSource& rows) {
     r.set("method", std::string(to_string(rows.options().method)));
     if (!rows.options().method_choice.empty()) r.set("method_choice", rows.options().method_choice);
+    // With a --cost-model file, the engine per row class and the costs weighed (ms of one worker a
+    // row; pipeline/row_engine.hpp): --method auto's whole-scene choice, then the 4 × 4 rows' in a
+    // hemicube run. Centre and 2 × 2 rows are drawn in a hemicube run, cast in a ray-cast one.
+    if (const RowOptions& o = rows.options(); !o.cost_model.builtin()) {
+        r.set("method_cost.model", o.cost_model.source);
+        if (!o.method_choice.empty()) {  // --method auto's whole-scene choice
+            const MethodCosts& c = o.method_costs;
+            r.set("method_cost.scene_row_hemicubes", c.hemicubes);
+            r.set("method_cost.scene_row_hemicube_ms", 1e-6 * c.hemicube_ns);
+            r.set("method_cost.scene_row_rays_ms", 1e-6 * c.rays_ns);
+        }
+        const bool cast = o.method == RowMethod::Raycast;
+        r.set("method_cost.rows_centre", cast ? "rays" : "hemicube");
+        r.set("method_cost.rows_2x2", cast ? "rays" : "hemicube");
+        if (const RowDriver* d = rows.driver()) {
+            const SceneFacts& f = d->facts();
+            r.set("method_cost.rows_4x4", d->fine_rows_by_rays() ? "rays" : "hemicube");
+            r.set("method_cost.rows_4x4_hemicube_ms",
+                  1e-6 * hemicube_row_ns(f.costs, RowProvider::RowPlan::sampled_fine, f.resolution, f.pieces));
+            r.set("method_cost.rows_4x4_rays_ms", 1e-6 * ray_row_ns(f.costs, d->fine_row_rays()));
+        } else {
+            r.set("method_cost.rows_4x4", cast ? "rays" : "hemicube");
+        }
+    }
     r.set("time.setup", rows.setup_seconds());
     if (const CorrectedRowProvider* c = rows.corrected()) {
         if (rows.hemicube()) {
@@ -461,6 +489,8 @@ void report_row_source(Report& r, const RowSource& rows) {
             r.set("cost_model.source", m.builtin() ? std::string("built-in") : m.source);
             r.set("cost_model.pixel_ns", m.pixel_ns);
             r.set("cost_model.cpu_scale", m.cpu_scale);
+            r.set("cost_model.piece_ns", m.piece_ns);
+            r.set("cost_model.ray_ns", m.ray_ns);
         }
         report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size(),
                           rows.options());

@@ -64,6 +64,8 @@ struct RowOptions {
     bool method_auto = false;
     bool auto_raycast = false;
     std::string method_choice;  // resolve_row_method's reason, for the report ("" when named)
+    // With a --cost-model file, the costs resolve_row_method weighed (pipeline/row_engine.hpp).
+    MethodCosts method_costs;
     // Hemicube (gl/hemicube_provider.hpp): top-face pixels (hemicube/layout.hpp's rule), context.
     int resolution = 256;
     Backend backend = Backend::Auto;
@@ -151,8 +153,11 @@ std::string_view to_string(RowMethod m);
 // --fine-rows is not hemicubes; there, on llvmpipe, a row of 65,536 rays cost a third of one
 // hemicube that draws the whole city and is more accurate (docs/accuracy.md, "Rows by rays on a
 // mesh of many pieces"; docs/benchmarks.md, "Rays in coherent packets"). Its rays: --rays if given, else --fine-row-rays, else
-// default_fine_row_rays(--resolution). Everywhere else the hemicube. Options
-// without method_auto come back as they are.
+// default_fine_row_rays(--resolution). Everywhere else the hemicube. That is the built-in cost
+// model's rule; with a --cost-model file the costs decide instead (scene_method_costs: rays where
+// a ray-cast row, at expected_row_rays, costs less than the mesh's typical hemicube row), still
+// never with obstruction-only surfaces or --fine-rows hemicubes. Options without method_auto come
+// back as they are.
 RowOptions resolve_row_method(const RowOptions& o, const Scene& drawn);
 std::string_view to_string(Correction c);
 std::string_view to_string(FarFieldMode f);

@@ -3,8 +3,9 @@
 // correct → sinks). The plan (accuracy) says how a row is to be measured (centre, 2 × 2 or
 // 4 × 4 sender points, or not at all); engine_for_row says by which engine, from the scene's
 // facts and the plan alone; RowDriver hands the row to it on the hemicube provider's worker
-// thread. Today's rule: rows planned at 4 × 4 (an occluder touches the sender) are ray-cast
-// where rays are preferred on llvmpipe (docs/accuracy.md, "Rows an occluder touches, by rays").
+// thread. Rows planned at 4 × 4 (an occluder touches the sender) are ray-cast where a ray-cast
+// row costs less than the sixteen sub-hemicubes (row costs below), or, with the built-in cost
+// model, where rays_preferred (docs/accuracy.md, "Rows an occluder touches, by rays", "Cost model").
 #pragma once
 
 #include <cstddef>
@@ -16,6 +17,7 @@
 
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
+#include "ffcube/pipeline/cost_model.hpp"
 #include "ffcube/raycast/raycast_provider.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -36,7 +38,8 @@ enum class FineRows { hemicubes, rays, automatic };
 // near-singular integrand that sixteen points miss); a scene of few pieces and many patches (the
 // Cornell box, 170 a piece) keeps hemicubes, whose rows there are the more accurate
 // (docs/benchmarks.md, "Rays in coherent packets, and --method auto"). --method auto casts every
-// row on such a mesh (resolve_row_method).
+// row on such a mesh (resolve_row_method). This is the built-in cost model's rule; a --cost-model
+// file's costs replace it (scene_method_costs, engine_for_row).
 inline constexpr std::size_t kFineRowsByRaysMinPieces = 1000;
 inline constexpr std::size_t kRaysMinMeshPieces = 100;
 inline constexpr std::size_t kRaysMaxPatchesPerPiece = 4;
@@ -54,16 +57,52 @@ struct SceneFacts {
     std::size_t patches = 0;   // rows
     bool obstructions = false; // obstruction-only surfaces (Scene::obstruction_first)
     int resolution = 256;      // the hemicube's
+    CostModel costs;           // --cost-model (built-in: the piece-count rule decides)
 };
-SceneFacts scene_facts(const Scene& drawn, int resolution);
+SceneFacts scene_facts(const Scene& drawn, int resolution, const CostModel& costs = {});
+
+// What a row costs by each engine, in nanoseconds of one worker, priced by a cost model
+// (`ffcube calibrate`, pipeline/cost_model.hpp). Nothing is timed: the same model, the same costs.
+// - A hemicube row planned `plan` draws hemicubes_for_plan(plan) hemicubes (centre 1, 2 × 2
+//   sub-hemicubes 4, 4 × 4 16, skip 0: a row every pair of which is analytic draws nothing),
+//   each 3N² pixels and every piece: hemicubes × (3N² × pixel_ns + pieces × piece_ns).
+// - A ray-cast row casts `rays` rays: rays × ray_ns. Refined to a tolerance E, its count is
+//   expected_row_rays(E, …): the budget of tolerance_rays(E), 2^⌈log2(64/E)⌉ (65,536 at
+//   E = 1e-3), which a city's rows spend nearly whole (63,409 of 65,536 a row on the
+//   22,881-facet city; docs/benchmarks.md, "Accuracy by target"); without one, the fixed count.
+unsigned hemicubes_for_plan(RowProvider::RowPlan plan);
+double hemicube_row_ns(const CostModel& m, RowProvider::RowPlan plan, int resolution, std::size_t pieces);
+double ray_row_ns(const CostModel& m, std::uint64_t rays);
+std::uint64_t expected_row_rays(double tolerance, std::uint64_t fixed_rays);
+
+// --method auto's whole-scene choice, by costs: a scene's rows are measured by rays where a
+// ray-cast row costs less than the hemicube row its rows are typically planned as. A mesh of at
+// most kRaysMaxPatchesPerPiece patches a piece (one patch a facet, or nearly) has nearly every row
+// planned at 4 × 4 (an occluder touches every facet: 1,491 of 1,500, 4,058 of 5,000 and 18,813 of
+// 22,881 rows on generated cities), so its row is costed as 16 hemicubes; a subdivided mesh's rows
+// mostly lie inside their piece, touch no occluder and are drawn once (centre). Each row class is
+// then measured by the cheaper engine the driver can give it (engine_for_row): in a hemicube run
+// the 4 × 4 rows by costs, the centre and 2 × 2 rows drawn (the correction's estimate of a row
+// cast instead is the 4 × 4 class's only).
+struct MethodCosts {
+    double hemicube_ns = 0;  // the typical row of this mesh by hemicubes
+    double rays_ns = 0;      // a row by rays, `rays` of them
+    unsigned hemicubes = 1;  // hemicubes in the typical row (1 or 16)
+    bool rays_cheaper() const { return rays_ns < hemicube_ns; }
+};
+MethodCosts scene_method_costs(const SceneFacts& scene, std::uint64_t rays);
 
 struct EngineChoice {
     RowProvider::RowEngine engine = RowProvider::RowEngine::provider;
     std::uint64_t rays = 0;  // rays per row when engine is rays
 };
 // The engine of a row planned `plan`, given --fine-rows and --fine-row-rays (0: the default for
-// the resolution). Pure: the same arguments, the same choice. Throws InputError for
-// FineRows::rays on a scene with obstruction-only surfaces.
+// the resolution). With FineRows::automatic a row planned at 4 × 4 goes to rays where
+// ray_row_ns(its rays) < hemicube_row_ns(sampled_fine) by scene.costs, or, with the built-in cost
+// model, where rays_preferred (the rule the built-in costs cannot reproduce: it ignores N and the
+// ray count, which any cost depends on; docs/accuracy.md, "Cost model"). Pure: the same
+// arguments, the same choice. Throws InputError for FineRows::rays on a scene with
+// obstruction-only surfaces.
 EngineChoice engine_for_row(FineRows fine_rows, std::uint64_t fine_row_rays, const SceneFacts& scene,
                             RowProvider::RowPlan plan);
 
@@ -76,7 +115,7 @@ EngineChoice engine_for_row(FineRows fine_rows, std::uint64_t fine_row_rays, con
 class RowDriver final : public RowProvider {
 public:
     RowDriver(const Scene& drawn, HemicubeRowProvider& hemicube, FineRows fine_rows, std::uint64_t fine_row_rays,
-              std::uint64_t seed);
+              std::uint64_t seed, const CostModel& costs = {});
     ~RowDriver() override;
     std::uint32_t size() const override { return hemicube_.size(); }
     std::string name() const override { return hemicube_.name(); }
@@ -97,6 +136,7 @@ public:
     std::uint64_t fine_row_rays() const {
         return fine_row_rays_ ? fine_row_rays_ : default_fine_row_rays(facts_.resolution);
     }
+    const SceneFacts& facts() const { return facts_; }
 
 private:
     void cast(unsigned worker, std::uint32_t i, SparseRow& out);
