@@ -270,6 +270,11 @@ HemicubeStats HemicubeRowProvider::stats() const {
     std::lock_guard lock(impl_->stats_mutex);
     return impl_->stats;
 }
+
+void HemicubeRowProvider::merge_stats(const HemicubeStats& other) {
+    std::lock_guard lock(impl_->stats_mutex);
+    stats::merge(impl_->stats, other);
+}
 std::string HemicubeRowProvider::backend() const { return impl_->backend; }
 std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }
 unsigned HemicubeRowProvider::threads() const { return impl_->pool->size(); }

@@ -374,6 +374,8 @@ public:
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     const NearFieldStats& stats() const { return stats_; }
+    // Adds another process's statistics to these (an MPI rank's, merged onto rank 0's).
+    void merge_stats(const NearFieldStats& other) { stats::merge(stats_, other); }
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }

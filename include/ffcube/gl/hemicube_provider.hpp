@@ -143,6 +143,8 @@ public:
     void set_scene(const Scene& scene);
 
     HemicubeStats stats() const;
+    // Adds another process's statistics to these (an MPI rank's, merged onto rank 0's).
+    void merge_stats(const HemicubeStats& other);
     std::string backend() const;   // e.g. "egl-surfaceless"
     std::string renderer() const;  // GL_RENDERER
     unsigned threads() const;
