@@ -17,59 +17,11 @@
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
+#include "ffcube/core/stats.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/quadrature.hpp"
 
 namespace ffcube {
-
-namespace {
-
-// Adds one row's statistics (a fresh NearFieldStats filled by correct()) to the call's: sums,
-// and the least and largest, so the totals do not depend on the order rows finish in (but for
-// the seconds, which are timings).
-// Every field of NearFieldStats is 8 bytes and listed below: a field added to the struct changes
-// its size, and this count with it (a statistic left out of the merge reads 0 in the report).
-static_assert(sizeof(NearFieldStats) == 36 * 8, "add the new NearFieldStats field to add_row_stats");
-void add_row_stats(NearFieldStats& a, const NearFieldStats& b) {
-    a.rows += b.rows;
-    a.rows_touched += b.rows_touched;
-    a.near_pairs += b.near_pairs;
-    a.replaced += b.replaced;
-    a.refused += b.refused;
-    a.below_value += b.below_value;
-    a.quadrature += b.quadrature;
-    a.rows_quadrature += b.rows_quadrature;
-    a.rows_untouched += b.rows_untouched;
-    a.rows_closed += b.rows_closed;
-    a.rows_capped += b.rows_capped;
-    a.rows_recomputed_out_of_range += b.rows_recomputed_out_of_range;
-    a.rows_sampled += b.rows_sampled;
-    a.refused_sampled += b.refused_sampled;
-    a.rows_sampled_occluder += b.rows_sampled_occluder;
-    a.rows_sampled_fine += b.rows_sampled_fine;
-    a.rows_sampled_unproven += b.rows_sampled_unproven;
-    a.small_receiver_entries += b.small_receiver_entries;
-    a.rows_with_small_receivers += b.rows_with_small_receivers;
-    a.far_rows += b.far_rows;
-    a.far_entries += b.far_entries;
-    a.far_unproven += b.far_unproven;
-    a.cut_sender_entries += b.cut_sender_entries;
-    a.cut_sender_unproven += b.cut_sender_unproven;
-    a.rows_analytic += b.rows_analytic;
-    a.exact_visibility += b.exact_visibility;
-    a.exact_visibility_points += b.exact_visibility_points;
-    a.exact_visibility_unconverged += b.exact_visibility_unconverged;
-    a.exact_visibility_over_budget += b.exact_visibility_over_budget;
-    a.exact_visibility_rows += b.exact_visibility_rows;
-    a.exact_visibility_cost += b.exact_visibility_cost;
-    a.closed_scale_max_change = std::max(a.closed_scale_max_change, b.closed_scale_max_change);
-    a.seconds += b.seconds;
-    a.near_seconds += b.near_seconds;
-    a.quadrature_seconds += b.quadrature_seconds;
-    a.inner_row_sum_min = std::min(a.inner_row_sum_min, b.inner_row_sum_min);
-}
-
-}  // namespace
 
 // Scratch spaces and analysis buffers, taken and given back under a lock by the plan and finish
 // stages (several at once, on the inner provider's threads). There are as many as were ever in
@@ -114,9 +66,12 @@ struct CorrectedRowProvider::Pools {
         const std::lock_guard lock(mutex);
         out_of_range.push_back(i);
     }
+    // Adds one row's statistics (a fresh NearFieldStats filled by correct()) to the call's: sums,
+    // and the least and largest, so the totals do not depend on the order rows finish in (but for
+    // the seconds, which are timings).
     void add(NearFieldStats& total, const NearFieldStats& row) {
         const std::lock_guard lock(mutex);
-        add_row_stats(total, row);
+        stats::merge(total, row);
     }
     void give_back(std::unique_ptr<NearFieldScratch> s) {
         const std::lock_guard lock(mutex);

@@ -12,6 +12,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
+#include "ffcube/core/stats.hpp"
 #include "ffcube/io/transpose_scratch.hpp"
 #include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
@@ -92,17 +93,32 @@ void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t fir
 // What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
 // own block only: reduced over the ranks onto rank 0.
 struct RanksFigures {
-    ClosureEvidence evidence;  // hemicube miss weight summed over the ranks, inner row sum min
+    // Hemicube miss weight summed over the ranks, inner row sum min: read from the providers'
+    // statistics once every rank's are merged into rank 0's (merge_ranks_stats).
+    ClosureEvidence evidence;
     // With obstruction-only surfaces (Scene::drawn): every row's obstructed share
     // (RowSource::obstructed(), or a reused row's from its rank's checkpoint shard), each from the
     // rank that owns the row; empty without them.
     std::vector<double> obstructed;
 };
 
-// The closure evidence of every rank's rows (a process's providers saw only its own), and with
-// obstruction-only surfaces every row's obstructed share, on rank 0. Collective. This rank's rows
-// are [first, last); store: where they wait (their shares as stored, reused rows' included), or
-// null (the RowSource computed them all).
+// Every other rank's statistics set handed to into_root on rank 0, one rank at a time in rank
+// order (each travels in its flat form, core/stats.hpp). Collective: every rank has the same
+// providers, so every rank calls this for the same sets.
+template <class S, class F>
+void merge_ranks_stats(const S& mine, F&& into_root) {
+    const auto words = stats::to_words(mine);
+    const std::vector<std::uint64_t> all = mpi::gather_to_root(words);
+    if (all.empty()) return;  // not rank 0
+    for (int r = 1; r < mpi::size(); ++r)
+        into_root(stats::from_words<S>(std::span(all).subspan(std::size_t(r) * words.size(), words.size())));
+}
+
+// The statistics of every rank's rows (a process's providers saw only its own) merged into rank
+// 0's providers, so its report and closure evidence count every row; with obstruction-only
+// surfaces every row's obstructed share, on rank 0. Collective. This rank's rows are [first,
+// last); store: where they wait (their shares as stored, reused rows' included), or null (the
+// RowSource computed them all).
 RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint32_t first, std::uint32_t last,
                             const RowCheckpoint* store) {
     RanksFigures figures;
@@ -115,11 +131,11 @@ RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint
         for (std::uint32_t i = first; i < last; ++i) figures.obstructed[i] = mine[i];
         mpi::reduce_sum_to_root(figures.obstructed);
     }
+    if (HemicubeRowProvider* h = rows.hemicube())
+        merge_ranks_stats(h->stats(), [&](const HemicubeStats& other) { h->merge_stats(other); });
+    if (CorrectedRowProvider* c = rows.corrected())
+        merge_ranks_stats(c->stats(), [&](const NearFieldStats& other) { c->merge_stats(other); });
     figures.evidence = closure_evidence(rows);
-    double miss = std::isnan(figures.evidence.hemicube_miss_weight) ? 0.0 : figures.evidence.hemicube_miss_weight;
-    mpi::reduce_sum_to_root(std::span(&miss, 1));
-    mpi::reduce_min_to_root(std::span(&figures.evidence.inner_row_sum_min, 1));
-    if (!std::isnan(figures.evidence.hemicube_miss_weight)) figures.evidence.hemicube_miss_weight = miss;
     return figures;
 }
 

@@ -42,7 +42,4 @@ public:
     virtual void hang_up() {}
 };
 
-// a += b, field by field.
-void add_stats(HemicubeStats& a, const HemicubeStats& b);
-
 }  // namespace ffcube

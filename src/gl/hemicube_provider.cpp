@@ -15,6 +15,7 @@
 #include <tuple>
 
 #include "ffcube/core/error.hpp"
+#include "ffcube/core/stats.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/formfactor/ordered_pool.hpp"
 #include "ffcube/hemicube/layout.hpp"
@@ -30,38 +31,6 @@ namespace ffcube {
 void Engine::submit(std::uint32_t, std::span<const Vec3>, std::span<const double>) { FFCUBE_CHECK_MSG(false, "Engine::submit on an engine that is not pipelined"); }
 void Engine::collect(SparseRow&, HemicubeStats&) {
     FFCUBE_CHECK_MSG(false, "Engine::collect on an engine that is not pipelined");
-}
-
-void add_stats(HemicubeStats& a, const HemicubeStats& b) {
-    a.hemicubes += b.hemicubes;
-    a.prepare_seconds += b.prepare_seconds;
-    a.draw_seconds += b.draw_seconds;
-    a.readback_seconds += b.readback_seconds;
-    a.accumulate_seconds += b.accumulate_seconds;
-    a.sampled_rows += b.sampled_rows;
-    a.skipped_rows += b.skipped_rows;
-    a.partly_enclosed_rows += b.partly_enclosed_rows;
-    a.upload_vertex_bytes += b.upload_vertex_bytes;
-    a.upload_index_bytes += b.upload_index_bytes;
-    a.pieces_considered += b.pieces_considered;
-    a.pieces_behind += b.pieces_behind;
-    a.pieces_tested += b.pieces_tested;
-    a.occlusion_hemicubes += b.occlusion_hemicubes;
-    a.nodes_occluded += b.nodes_occluded;
-    a.pieces_occluded_by_node += b.pieces_occluded_by_node;
-    a.enclosure_hemicubes += b.enclosure_hemicubes;
-    a.enclosure_pieces_drawn += b.enclosure_pieces_drawn;
-    a.depth_free_hemicubes += b.depth_free_hemicubes;
-    for (std::size_t f = 0; f < 5; ++f) {
-        a.pieces_drawn[f] += b.pieces_drawn[f];
-        a.pieces_culled[f] += b.pieces_culled[f];
-        a.pieces_occluded[f] += b.pieces_occluded[f];
-    }
-    a.back_face_weight += b.back_face_weight;
-    a.miss_weight += b.miss_weight;
-    a.self_hits += b.self_hits;
-    a.fine_rows_cast += b.fine_rows_cast;
-    a.cast_seconds += b.cast_seconds;
 }
 
 // Engines live as long as the provider; the pool's threads (one per engine) are stopped before
@@ -144,7 +113,7 @@ struct HemicubeRowProvider::Impl {
             {
                 // Merged before the row is handed on: the sink sees stats that include its row.
                 std::lock_guard lock(stats_mutex);
-                add_stats(stats, local);
+                stats::merge(stats, local);
             }
             if (stages && stages->finish) stages->finish(k, i, out);
         };
@@ -300,6 +269,11 @@ void HemicubeRowProvider::set_scene(const Scene& scene) {
 HemicubeStats HemicubeRowProvider::stats() const {
     std::lock_guard lock(impl_->stats_mutex);
     return impl_->stats;
+}
+
+void HemicubeRowProvider::merge_stats(const HemicubeStats& other) {
+    std::lock_guard lock(impl_->stats_mutex);
+    stats::merge(impl_->stats, other);
 }
 std::string HemicubeRowProvider::backend() const { return impl_->backend; }
 std::string HemicubeRowProvider::renderer() const { return impl_->renderer; }

@@ -41,7 +41,8 @@ struct RequestMsg {
 struct ProcessEngine::Reply {
     std::uint32_t error;   // 0: payload follows; else an ErrorKind, and 'count' bytes of message follow
     std::uint64_t count;   // entries (row), pixels (item buffer), bytes (hello strings, error)
-    HemicubeStats stats;   // work done for this reply
+    // Work done for this reply: a row's HemicubeStats in their flat form (core/stats.hpp).
+    std::array<std::uint64_t, stats::words<HemicubeStats>()> counts;
 };
 using ReplyMsg = ProcessEngine::Reply;
 
@@ -184,7 +185,9 @@ void send_current_error(int fd) {
                         if (!recv_all(fd, points.data(), m * sizeof(Vec3)) || !recv_all(fd, weights.data(), m * sizeof(double)))
                             break;
                     }
-                    worker->row(req.patch, points, weights, row, r.stats);
+                    HemicubeStats st;
+                    worker->row(req.patch, points, weights, row, st);
+                    r.counts = stats::to_words(st);
                     r.count = row.nnz();
                     std::array<iovec, 3> parts{{{&r, sizeof r},
                                                 {row.col.data(), row.col.size() * sizeof(std::uint32_t)},
@@ -192,8 +195,8 @@ void send_current_error(int fd) {
                     send_parts(fd, parts);
                 } else {
                     FFCUBE_CHECK_MSG(req.kind == Request::ItemBuffer, "hemicube worker: unknown request");
-                    worker->render(req.patch, r.stats);
-                    r.stats = HemicubeStats{};
+                    HemicubeStats ignored;
+                    worker->render(req.patch, ignored);
                     r.count = worker->ids().size();
                     send_all(fd, &r, sizeof r);
                     send_vector(fd, worker->ids());
@@ -314,7 +317,7 @@ void ProcessEngine::collect(SparseRow& out, HemicubeStats& st) {
         recv_or_throw(out.col.data(), r.count * sizeof(std::uint32_t));
         recv_or_throw(out.val.data(), r.count * sizeof(double));
     }
-    add_stats(st, r.stats);
+    stats::merge(st, stats::from_words<HemicubeStats>(r.counts));
 }
 
 void ProcessEngine::item_buffer(std::uint32_t p, std::vector<std::uint32_t>& out) {

@@ -201,6 +201,15 @@ void reduce_to_root(std::span<double> v, MPI_Op op) {
 void reduce_sum_to_root(std::span<double> v) { reduce_to_root(v, MPI_SUM); }
 void reduce_min_to_root(std::span<double> v) { reduce_to_root(v, MPI_MIN); }
 
+std::vector<std::uint64_t> gather_to_root(std::span<const std::uint64_t> mine) {
+    FFCUBE_CHECK(mine.size() <= std::size_t(INT_MAX));
+    std::vector<std::uint64_t> all(g_rank == 0 ? mine.size() * std::size_t(g_size) : 0);
+    check(MPI_Gather(mine.data(), static_cast<int>(mine.size()), MPI_UINT64_T, all.data(), static_cast<int>(mine.size()),
+                     MPI_UINT64_T, 0, MPI_COMM_WORLD),
+          "MPI_Gather");
+    return all;
+}
+
 WorldRowBlocks::WorldRowBlocks(std::vector<std::uint32_t> bounds) : bounds_(std::move(bounds)) {
     FFCUBE_CHECK(bounds_.size() == std::size_t(g_size) + 1);
     for (int r = 0; r < g_size; ++r) {

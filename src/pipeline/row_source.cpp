@@ -11,6 +11,7 @@
 #include "ffcube/core/error.hpp"
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
+#include "ffcube/core/stats.hpp"
 #include "ffcube/core/timer.hpp"
 #include "ffcube/geometry/analytic.hpp"
 
@@ -323,43 +324,12 @@ void report_tolerance(Report& r, const CorrectedRowProvider& corrected, const Ro
 void report_correction(Report& r, const CorrectedRowProvider& corrected, std::size_t rows, const RowOptions& options) {
     const NearFieldStats& c = corrected.stats();
     r.set("corrections.kind", "near");
-    r.set("corrections.rows", c.rows);
-    r.set("corrections.rows_touched", c.rows_touched);
-    r.set("corrections.near_pairs", c.near_pairs);
-    r.set("corrections.entries_replaced", c.replaced);
-    r.set("corrections.pairs_refused_possibly_occluded", c.refused);
-    r.set("corrections.near_pairs_below_value", c.below_value);
-    r.set("corrections.entries_quadrature", c.quadrature);
-    r.set("corrections.rows_quadrature", c.rows_quadrature);
-    r.set("corrections.rows_untouched", c.rows_untouched);
-    r.set("corrections.rows_closed_rebalanced", c.rows_closed);
-    r.set("corrections.rows_capped_at_one", c.rows_capped);
-    r.set("corrections.rows_recomputed_out_of_range", c.rows_recomputed_out_of_range);
-    r.set("corrections.rows_sub_hemicubes", c.rows_sampled);
-    r.set("corrections.pairs_refused_sub_hemicubes", c.refused_sampled);
-    r.set("corrections.pairs_exact_visibility", c.exact_visibility);
-    r.set("corrections.exact_visibility_points", c.exact_visibility_points);
-    r.set("corrections.exact_visibility_unconverged", c.exact_visibility_unconverged);
-    r.set("corrections.exact_visibility_over_budget", c.exact_visibility_over_budget);
-    r.set("corrections.exact_visibility_rows", c.exact_visibility_rows);
-    r.set("corrections.exact_visibility_cost", c.exact_visibility_cost);
+    stats::report(r, c);  // every counter of NearFieldStats, by its key
     r.set("corrections.exact_visibility_mode", corrected.corrector().exact_visibility_mode());
-    r.set("corrections.rows_sub_hemicubes_occluder", c.rows_sampled_occluder);
-    r.set("corrections.rows_sub_hemicubes_4x4", c.rows_sampled_fine);
-    r.set("corrections.rows_sub_hemicubes_unproven", c.rows_sampled_unproven);
-    r.set("corrections.small_receiver_entries", c.small_receiver_entries);
     r.set("corrections.far_field", corrected.corrector().far_field_status());
     r.set("corrections.far_field_planes", corrected.corrector().far_field_planes());
     if (const double ns = corrected.corrector().far_field_cost_ns(); std::isfinite(ns))
         r.set("corrections.far_field_estimated_ms_per_row", ns * 1e-6);
-    r.set("corrections.far_field_rows", c.far_rows);
-    r.set("corrections.far_field_entries", c.far_entries);
-    r.set("corrections.far_field_pairs_unproven", c.far_unproven);
-    r.set("corrections.cut_sender_entries", c.cut_sender_entries);
-    r.set("corrections.cut_sender_pairs_unproven", c.cut_sender_unproven);
-    r.set("corrections.rows_analytic", c.rows_analytic);
-    r.set("corrections.rows_with_small_receivers", c.rows_with_small_receivers);
-    r.set("corrections.rebalance_max_change", c.closed_scale_max_change);
     // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row
     // (−1 where not computed), then the largest, the mean and the row that has the largest.
     const std::span<const float> est =
@@ -392,9 +362,6 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     // again at a finer resolution and no more.
     const std::vector<std::int8_t>& measures = corrected.row_measures();
     r.set_array("corrections.row_measure", std::vector<std::int64_t>(measures.begin(), measures.end()));
-    r.set("corrections.seconds", c.seconds);
-    r.set("corrections.near_seconds", c.near_seconds);
-    r.set("corrections.quadrature_seconds", c.quadrature_seconds);
 }
 
 void report_hemicube(Report& r, const HemicubeRowProvider& provider, const RowDriver& driver) {
@@ -404,47 +371,18 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider, const RowDr
     r.set("resolution", provider.resolution());
     r.set("threads", provider.threads());
     r.set("workers", provider.workers());
-    r.set("hemicubes", st.hemicubes);
-    // CPU-seconds summed over workers.
-    r.set("time.prepare", st.prepare_seconds);
-    r.set("time.drawing", st.draw_seconds);
-    r.set("time.readback", st.readback_seconds);
-    r.set("time.accumulation", st.accumulate_seconds);
-    // Culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
-    r.set("left_out.pieces_considered", st.pieces_considered);
-    r.set("left_out.pieces_behind_plane", st.pieces_behind);
-    r.set("left_out.pieces_tested", st.pieces_tested);
-    const char* names[5] = {"top", "pos_x", "neg_x", "pos_y", "neg_y"};
-    for (std::size_t f = 0; f < 5; ++f) {
-        r.set(fmt::format("left_out.pieces_culled_per_face.{}", names[f]), st.pieces_culled[f]);
-        r.set(fmt::format("drawn.pieces_per_face.{}", names[f]), st.pieces_drawn[f]);
-        r.set(fmt::format("left_out.pieces_occluded_per_face.{}", names[f]), st.pieces_occluded[f]);
-    }
-    r.set("left_out.occlusion_hemicubes", st.occlusion_hemicubes);
-    r.set("left_out.nodes_occluded", st.nodes_occluded);
-    r.set("left_out.pieces_occluded_by_node", st.pieces_occluded_by_node);
-    // The enclosure drawn without the depth test (--enclosure on|off): its planes and pieces,
-    // the hemicubes whose eye lay inside it, the pieces × faces they drew so.
+    // Every counter of HemicubeStats by its key: times are CPU-seconds summed over workers;
+    // culling is per mesher piece (a face's quad or triangle, drawn whole), summed over hemicubes.
+    stats::report(r, st);
+    // The enclosure drawn without the depth test (--enclosure on|off): its planes and pieces.
     r.set("drawn.enclosure_planes", provider.enclosure_planes());
     r.set("drawn.enclosure_pieces", provider.enclosure_pieces());
-    r.set("drawn.enclosure_hemicubes", st.enclosure_hemicubes);
-    r.set("drawn.enclosure_pieces_drawn", st.enclosure_pieces_drawn);
-    r.set("drawn.depth_free_hemicubes", st.depth_free_hemicubes);
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
     r.set("coverage.mean_miss_fraction", st.miss_weight / h);
     r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
-    r.set("self_hits", st.self_hits);
-    r.set("sub_hemicube_rows", st.sampled_rows);
-    // Senders cut by a facet and partly inside it (a ground triangle under a building).
-    r.set("sub_hemicube_rows_partly_enclosed", st.partly_enclosed_rows);
-    // Rows planned at 4 × 4 ray-cast instead (--fine-rows), their rays and CPU-seconds.
+    // Rows planned at 4 × 4 ray-cast instead (--fine-rows) and their rays (fine_rows.cast, above).
     r.set("fine_rows.by", driver.fine_rows_by_rays() ? "rays" : "hemicubes");
     r.set("fine_rows.rays_per_row", driver.fine_row_rays());
-    r.set("fine_rows.cast", st.fine_rows_cast);
-    r.set("time.fine_row_rays", st.cast_seconds);
-    r.set("upload.vertex_bytes", st.upload_vertex_bytes);
-    r.set("upload.index_bytes", st.upload_index_bytes);
-    r.set("rows_not_rendered", st.skipped_rows);
 }
 
 }  // namespace

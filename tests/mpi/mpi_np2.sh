@@ -18,7 +18,7 @@ export TMPDIR="$work/tmp"
 rows="$scene --patches 600 --resolution 64 --threads 1 -q"
 
 # 1. Byte-identical outputs.
-"$ffcube" formfactors $rows -o one.ffm || fail "one-process formfactors"
+"$ffcube" formfactors $rows -o one.ffm --report one.json || fail "one-process formfactors"
 "$ffcube" formfactors $rows -o one.mtx || fail "one-process formfactors .mtx"
 mpi formfactors $rows -o two.ffm --report two.json || fail "mpirun formfactors"
 mpi formfactors $rows -o two.mtx || fail "mpirun formfactors .mtx"
@@ -36,6 +36,26 @@ echo "ok: --groups and --sky byte-identical at -np 2 without a matrix file"
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['streamed'] and r['mpi']['streamed'], r" \
     two.json || fail "the .ffm run under mpirun was not streamed"
 [ -z "$(ls -A | grep scratch)" ] && [ -z "$(ls -A tmp)" ] || fail "scratch left behind: $(ls -A . tmp)"
+# The providers' statistics (core/stats.hpp) count every rank's rows: each rank's set is merged onto
+# rank 0's, so every counter of the hemicube and the correction equals the one-process run's (the
+# ranks' blocks partition the rows, and on this scene a row's counts do not depend on the process
+# that made it). Floating-point figures (timings, weights: sums in another order) are left out.
+python3 - one.json two.json <<'PY' || fail "the report's counters under mpirun differ from one process's"
+import json, sys
+def ints(d, p=""):
+    for k, v in d.items():
+        if isinstance(v, dict):
+            yield from ints(v, p + k + ".")
+        elif isinstance(v, int) and not isinstance(v, bool):
+            yield p + k, v
+one, two = (json.load(open(f)) for f in sys.argv[1:])
+sets = ("hemicubes", "corrections.", "left_out.", "drawn.", "sub_hemicube_rows", "rows_not_rendered", "self_hits", "upload.")
+a = {k: v for k, v in ints(one) if k.startswith(sets)}
+b = {k: v for k, v in ints(two) if k.startswith(sets)}
+assert len(a) > 30 and a == b, {k: (a.get(k), b.get(k)) for k in set(a) | set(b) if a.get(k) != b.get(k)}
+assert a["hemicubes"] == 600, a["hemicubes"]  # one hemicube a patch: no row is sub-sampled here
+PY
+echo "ok: the report's counters under mpirun are every rank's, equal to one process's"
 
 # 1b. --enforce on the streamed path (out of core: 1 MiB of --stats-memory cuts the transpose of
 # these 600 rows, about 3 MB of entries, into bands spilled to scratch files), against one process.

@@ -34,6 +34,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/core/stats.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -162,55 +163,79 @@ NearFieldOptions near_field_options_for_hemicube(int resolution, double k = 3.0,
 double exact_visibility_budget_for_hemicube(int resolution, double pixel_ns = 5.0, double cpu_scale = 1.0);
 inline constexpr std::size_t kAutoExactVisibilityOccluders = 8;
 
+// What the correction did, summed over rows (and threads), declared once each with its report
+// key and merge rule (core/stats.hpp): merged, flattened and reported from this list.
+#define FFCUBE_NEAR_FIELD_STATS(X)                                                                                  \
+    X(std::uint64_t, rows, sum, "corrections.rows")                     /* rows passed through */                  \
+    X(std::uint64_t, rows_touched, sum, "corrections.rows_touched")     /* rows with a replaced entry */           \
+    X(std::uint64_t, near_pairs, sum, "corrections.near_pairs")         /* near, facing pairs examined */          \
+    X(std::uint64_t, replaced, sum, "corrections.entries_replaced")     /* entries replaced by the exact value */  \
+    /* near, facing pairs left alone: possibly occluded */                                                          \
+    X(std::uint64_t, refused, sum, "corrections.pairs_refused_possibly_occluded")                                  \
+    /* near, facing pairs left as measured: below min_near_value */                                                 \
+    X(std::uint64_t, below_value, sum, "corrections.near_pairs_below_value")                                       \
+    X(std::uint64_t, quadrature, sum, "corrections.entries_quadrature") /* rescaled by the sender quadrature */     \
+    /* rows with an entry within quadrature_k sizes */                                                              \
+    X(std::uint64_t, rows_quadrature, sum, "corrections.rows_quadrature")                                          \
+    /* rows that triggered nothing, handed on as they were */                                                       \
+    X(std::uint64_t, rows_untouched, sum, "corrections.rows_untouched")                                            \
+    X(std::uint64_t, rows_closed, sum, "corrections.rows_closed_rebalanced") /* closed rows rebalanced to 1 */     \
+    /* open rows the correction pushed above 1, scaled to 1 */                                                      \
+    X(std::uint64_t, rows_capped, sum, "corrections.rows_capped_at_one")                                           \
+    /* Corrected rows out of range (an entry < 0, > 1 or not finite, or a sum above 1 beyond the                    \
+       row's tolerance: src/accuracy/row_range.hpp) handed on as measured (docs/robustness.md). */                  \
+    X(std::uint64_t, rows_recomputed_out_of_range, sum, "corrections.rows_recomputed_out_of_range")                \
+    /* refused pairs that ask for sub-hemicubes (sub_hemicube_k) */                                                 \
+    X(std::uint64_t, refused_sampled, sum, "corrections.pairs_refused_sub_hemicubes")                              \
+    /* rows measured by sub-hemicubes (either reason below); of which for an occluder beside the                    \
+       sender only; at 4 x 4 points (an occluder touches the sender); for far pairs not proven                      \
+       unoccluded only */                                                                                           \
+    X(std::uint64_t, rows_sampled, sum, "corrections.rows_sub_hemicubes")                                          \
+    X(std::uint64_t, rows_sampled_occluder, sum, "corrections.rows_sub_hemicubes_occluder")                        \
+    X(std::uint64_t, rows_sampled_fine, sum, "corrections.rows_sub_hemicubes_4x4")                                 \
+    X(std::uint64_t, rows_sampled_unproven, sum, "corrections.rows_sub_hemicubes_unproven")                        \
+    /* Receivers worth fewer than 4 of the largest hemicube pixels (F_ij < 4 pixel_delta_ff), as                    \
+       the inner provider made them: detected and counted, not corrected. */                                        \
+    X(std::uint64_t, small_receiver_entries, sum, "corrections.small_receiver_entries")                            \
+    X(std::uint64_t, rows_with_small_receivers, sum, "corrections.rows_with_small_receivers")                      \
+    /* Far field (NearFieldOptions::far_field): rows given analytic values beyond the near range,                   \
+       entries so replaced (or added: the hemicube had no pixel for them), and facing pairs beyond                  \
+       the near range whose visibility the plane test could not prove (kept as made); the same of                   \
+       senders cut by a receiver's plane. */                                                                        \
+    X(std::uint64_t, far_rows, sum, "corrections.far_field_rows")                                                  \
+    X(std::uint64_t, far_entries, sum, "corrections.far_field_entries")                                            \
+    X(std::uint64_t, far_unproven, sum, "corrections.far_field_pairs_unproven")                                    \
+    X(std::uint64_t, cut_sender_entries, sum, "corrections.cut_sender_entries")                                    \
+    X(std::uint64_t, cut_sender_unproven, sum, "corrections.cut_sender_pairs_unproven")                            \
+    /* rows made wholly of analytic values, not measured at all */                                                  \
+    X(std::uint64_t, rows_analytic, sum, "corrections.rows_analytic")                                              \
+    /* refused near pairs given the exact value past their occluders, the point-kernel                              \
+       evaluations they took, and those tried whose tolerance was not reached (left refused) */                     \
+    X(std::uint64_t, exact_visibility, sum, "corrections.pairs_exact_visibility")                                  \
+    X(std::uint64_t, exact_visibility_points, sum, "corrections.exact_visibility_points")                          \
+    X(std::uint64_t, exact_visibility_unconverged, sum, "corrections.exact_visibility_unconverged")                \
+    /* Automatic mode (exact_visibility_budget > 0): refused pairs not tried or stopped because the                 \
+       row's budget would be exceeded, and rows where some pair was made exact. */                                  \
+    X(std::uint64_t, exact_visibility_over_budget, sum, "corrections.exact_visibility_over_budget")                \
+    X(std::uint64_t, exact_visibility_rows, sum, "corrections.exact_visibility_rows")                              \
+    /* sum of points x possible occluders (what the budget counts) */                                               \
+    X(double, exact_visibility_cost, sum, "corrections.exact_visibility_cost")                                     \
+    /* largest |factor - 1| of the closed rows' rebalancing */                                                      \
+    X(double, closed_scale_max_change, max, "corrections.rebalance_max_change")                                    \
+    /* seconds spent correcting, summed over threads (inner provider excluded); of which (CPU                       \
+       seconds, any thread) the near analysis and exact values; the sender quadrature ratios and                    \
+       the error estimate */                                                                                        \
+    X(double, seconds, sum, "corrections.seconds")                                                                 \
+    X(double, near_seconds, sum, "corrections.near_seconds")                                                       \
+    X(double, quadrature_seconds, sum, "corrections.quadrature_seconds")                                           \
+    /* Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any                   \
+       row): whether light escapes is a property of the uncorrected rows, since replacing noisy                     \
+       near entries by exact ones moves ray-cast row sums of a closed scene off 1. (Not in the                      \
+       report: the enforcement's closure evidence reads it.) */                                                     \
+    X(double, inner_row_sum_min, min, "")
+
 struct NearFieldStats {
-    std::uint64_t rows = 0;          // rows passed through
-    std::uint64_t rows_touched = 0;  // rows with at least one replaced entry
-    std::uint64_t near_pairs = 0;    // near, facing pairs examined
-    std::uint64_t replaced = 0;      // entries replaced by the exact value
-    std::uint64_t refused = 0;       // near, facing pairs left alone: possibly occluded
-    std::uint64_t below_value = 0;   // near, facing pairs left as measured: below min_near_value
-    std::uint64_t quadrature = 0;    // entries rescaled by the sender quadrature
-    std::uint64_t rows_quadrature = 0;  // rows with an entry within quadrature_k sizes
-    std::uint64_t rows_untouched = 0;   // rows that triggered nothing, handed on as they were
-    std::uint64_t rows_closed = 0;      // closed rows rebalanced to sum to 1
-    std::uint64_t rows_capped = 0;      // open rows the correction pushed above 1, scaled to 1
-    // Corrected rows out of range (an entry < 0, > 1 or not finite, or a sum above 1 beyond the
-    // row's tolerance: src/accuracy/row_range.hpp) handed on as measured instead (docs/robustness.md).
-    std::uint64_t rows_recomputed_out_of_range = 0;
-    std::uint64_t refused_sampled = 0;  // refused pairs that ask for sub-hemicubes (sub_hemicube_k)
-    std::uint64_t rows_sampled = 0;     // rows measured by sub-hemicubes (either reason below)
-    std::uint64_t rows_sampled_occluder = 0;  // of which for an occluder beside the sender only
-    std::uint64_t rows_sampled_fine = 0;      // rows at 4 × 4 points: an occluder touches the sender
-    std::uint64_t rows_sampled_unproven = 0;  // for far pairs not proven unoccluded only
-    // Receivers worth fewer than 4 of the largest hemicube pixels (F_ij < 4 pixel_delta_ff), as
-    // the inner provider made them: detected and counted, not corrected.
-    std::uint64_t small_receiver_entries = 0;
-    std::uint64_t rows_with_small_receivers = 0;
-    // Far field (NearFieldOptions::far_field): rows given analytic values beyond the
-    // near range, entries so replaced (or added: the hemicube had no pixel for them), and facing
-    // pairs beyond the near range whose visibility the plane test could not prove (kept as made).
-    std::uint64_t far_rows = 0;
-    std::uint64_t far_entries = 0;
-    std::uint64_t far_unproven = 0;
-    std::uint64_t cut_sender_entries = 0;
-    std::uint64_t cut_sender_unproven = 0;
-    std::uint64_t rows_analytic = 0;  // rows made wholly of analytic values, not measured at all
-    std::uint64_t exact_visibility = 0;        // refused near pairs given the exact value past their occluders
-    std::uint64_t exact_visibility_points = 0;  // point-kernel evaluations they took
-    std::uint64_t exact_visibility_unconverged = 0;  // tried, tolerance not reached: left refused
-    // Automatic mode (exact_visibility_budget > 0): refused pairs not tried or stopped because the
-    // row's budget would be exceeded, and rows where some pair was made exact.
-    std::uint64_t exact_visibility_over_budget = 0;
-    std::uint64_t exact_visibility_rows = 0;
-    double exact_visibility_cost = 0;  // Σ points × possible occluders (what the budget counts)
-    double closed_scale_max_change = 0; // largest |factor − 1| of that rebalancing
-    double seconds = 0;              // seconds spent correcting, summed over threads (inner provider excluded)
-    double near_seconds = 0;         // of which (CPU seconds, any thread): near analysis and exact values
-    double quadrature_seconds = 0;   // sender quadrature ratios and the error estimate
-    // Smallest row sum as the inner provider made it (CorrectedRowProvider only; +inf before any
-    // row): whether light escapes is a property of the uncorrected rows, since replacing noisy
-    // near entries by exact ones moves ray-cast row sums of a closed scene off 1.
-    double inner_row_sum_min = INFINITY;
+    FFCUBE_STATS(NearFieldStats, FFCUBE_NEAR_FIELD_STATS)
 };
 
 // The near pairs of one row (NearFieldCorrector::analyse).
@@ -349,6 +374,8 @@ public:
     std::string name() const override { return inner_.name(); }
     void compute_rows(std::span<const std::uint32_t> rows, const RowSink& sink) override;
     const NearFieldStats& stats() const { return stats_; }
+    // Adds another process's statistics to these (an MPI rank's, merged onto rank 0's).
+    void merge_stats(const NearFieldStats& other) { stats::merge(stats_, other); }
     // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
     // computed; empty before the first row).
     const std::vector<float>& row_error_estimates() const { return row_error_; }

@@ -12,8 +12,10 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
+#include "ffcube/core/stats.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/gl/context.hpp"
 #include "ffcube/scene/scene.hpp"
@@ -44,48 +46,61 @@ struct HemicubeOptions {
     bool enclosure_without_depth = true;
 };
 
-// What the provider did, summed over all hemicubes so far. Times are summed over workers
-// (CPU-seconds, not wall time).
+// The hemicube's faces in the order of its per-face statistics (hemicube/layout.hpp).
+inline constexpr std::array<std::string_view, 5> kHemicubeFaceNames{"top", "pos_x", "neg_x", "pos_y", "neg_y"};
+using PerFace = stats::PerPart<std::uint64_t, 5, kHemicubeFaceNames>;
+
+// What the provider did, summed over all hemicubes so far, declared once each with its report
+// key and merge rule (core/stats.hpp): merged over workers, sent back by worker processes and
+// reported from this list. Times are summed over workers (CPU-seconds, not wall time).
+#define FFCUBE_HEMICUBE_STATS(X)                                                                                   \
+    X(std::uint64_t, hemicubes, sum, "hemicubes")                                                                 \
+    X(double, prepare_seconds, sum, "time.prepare")       /* eye-relative transform and culling on the CPU */     \
+    X(double, draw_seconds, sum, "time.drawing")          /* uploads and draw calls, up to glFinish */            \
+    X(double, readback_seconds, sum, "time.readback")     /* glReadPixels of the atlas */                         \
+    X(double, accumulate_seconds, sum, "time.accumulation") /* dF per ID into the row */                          \
+    /* Culling counts mesher pieces (Scene::grids: a face's quad or triangle, drawn whole; the                     \
+       fragment shader finds the patch), summed over hemicubes: pieces x hemicubes, those wholly                   \
+       behind the hemicube plane, those classified one by one (the others: PieceBvh). */                           \
+    X(std::uint64_t, pieces_considered, sum, "left_out.pieces_considered")                                        \
+    X(std::uint64_t, pieces_behind, sum, "left_out.pieces_behind_plane")                                          \
+    X(std::uint64_t, pieces_tested, sum, "left_out.pieces_tested")                                                \
+    /* Per face: drawn; in front of the plane but outside the face; in the face but behind the                     \
+       occluders. */                                                                                               \
+    X(PerFace, pieces_drawn, sum, "drawn.pieces_per_face")                                                        \
+    X(PerFace, pieces_culled, sum, "left_out.pieces_culled_per_face")                                             \
+    X(PerFace, pieces_occluded, sum, "left_out.pieces_occluded_per_face")                                         \
+    /* Hemicubes that drew occluders first; hierarchy nodes x faces found hidden whole; of                         \
+       pieces_occluded (all faces), those left out by such nodes. */                                               \
+    X(std::uint64_t, occlusion_hemicubes, sum, "left_out.occlusion_hemicubes")                                    \
+    X(std::uint64_t, nodes_occluded, sum, "left_out.nodes_occluded")                                              \
+    X(std::uint64_t, pieces_occluded_by_node, sum, "left_out.pieces_occluded_by_node")                            \
+    /* Hemicubes whose eye lay inside the scene's enclosure (enclosure_without_depth), and the                     \
+       pieces x faces of it they drew without the depth test; of those hemicubes, the ones drawn                   \
+       with no depth test at all (Enclosure::inner_flat: the other pieces lie in one plane). */                    \
+    X(std::uint64_t, enclosure_hemicubes, sum, "drawn.enclosure_hemicubes")                                       \
+    X(std::uint64_t, enclosure_pieces_drawn, sum, "drawn.enclosure_pieces_drawn")                                 \
+    X(std::uint64_t, depth_free_hemicubes, sum, "drawn.depth_free_hemicubes")                                     \
+    /* sum of dF of pixels that showed a back face, and nothing (reported per hemicube: coverage.*) */             \
+    X(double, back_face_weight, sum, "")                                                                          \
+    X(double, miss_weight, sum, "")                                                                               \
+    X(std::uint64_t, self_hits, sum, "self_hits") /* pixels that showed the patch itself (should stay 0) */       \
+    X(std::uint64_t, sampled_rows, sum, "sub_hemicube_rows") /* rows made of sub-hemicubes (sampled) */           \
+    X(std::uint64_t, skipped_rows, sum, "rows_not_rendered") /* rows needing no hemicube (RowPlan::skip) */       \
+    /* Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at points                \
+       on its exposed part only (RowRequest::partly_enclosed; accuracy/exposed_points.hpp). */                     \
+    X(std::uint64_t, partly_enclosed_rows, sum, "sub_hemicube_rows_partly_enclosed")                              \
+    /* Bytes sent to the GL per hemicube, summed: vertex data (the eye and frame), index lists. */                 \
+    X(std::uint64_t, upload_vertex_bytes, sum, "upload.vertex_bytes")                                             \
+    X(std::uint64_t, upload_index_bytes, sum, "upload.index_bytes")                                               \
+    /* Rows the driver had ray-cast instead (RowEngine::rays: rows planned at 4 x 4 on a scene                     \
+       where rays are preferred, pipeline/row_engine.hpp), through RowStages::cast on the workers'                 \
+       threads in this process, and the CPU-seconds their rays took. */                                            \
+    X(std::uint64_t, fine_rows_cast, sum, "fine_rows.cast")                                                       \
+    X(double, cast_seconds, sum, "time.fine_row_rays")
+
 struct HemicubeStats {
-    std::uint64_t hemicubes = 0;
-    double prepare_seconds = 0;     // eye-relative transform and culling on the CPU
-    double draw_seconds = 0;        // uploads and draw calls, up to glFinish
-    double readback_seconds = 0;    // glReadPixels of the atlas
-    double accumulate_seconds = 0;  // ΔF per ID into the row
-    // Culling counts mesher pieces (Scene::grids: a face's quad or triangle, drawn whole; the
-    // fragment shader finds the patch), summed over hemicubes.
-    std::uint64_t pieces_considered = 0;              // pieces × hemicubes
-    std::uint64_t pieces_behind = 0;                  // wholly behind the hemicube plane
-    std::uint64_t pieces_tested = 0;                  // classified one by one (the others: PieceBvh)
-    std::array<std::uint64_t, 5> pieces_drawn{};      // per face (top, +x, -x, +y, -y)
-    std::array<std::uint64_t, 5> pieces_culled{};     // in front of the plane but outside the face
-    std::array<std::uint64_t, 5> pieces_occluded{};   // in the face but behind the occluders
-    std::uint64_t occlusion_hemicubes = 0;            // hemicubes that drew occluders first
-    std::uint64_t nodes_occluded = 0;                 // hierarchy nodes × faces found hidden whole
-    std::uint64_t pieces_occluded_by_node = 0;        // of pieces_occluded (all faces): left out by those
-    // Hemicubes whose eye lay inside the scene's enclosure (enclosure_without_depth), and the
-    // pieces × faces of it they drew without the depth test.
-    std::uint64_t enclosure_hemicubes = 0;
-    std::uint64_t enclosure_pieces_drawn = 0;
-    // Of those, hemicubes drawn with no depth test at all (Enclosure::inner_flat: the other
-    // pieces lie in one plane, a blocker or a partition).
-    std::uint64_t depth_free_hemicubes = 0;
-    double back_face_weight = 0;   // Σ ΔF of pixels that showed a back face
-    double miss_weight = 0;        // Σ ΔF of pixels that showed nothing
-    std::uint64_t self_hits = 0;   // pixels that showed the patch itself (should stay 0)
-    std::uint64_t sampled_rows = 0;  // rows made of sub-hemicubes (a sampled RowRequest)
-    std::uint64_t skipped_rows = 0;  // rows the caller needed no hemicube for (RowPlan::skip)
-    // Rows made of sub-hemicubes whose sender a facet cuts and partly encloses: measured at
-    // points on its exposed part only (RowRequest::partly_enclosed; accuracy/exposed_points.hpp).
-    std::uint64_t partly_enclosed_rows = 0;
-    // Bytes sent to the GL per hemicube, summed: vertex data (the eye and frame) and the index lists.
-    std::uint64_t upload_vertex_bytes = 0;
-    std::uint64_t upload_index_bytes = 0;
-    // Rows the driver had ray-cast instead (RowEngine::rays: rows planned at 4 × 4 on a scene
-    // where rays are preferred, pipeline/row_engine.hpp), through RowStages::cast on the
-    // workers' threads in this process, and the CPU-seconds their rays took.
-    std::uint64_t fine_rows_cast = 0;
-    double cast_seconds = 0;
+    FFCUBE_STATS(HemicubeStats, FFCUBE_HEMICUBE_STATS)
 };
 
 class HemicubeRowProvider final : public RowProvider {
@@ -128,6 +143,8 @@ public:
     void set_scene(const Scene& scene);
 
     HemicubeStats stats() const;
+    // Adds another process's statistics to these (an MPI rank's, merged onto rank 0's).
+    void merge_stats(const HemicubeStats& other);
     std::string backend() const;   // e.g. "egl-surfaceless"
     std::string renderer() const;  // GL_RENDERER
     unsigned threads() const;

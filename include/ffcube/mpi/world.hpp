@@ -65,6 +65,10 @@ ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
 // the other ranks' v is left as it was). Collective.
 void reduce_sum_to_root(std::span<double> v);
 void reduce_min_to_root(std::span<double> v);
+// Every rank's `mine` (the same length on every rank) on rank 0, one after another in rank order
+// (MPI_Gather); empty on the other ranks. Collective. For the flat form of statistics sets
+// (core/stats.hpp), which rank 0 merges in rank order.
+std::vector<std::uint64_t> gather_to_root(std::span<const std::uint64_t> mine);
 
 // RowBlocks (solver/row_blocks.hpp) over MPI_COMM_WORLD: share is an in-place MPI_Allgatherv,
 // sum gathers every rank's partial values and adds them in rank order (the same bits on every
