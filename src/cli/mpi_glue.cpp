@@ -13,6 +13,7 @@
 #include "ffcube/core/log.hpp"
 #include "ffcube/core/progress.hpp"
 #include "ffcube/core/stats.hpp"
+#include "ffcube/geometry/analytic.hpp"
 #include "ffcube/io/transpose_scratch.hpp"
 #include "ffcube/pipeline/enforcement.hpp"
 #include "ffcube/pipeline/scene_loading.hpp"
@@ -135,6 +136,10 @@ RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint
         merge_ranks_stats(h->stats(), [&](const HemicubeStats& other) { h->merge_stats(other); });
     if (CorrectedRowProvider* c = rows.corrected())
         merge_ranks_stats(c->stats(), [&](const NearFieldStats& other) { c->merge_stats(other); });
+    if (RaycastRowProvider* rc = rows.raycast())
+        merge_ranks_stats(rc->stats(), [&](const RaycastStats& other) { rc->merge_stats(other); });
+    // The analytic kernels' totals are the process's: every rank's added to rank 0's.
+    merge_ranks_stats(analytic_stats(), [](const AnalyticStats& other) { merge_analytic_stats(other); });
     figures.evidence = closure_evidence(rows);
     return figures;
 }

@@ -10,9 +10,9 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <numbers>
 #include <random>
 #include <vector>
@@ -21,8 +21,14 @@ namespace ffcube {
 
 namespace {
 
-// Polygons projected onto their plane by planar_polygon (all calls; analytic_stats()).
-std::atomic<std::uint64_t> g_flattened{0};
+// The process's AnalyticStats (analytic_stats()): each call's figures merged under the lock.
+std::mutex g_stats_mutex;
+AnalyticStats g_stats;
+
+void add_stats(const AnalyticStats& s) {
+    const std::lock_guard lock(g_stats_mutex);
+    stats::merge(g_stats, s);
+}
 
 constexpr double kPi = std::numbers::pi;
 
@@ -60,7 +66,9 @@ std::span<const Vec3> planar_polygon(const char* fn, const char* which, std::spa
     const Vec3 n = polygon_normal(poly), c = polygon_centroid(poly);
     storage.assign(poly.begin(), poly.end());
     for (Vec3& v : storage) v -= glm::dot(v - c, n) * n;
-    g_flattened.fetch_add(1, std::memory_order_relaxed);
+    AnalyticStats flattened;  // a polygon projected onto its plane
+    flattened.flattened_polygons = 1;
+    add_stats(flattened);
     return storage;
 }
 
@@ -431,19 +439,14 @@ std::uint64_t ff_polygon_polygon_budget(std::size_t k1, std::size_t k2) {
 
 namespace {
 
-std::atomic<std::uint64_t> g_calls{0}, g_evaluations{0}, g_fallbacks{0}, g_fallback_calls{0}, g_max_evaluations{0};
-
 void record(const AnalyticCallInfo& info) {
-    g_calls.fetch_add(1, std::memory_order_relaxed);
-    g_evaluations.fetch_add(info.evaluations, std::memory_order_relaxed);
-    if (info.fallbacks > 0) {
-        g_fallbacks.fetch_add(info.fallbacks, std::memory_order_relaxed);
-        g_fallback_calls.fetch_add(1, std::memory_order_relaxed);
-    }
-    std::uint64_t m = g_max_evaluations.load(std::memory_order_relaxed);
-    while (info.evaluations > m &&
-           !g_max_evaluations.compare_exchange_weak(m, info.evaluations, std::memory_order_relaxed)) {
-    }
+    AnalyticStats call;
+    call.calls = 1;
+    call.evaluations = info.evaluations;
+    call.max_evaluations_per_call = info.evaluations;
+    call.fallbacks = info.fallbacks;
+    call.fallback_calls = info.fallbacks > 0 ? 1 : 0;
+    add_stats(call);
 }
 
 double polygon_polygon(std::span<const Vec3> given1, std::span<const Vec3> given2, AnalyticCallInfo& info) {
@@ -526,24 +529,16 @@ double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2) {
 }
 
 AnalyticStats analytic_stats() {
-    AnalyticStats s;
-    s.calls = g_calls.load(std::memory_order_relaxed);
-    s.evaluations = g_evaluations.load(std::memory_order_relaxed);
-    s.fallbacks = g_fallbacks.load(std::memory_order_relaxed);
-    s.fallback_calls = g_fallback_calls.load(std::memory_order_relaxed);
-    s.max_evaluations_per_call = g_max_evaluations.load(std::memory_order_relaxed);
-    s.flattened_polygons = g_flattened.load(std::memory_order_relaxed);
-    return s;
+    const std::lock_guard lock(g_stats_mutex);
+    return g_stats;
 }
 
 void reset_analytic_stats() {
-    g_calls.store(0, std::memory_order_relaxed);
-    g_evaluations.store(0, std::memory_order_relaxed);
-    g_fallbacks.store(0, std::memory_order_relaxed);
-    g_fallback_calls.store(0, std::memory_order_relaxed);
-    g_max_evaluations.store(0, std::memory_order_relaxed);
-    g_flattened.store(0, std::memory_order_relaxed);
+    const std::lock_guard lock(g_stats_mutex);
+    g_stats = AnalyticStats{};
 }
+
+void merge_analytic_stats(const AnalyticStats& other) { add_stats(other); }
 
 
 double ff_polygon_polygon_mc(std::span<const Vec3> given1, std::span<const Vec3> given2,

@@ -441,27 +441,24 @@ void report_row_source(Report& r, const RowSource& rows) {
         // call has a budget, and a fallback is a panel accepted at its fixed rule's value when
         // the budget was spent (its error is within the call's stated bound).
         const AnalyticStats a = analytic_stats();
-        r.set("analytic.calls", a.calls);
-        r.set("analytic.evaluations", a.evaluations);
-        r.set("analytic.max_evaluations_per_call", a.max_evaluations_per_call);
-        r.set("analytic.fallbacks", a.fallbacks);
-        r.set("analytic.fallback_calls", a.fallback_calls);
-        r.set("analytic.flattened_polygons", a.flattened_polygons);
+        stats::report(r, a);
         if (a.fallback_calls > 0)
             info("analytic form factors: {} of {} calls spent their budget and took the fallback rule on {} panels",
                  a.fallback_calls, a.calls, a.fallbacks);
     }
     if (const RaycastRowProvider* rc = rows.raycast()) {
+        const RaycastStats s = rc->stats();
         if (rc->tolerance() > 0) {  // refined to the tolerance: rays per row vary
             const RayBudget b = tolerance_rays(rc->tolerance());
             r.set("rays_per_patch_least", b.least);
             r.set("rays_per_patch_most", b.most);
-            r.set("rays_per_patch_mean", rc->refined_rows() ? static_cast<double>(rc->rays_traced()) / static_cast<double>(rc->refined_rows()) : 0.0);
-            r.set("rows_at_ray_budget", rc->rows_at_budget());
+            r.set("rays_per_patch_mean",
+                  s.refined_rows ? static_cast<double>(s.rays_traced) / static_cast<double>(s.refined_rows) : 0.0);
+            r.set("rows_at_ray_budget", s.rows_at_budget);
         } else {
             r.set("rays_per_patch", rc->rays());
         }
-        r.set("rays_traced", rc->rays_traced());
+        stats::report(r, s);  // rays_traced
         r.set("threads", rc->threads());
     }
     if (const HemicubeRowProvider* h = rows.hemicube()) report_hemicube(r, *h, *rows.driver());

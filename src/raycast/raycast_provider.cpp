@@ -10,6 +10,7 @@
 #include <atomic>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <span>
 #include <numbers>
 #include <thread>
@@ -279,12 +280,24 @@ struct RaycastRowProvider::Impl {
     std::vector<std::uint8_t> parallelogram;  // per patch: uniform bilinear sampling, weight 1
     std::vector<Vec3> normal;                 // per patch, packed: every hit reads one
     std::vector<std::uint32_t> twin;          // per patch: twin_patches (kNoPatch: none)
-    mutable std::atomic<std::uint64_t> traced{0};
-    // Rows refined to the tolerance: how many, and how many stopped at the budget above it.
-    mutable std::atomic<std::uint64_t> refined_rows{0}, rows_at_budget{0};
+    // The statistics (RaycastStats), each row's merged under the lock once the row is done.
+    mutable std::mutex stats_mutex;
+    mutable RaycastStats totals;
+    void add(const RaycastStats& s) const {
+        const std::lock_guard lock(stats_mutex);
+        stats::merge(totals, s);
+    }
+    // A row refined to the tolerance, and whether it stopped at the budget above it.
+    void add_traced(std::uint64_t rays) const {
+        RaycastStats s;
+        s.rays_traced = rays;
+        add(s);
+    }
     void note(const RowFigures& f) const {
-        refined_rows.fetch_add(1, std::memory_order_relaxed);
-        if (!(f.noise <= opt.tolerance)) rows_at_budget.fetch_add(1, std::memory_order_relaxed);
+        RaycastStats s;
+        s.refined_rows = 1;
+        s.rows_at_budget = f.noise <= opt.tolerance ? 0 : 1;
+        add(s);
     }
 
     Impl(const Scene& s, const RaycastOptions& o) : scene(s), opt(o) {
@@ -520,13 +533,13 @@ struct RaycastRowProvider::Impl {
         };
         if (opt.tolerance > 0) {
             replicated_row(rng, out, scratch, wsum, cast_points, exact, figures);
-            traced.fetch_add(traced_here, std::memory_order_relaxed);
+            add_traced(traced_here);
             return;
         }
         std::uint32_t state[4] = {0, 0, 0, 0}, seed[4];
         for (std::uint32_t& sd : seed) sd = static_cast<std::uint32_t>(rng.next() >> 32);
         cast_points(0, opt.rays, state, seed);
-        traced.fetch_add(traced_here, std::memory_order_relaxed);
+        add_traced(traced_here);
         std::sort(touched.begin(), touched.end());
         for (std::uint32_t j : touched) {
             out.col.push_back(j);
@@ -545,8 +558,11 @@ RaycastRowProvider::~RaycastRowProvider() = default;
 std::uint32_t RaycastRowProvider::size() const { return static_cast<std::uint32_t>(impl_->scene.size()); }
 std::uint64_t RaycastRowProvider::rays() const { return impl_->opt.rays; }
 double RaycastRowProvider::tolerance() const { return impl_->opt.tolerance; }
-std::uint64_t RaycastRowProvider::refined_rows() const { return impl_->refined_rows.load(); }
-std::uint64_t RaycastRowProvider::rows_at_budget() const { return impl_->rows_at_budget.load(); }
+RaycastStats RaycastRowProvider::stats() const {
+    const std::lock_guard lock(impl_->stats_mutex);
+    return impl_->totals;
+}
+void RaycastRowProvider::merge_stats(const RaycastStats& other) { impl_->add(other); }
 
 RayBudget tolerance_rays(double tolerance) {
     const auto pow2_at_least = [](double x) {
@@ -560,7 +576,6 @@ RayBudget tolerance_rays(double tolerance) {
     return b;
 }
 unsigned RaycastRowProvider::threads() const { return impl_->threads; }
-std::uint64_t RaycastRowProvider::rays_traced() const { return impl_->traced.load(); }
 
 void RaycastRowProvider::cast_row(std::uint32_t i, SparseRow& out, RowScratch& scratch) const {
     FFCUBE_CHECK_MSG(i < size(), "raycast: row out of range");

@@ -49,13 +49,23 @@ def ints(d, p=""):
         elif isinstance(v, int) and not isinstance(v, bool):
             yield p + k, v
 one, two = (json.load(open(f)) for f in sys.argv[1:])
-sets = ("hemicubes", "corrections.", "left_out.", "drawn.", "sub_hemicube_rows", "rows_not_rendered", "self_hits", "upload.")
+sets = ("hemicubes", "corrections.", "left_out.", "drawn.", "sub_hemicube_rows", "rows_not_rendered", "self_hits", "upload.",
+        "analytic.")
 a = {k: v for k, v in ints(one) if k.startswith(sets)}
 b = {k: v for k, v in ints(two) if k.startswith(sets)}
 assert len(a) > 30 and a == b, {k: (a.get(k), b.get(k)) for k in set(a) | set(b) if a.get(k) != b.get(k)}
 assert a["hemicubes"] == 600, a["hemicubes"]  # one hemicube a patch: no row is sub-sampled here
+assert a["analytic.calls"] > 0, a  # the near-field correction's exact values (the kernels' process totals)
 PY
 echo "ok: the report's counters under mpirun are every rank's, equal to one process's"
+# The ray caster's too: at a fixed count each row traces its rays (and its re-traces past its own
+# plane, a property of the row), so the rays traced over the ranks are the one-process total.
+"$ffcube" formfactors $rows --method raycast --set rays=256 -o one-rays.ffm --report one-rays.json || fail "one-process rays"
+mpi formfactors $rows --method raycast --set rays=256 -o two-rays.ffm --report two-rays.json || fail "mpirun rays"
+cmp one-rays.ffm two-rays.ffm || fail "ray-cast .ffm differs"
+python3 -c "import json,sys; a,b=(json.load(open(f)) for f in sys.argv[1:]); assert a['rays_traced']>=600*256 and a['rays_traced']==b['rays_traced'], (a['rays_traced'], b['rays_traced'])" \
+    one-rays.json two-rays.json || fail "rays_traced under mpirun differs from one process's"
+echo "ok: ray-cast rows byte-identical and rays_traced every rank's at -np 2"
 
 # 1b. --enforce on the streamed path (out of core: 1 MiB of --stats-memory cuts the transpose of
 # these 600 rows, about 3 MB of entries, into bands spilled to scratch files), against one process.

@@ -98,7 +98,7 @@ TEST(RaycastRows, ClosedBoxRowsSumToOneAndMatchClosedForms) {
     const double adjacent = ff_perpendicular_rectangles_common_edge(1, 1, 1);
     EXPECT_NEAR(G[z0][z1], opposite, tolerance(scene, z0, opposite, rays));
     EXPECT_NEAR(G[z0][x0], adjacent, tolerance(scene, z0, adjacent, rays));
-    EXPECT_EQ(provider.rays_traced() >= F.size() * rays, true);
+    EXPECT_EQ(provider.stats().rays_traced >= F.size() * rays, true);
 }
 
 // A non-parallelogram quad (trapezoid) is sampled with the bilinear map's Jacobian as weight;

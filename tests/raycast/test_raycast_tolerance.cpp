@@ -64,8 +64,8 @@ Checked check_rows(const Scene& scene, double E) {
             EXPECT_EQ(rays[i], static_cast<double>(b.most)) << "row " << i << " stopped above the target";
         }
     }
-    EXPECT_EQ(provider.refined_rows(), n);
-    EXPECT_EQ(provider.rows_at_budget(), c.above);
+    EXPECT_EQ(provider.stats().refined_rows, n);
+    EXPECT_EQ(provider.stats().rows_at_budget, c.above);
     return c;
 }
 

@@ -9,6 +9,7 @@
 // differential element, C-n cases between finite areas. All lengths in the same (any) unit.
 #pragma once
 
+#include "ffcube/core/stats.hpp"
 #include "ffcube/geometry/polygon.hpp"
 
 #include <cstdint>
@@ -105,19 +106,24 @@ struct AnalyticCallInfo {
 // The same value as ff_polygon_polygon(p1, p2), with its work reported in `info`.
 double ff_polygon_polygon(std::span<const Vec3> p1, std::span<const Vec3> p2, AnalyticCallInfo& info);
 
-// Process-wide totals of ff_polygon_polygon calls since the last reset (relaxed atomics: any
-// thread may call, totals are exact, reads are a snapshot). For the run report: "analytic
-// fallbacks: N" = fallback_calls.
+// Process-wide totals of ff_polygon_polygon calls since the last reset, a statistics set
+// (core/stats.hpp: each declared once, merged, flattened and reported by its key). Any thread may
+// call; each call merges its figures under a lock, so totals are exact and reads a snapshot. For
+// the run report: "analytic fallbacks: N" = fallback_calls.
+#define FFCUBE_ANALYTIC_STATS(X)                                                                              \
+    X(std::uint64_t, calls, sum, "analytic.calls")                                                            \
+    X(std::uint64_t, evaluations, sum, "analytic.evaluations")                                                \
+    X(std::uint64_t, max_evaluations_per_call, max, "analytic.max_evaluations_per_call")                      \
+    X(std::uint64_t, fallbacks, sum, "analytic.fallbacks")           /* panels accepted unconverged */        \
+    X(std::uint64_t, fallback_calls, sum, "analytic.fallback_calls") /* calls with such a panel */            \
+    X(std::uint64_t, flattened_polygons, sum, "analytic.flattened_polygons") /* projected onto their plane */
 struct AnalyticStats {
-    std::uint64_t calls = 0;
-    std::uint64_t evaluations = 0;
-    std::uint64_t fallbacks = 0;       // panels accepted unconverged, all calls
-    std::uint64_t fallback_calls = 0;  // calls with at least one such panel
-    std::uint64_t max_evaluations_per_call = 0;
-    std::uint64_t flattened_polygons = 0;  // slightly non-planar polygons projected onto their plane
+    FFCUBE_STATS(AnalyticStats, FFCUBE_ANALYTIC_STATS)
 };
 AnalyticStats analytic_stats();
 void reset_analytic_stats();
+// Adds another process's totals (an MPI rank's) to this process's.
+void merge_analytic_stats(const AnalyticStats& other);
 
 // Monte Carlo reference for tests: `samples` points uniform on polygon 1 (convex polygons only:
 // fan triangulation), each shooting one cosine-distributed ray from its front; F12 = fraction

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/core/stats.hpp"
 #include "ffcube/formfactor/row_provider.hpp"
 #include "ffcube/scene/scene.hpp"
 
@@ -57,6 +58,18 @@ struct RayBudget {
     std::uint64_t least = 0, most = 0;
 };
 RayBudget tolerance_rays(double tolerance);
+
+// The ray caster's statistics set (core/stats.hpp): rays traced (re-traces past a ray's own
+// patch included, see the .cpp), rows refined to the tolerance, and of those the ones whose
+// estimate was still above it when the budget was spent (the last two reported by the pipeline as
+// rays_per_patch_mean and rows_at_ray_budget, with a tolerance only).
+#define FFCUBE_RAYCAST_STATS(X)                                 \
+    X(std::uint64_t, rays_traced, sum, "rays_traced")           \
+    X(std::uint64_t, refined_rows, sum, "")                     \
+    X(std::uint64_t, rows_at_budget, sum, "")
+struct RaycastStats {
+    FFCUBE_STATS(RaycastStats, FFCUBE_RAYCAST_STATS)
+};
 
 class RaycastRowProvider final : public RowProvider {
 public:
@@ -97,13 +110,11 @@ public:
 
     std::uint64_t rays() const;
     double tolerance() const;
-    // Rows refined to the tolerance so far, and of those the ones whose estimate was still above
-    // it when the budget was spent.
-    std::uint64_t refined_rows() const;
-    std::uint64_t rows_at_budget() const;
     unsigned threads() const;
-    // Rays traced so far (including re-traces past a ray's own patch, see the .cpp).
-    std::uint64_t rays_traced() const;
+    // What the provider did so far (RaycastStats, above); merge_stats adds another's (an MPI
+    // rank's) to this one's.
+    RaycastStats stats() const;
+    void merge_stats(const RaycastStats& other);
 
     // Ray origins sit this far in front of the patch, as a fraction of the patch's longest edge
     // (relative, never absolute units), but at least kMinOffset of the scene's extent: Embree
