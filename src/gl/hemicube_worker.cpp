@@ -424,8 +424,8 @@ void Worker::accumulate(std::uint32_t p, double weight, Res res, HemicubeStats& 
         }
     });
     end_seen();
-    st.back_face_weight += weight * back;
-    st.miss_weight += weight * miss;
+    st.back_face_units += HemicubeStats::weight_units(weight * back);
+    st.miss_units += HemicubeStats::weight_units(weight * miss);
     st.accumulate_seconds += watch.seconds();
 }
 

@@ -22,7 +22,7 @@
 namespace ffcube {
 ClosureEvidence closure_evidence(const RowSource& rows) {
     ClosureEvidence evidence;
-    if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight;
+    if (rows.hemicube()) evidence.hemicube_miss_weight = rows.hemicube()->stats().miss_weight();
     if (rows.corrected()) evidence.inner_row_sum_min = rows.corrected()->stats().inner_row_sum_min;
     return evidence;
 }

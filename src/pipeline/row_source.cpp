@@ -378,8 +378,8 @@ void report_hemicube(Report& r, const HemicubeRowProvider& provider, const RowDr
     r.set("drawn.enclosure_planes", provider.enclosure_planes());
     r.set("drawn.enclosure_pieces", provider.enclosure_pieces());
     const double h = st.hemicubes ? static_cast<double>(st.hemicubes) : 1.0;
-    r.set("coverage.mean_miss_fraction", st.miss_weight / h);
-    r.set("coverage.mean_back_face_fraction", st.back_face_weight / h);
+    r.set("coverage.mean_miss_fraction", st.miss_weight() / h);
+    r.set("coverage.mean_back_face_fraction", st.back_face_weight() / h);
     // Rows planned at 4 × 4 ray-cast instead (--fine-rows) and their rays (fine_rows.cast, above).
     r.set("fine_rows.by", driver.fine_rows_by_rays() ? "rays" : "hemicubes");
     r.set("fine_rows.rays_per_row", driver.fine_row_rays());

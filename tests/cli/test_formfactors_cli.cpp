@@ -119,6 +119,26 @@ TEST(FormfactorsCli, ByteIdenticalAcrossRunsAndThreadCounts) {
     }
 }
 
+// The report's coverage figures (the hemicubes' miss and back-face weights) are sums over every
+// hemicube, merged across worker threads and processes in whatever order rows finish; they are
+// summed as integers (HemicubeStats::kWeightUnit), so the report is the same whatever the thread
+// count. Two plates (examples/parallel_squares.obj) leave most of each hemicube empty.
+TEST(FormfactorsCli, CoverageFiguresDoNotDependOnTheThreadCount) {
+    TempDir dir;
+    const std::string base = "formfactors " + test::example("parallel_squares.obj") +
+                             " --max-patch-edge 0.1 --method hemicube --resolution 32 -q -o " + (dir / "F.ffm") + " --report ";
+    std::vector<double> miss;
+    for (const std::string threads : {"1", "2", "2"}) {
+        const std::string report = dir / ("r" + std::to_string(miss.size()) + ".json");
+        ASSERT_EQ(run_ffcube(base + report + " --threads " + threads).code, 0);
+        const auto r = nlohmann::json::parse(test::read_text(report));
+        miss.push_back(r["coverage"]["mean_miss_fraction"].get<double>());
+    }
+    EXPECT_GT(miss[0], 0.5);  // each plate sees the other under F = 0.2: most pixels see nothing
+    EXPECT_EQ(miss[0], miss[1]);
+    EXPECT_EQ(miss[0], miss[2]);
+}
+
 struct BadCase {
     std::string args;
     int code;

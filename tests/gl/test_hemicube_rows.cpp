@@ -71,8 +71,8 @@ void expect_closed_and_watertight(const Scene& scene, int n, const std::string& 
     HemicubeRowProvider provider(scene, options(n));
     const CsrMatrix F = compute_all_rows(provider);
     for (std::uint32_t i = 0; i < scene.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i << " " << label;
-    EXPECT_EQ(provider.stats().miss_weight, 0.0) << label;
-    EXPECT_EQ(provider.stats().back_face_weight, 0.0) << label;
+    EXPECT_EQ(provider.stats().miss_weight(), 0.0) << label;
+    EXPECT_EQ(provider.stats().back_face_weight(), 0.0) << label;
 }
 
 std::size_t object_index(const Scene& s, const std::string& name) {
@@ -240,7 +240,7 @@ TEST(HemicubeRows, BackFacesBlockAndReceiveNothing) {
                       h = object_index(scene, "hidden");
     EXPECT_EQ(G[s][bw], 0.0);
     EXPECT_EQ(G[s][h], 0.0);
-    EXPECT_GT(provider.stats().back_face_weight, 0.0);
+    EXPECT_GT(provider.stats().back_face_weight(), 0.0);
     // 'backwards' faces up, toward 'hidden' (which faces down): they see each other.
     EXPECT_GT(G[bw][h], 0.1);
 }
@@ -264,8 +264,8 @@ TEST(HemicubeRows, TwoSidedPlateShowsBothFrontsAndLeaksNothing) {
         HemicubeRowProvider provider(scene, options(n));
         const CsrMatrix F = compute_all_rows(provider);
         for (std::uint32_t i = 0; i < scene.size(); ++i) EXPECT_NEAR(F.row(i).sum(), 1.0, 1e-7) << "row " << i << " N=" << n;
-        EXPECT_EQ(provider.stats().back_face_weight, 0.0) << "a back face won a pixel somewhere (N=" << n << ")";
-        EXPECT_EQ(provider.stats().miss_weight, 0.0);
+        EXPECT_EQ(provider.stats().back_face_weight(), 0.0) << "a back face won a pixel somewhere (N=" << n << ")";
+        EXPECT_EQ(provider.stats().miss_weight(), 0.0);
         // The floor sees the plate's lower side, the ceiling its upper side, never the other.
         const auto G = object_form_factors(F, scene);
         const std::size_t up = object_index(scene, "plate_up"), down = object_index(scene, "plate_down"),
@@ -460,8 +460,8 @@ TEST(HemicubeRows, ManyBricksShowNoBackFacesAndLeakNothing) {
         for (const double v : row.val) sum += v;
         EXPECT_NEAR(sum, 1.0, 1e-7) << "row " << i;
     });
-    EXPECT_EQ(provider.stats().miss_weight, 0.0);
-    EXPECT_EQ(provider.stats().back_face_weight, 0.0);
+    EXPECT_EQ(provider.stats().miss_weight(), 0.0);
+    EXPECT_EQ(provider.stats().back_face_weight(), 0.0);
 }
 
 // The worker lists a row's columns by sorting the ones it touched (a sparse row: m columns of n

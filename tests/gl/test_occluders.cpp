@@ -51,7 +51,7 @@ TEST(Occluders, WallSeenEdgeOnFromBothSidesBlocksEverything) {
         EXPECT_GT(checked, 500u);
         EXPECT_LT(total_leak, 1e-3) << "N=" << n;
         // The plate patches next to the wall's back see it: back-face pixels were drawn.
-        EXPECT_GT(provider.stats().back_face_weight, 0.0);
+        EXPECT_GT(provider.stats().back_face_weight(), 0.0);
     }
 }
 

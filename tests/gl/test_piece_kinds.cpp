@@ -478,11 +478,11 @@ TEST(PieceKinds, TJunctionsBetweenKindsLeaveNoCracksAndMapPixelsToTheirCells) {
         const CsrMatrix F = compute_all_rows(provider);
         const RowSumStats rs = row_sum_stats(F);
         std::printf("[ prism, %zu patches, N=128 ] row sums in [1%+.2g, 1%+.2g]; miss %.3g back %.3g\n", s.size(), rs.min - 1,
-                    rs.max - 1, provider.stats().miss_weight, provider.stats().back_face_weight);
+                    rs.max - 1, provider.stats().miss_weight(), provider.stats().back_face_weight());
         EXPECT_NEAR(rs.min, 1.0, 1e-7);
         EXPECT_NEAR(rs.max, 1.0, 1e-7);
-        EXPECT_EQ(provider.stats().miss_weight, 0.0);
-        EXPECT_EQ(provider.stats().back_face_weight, 0.0);
+        EXPECT_EQ(provider.stats().miss_weight(), 0.0);
+        EXPECT_EQ(provider.stats().back_face_weight(), 0.0);
         EXPECT_EQ(provider.stats().self_hits, 0u);
     }
 

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -81,9 +82,10 @@ using PerFace = stats::PerPart<std::uint64_t, 5, kHemicubeFaceNames>;
     X(std::uint64_t, enclosure_hemicubes, sum, "drawn.enclosure_hemicubes")                                       \
     X(std::uint64_t, enclosure_pieces_drawn, sum, "drawn.enclosure_pieces_drawn")                                 \
     X(std::uint64_t, depth_free_hemicubes, sum, "drawn.depth_free_hemicubes")                                     \
-    /* sum of dF of pixels that showed a back face, and nothing (reported per hemicube: coverage.*) */             \
-    X(double, back_face_weight, sum, "")                                                                          \
-    X(double, miss_weight, sum, "")                                                                               \
+    /* sum of dF of pixels that showed a back face, and nothing, in units of kWeightUnit (reported per            \
+       hemicube: coverage.*; read through back_face_weight(), miss_weight()) */                                   \
+    X(std::uint64_t, back_face_units, sum, "")                                                                    \
+    X(std::uint64_t, miss_units, sum, "")                                                                         \
     X(std::uint64_t, self_hits, sum, "self_hits") /* pixels that showed the patch itself (should stay 0) */       \
     X(std::uint64_t, sampled_rows, sum, "sub_hemicube_rows") /* rows made of sub-hemicubes (sampled) */           \
     X(std::uint64_t, skipped_rows, sum, "rows_not_rendered") /* rows needing no hemicube (RowPlan::skip) */       \
@@ -101,6 +103,21 @@ using PerFace = stats::PerPart<std::uint64_t, 5, kHemicubeFaceNames>;
 
 struct HemicubeStats {
     FFCUBE_STATS(HemicubeStats, FFCUBE_HEMICUBE_STATS)
+
+    // The weights are summed as integers of 2^-32, so that their totals are the same bits in any
+    // order of threads, worker processes and MPI ranks (a sum of doubles is not): the report's
+    // coverage figures do not depend on the thread count or the load. Each hemicube's weight
+    // (at most 1) is rounded to the nearest unit, but a positive weight counts at least one, so
+    // "some pixel saw nothing" (the closure evidence, accuracy/enforce.hpp) is kept exactly.
+    // 2^64 units hold 2^32 hemicubes' worth of weight 1.
+    static constexpr double kWeightUnit = 0x1p-32;
+    static std::uint64_t weight_units(double w) {
+        if (!(w > 0)) return 0;
+        const auto u = static_cast<std::uint64_t>(std::llround(w / kWeightUnit));
+        return u > 0 ? u : 1;
+    }
+    double back_face_weight() const { return static_cast<double>(back_face_units) * kWeightUnit; }
+    double miss_weight() const { return static_cast<double>(miss_units) * kWeightUnit; }
 };
 
 class HemicubeRowProvider final : public RowProvider {
