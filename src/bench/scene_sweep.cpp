@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <vector>
 
 #include "ffcube/bench/bench.hpp"
 #include "ffcube/core/error.hpp"
@@ -90,14 +91,13 @@ std::vector<BenchResult> run_scene_sweep(const Scene& scene, const std::string& 
         r.patches = scene.size();
         r.seconds = seconds * scale;
         double sum = 0.0, estimate = 0.0;
+        const std::vector<float> none;
+        const std::vector<float>& est = rows.corrected() ? rows.corrected()->row_tolerance_estimates() : none;
         for (const std::uint32_t i : sample) {
             const double err = row_error(got.at(i), ref.at(i));
             r.errors.max_abs_error = std::max(r.errors.max_abs_error, err);
             sum += err;
-            if (rows.corrected()) {
-                const auto& est = rows.corrected()->row_tolerance_estimates();
-                if (i < est.size() && std::isfinite(est[i])) estimate = std::max(estimate, static_cast<double>(est[i]));
-            }
+            if (i < est.size() && std::isfinite(est[i])) estimate = std::max(estimate, static_cast<double>(est[i]));
         }
         r.errors.mean_abs_error = sum / static_cast<double>(sample.size());
         r.estimate = estimate;
