@@ -122,23 +122,11 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
     // plans, when the row is corrected; slot k is touched only by row k's plan and finish, which
     // run one after the other on one thread.
     analyses_.assign(rows.size(), NearAnalysis{});
-    if (row_error_.size() != inner_.size()) row_error_.assign(inner_.size(), NAN);
-    if (row_tolerance_.size() != inner_.size()) row_tolerance_.assign(inner_.size(), NAN);
-    if (row_measure_.size() != inner_.size()) row_measure_.assign(inner_.size(), RowMeasure::not_computed);
-    // The stages below write row_error_[i] and row_measure_[i] from the inner provider's worker
-    // threads without a lock: that needs each row listed once. Checked always (O(rows), a mark
-    // set and cleared per listed row), as a race here would corrupt the estimates silently.
-    if (listed_.size() != inner_.size()) listed_.assign(inner_.size(), 0);
-    for (std::size_t k = 0; k < rows.size(); ++k) {
-        const std::uint32_t i = rows[k];
-        if (i >= listed_.size() || listed_[i]) {
-            for (std::size_t m = 0; m < k; ++m) listed_[rows[m]] = 0;
-            throw InternalError(fmt::format("CorrectedRowProvider::compute_rows: row {} is {} (one writer per row)", i,
-                                               i >= listed_.size() ? "out of range" : "listed twice"));
-        }
-        listed_[i] = 1;
-    }
-    for (const std::uint32_t i : rows) listed_[i] = 0;
+    // Each row's figures go with it (SparseRow::side); a row listed twice is measured twice.
+    for (const std::uint32_t i : rows)
+        if (i >= inner_.size())
+            throw InternalError(fmt::format("CorrectedRowProvider::compute_rows: row {} is out of range ({} rows)", i,
+                                            inner_.size()));
     // Rows with a near pair that may be occluded are measured by sub-hemicubes at the sender's
     // quadrature points (the pair keeps a value with its own visibility and sender quadrature);
     // rows whose every pair is known are not measured. Each row's plan comes from its analysis,
@@ -279,10 +267,10 @@ void CorrectedRowProvider::compute_rows(std::span<const std::uint32_t> rows, con
             pools_->note_out_of_range(i);
         }
         pools_->give_back(std::move(scratch));
-        // One writer per row (i is listed once); both are sized before the stages start.
-        row_error_[i] = static_cast<float>(estimate);
-        row_tolerance_[i] = static_cast<float>(std::max(tolerance_estimate, 0.0));
-        row_measure_[i] = by_rays     ? RowMeasure::refined
+        // The row's figures go with it to every sink (SparseRow::side).
+        row.side.error = static_cast<float>(estimate);
+        row.side.tolerance_error = static_cast<float>(std::max(tolerance_estimate, 0.0));
+        row.side.measure = by_rays     ? RowMeasure::refined
                           : by_redraw ? RowMeasure::redrawn
                           : a.skipped ? RowMeasure::analytic
                           : !sampled ? RowMeasure::centre

@@ -226,8 +226,10 @@ int run(const Options& o) {
             report.set("sky.rows_reused", reused);
             report.set("sky.rows_computed", scene.size() - reused);
             info("sky: {} rows kept from the solve, {} computed", reused, scene.size() - reused);
-            const std::span<const double> cut = computed_rows.obstructed();
-            obstructed.assign(cut.begin(), cut.end());
+            if (scene.drawn) {  // each row's share came with it (RowSide), noted in the source's ledger
+                const std::span<const double> cut = computed_rows.ledger().obstructed();
+                obstructed.assign(cut.begin(), cut.end());
+            }
         }
         report.set("time.sky_rows", watch.seconds());
     }

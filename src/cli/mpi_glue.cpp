@@ -76,7 +76,7 @@ std::optional<RowCheckpoint> open_shard(const CheckpointOptions& checkpoint, con
 
 // The rows of [first, last) missing from the store, each appended to it as it comes.
 void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t first, std::uint32_t last,
-                  bool progress, std::span<const double> obstructed) {
+                  bool progress) {
     std::vector<std::uint32_t> todo;
     for (std::uint32_t i = first; i < last; ++i)
         if (!store.has(i)) todo.push_back(i);
@@ -84,24 +84,12 @@ void compute_into(RowProvider& provider, RowCheckpoint& store, std::uint32_t fir
     {
         Progress bar("rows (rank 0's block)", todo.size(), progress && mpi::rank() == 0);
         provider.compute_rows(todo, [&](std::uint32_t i, const SparseRow& row) {
-            store.append(i, row, obstructed.empty() ? 0.0 : obstructed[i]);
+            store.append(i, row);  // with its side figures
             bar.add();
         });
     }
     store.sync();
 }
-
-// What a RowSource keeps of the rows it made besides the rows, which under mpirun is each rank's
-// own block only: reduced over the ranks onto rank 0.
-struct RanksFigures {
-    // Hemicube miss weight summed over the ranks, inner row sum min: read from the providers'
-    // statistics once every rank's are merged into rank 0's (merge_ranks_stats).
-    ClosureEvidence evidence;
-    // With obstruction-only surfaces (Scene::drawn): every row's obstructed share
-    // (RowSource::obstructed(), or a reused row's from its rank's checkpoint shard), each from the
-    // rank that owns the row; empty without them.
-    std::vector<double> obstructed;
-};
 
 // Every other rank's statistics set handed to into_root on rank 0, one rank at a time in rank
 // order (each travels in its flat form, core/stats.hpp). Collective: every rank has the same
@@ -116,22 +104,10 @@ void merge_ranks_stats(const S& mine, F&& into_root) {
 }
 
 // The statistics of every rank's rows (a process's providers saw only its own) merged into rank
-// 0's providers, so its report and closure evidence count every row; with obstruction-only
-// surfaces every row's obstructed share, on rank 0. Collective. This rank's rows are [first,
-// last); store: where they wait (their shares as stored, reused rows' included), or null (the
-// RowSource computed them all).
-RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint32_t first, std::uint32_t last,
-                            const RowCheckpoint* store) {
-    RanksFigures figures;
-    if (scene.drawn) {
-        // Zeros outside this rank's block: the sum over the ranks is each row's owner's value,
-        // bit for bit (x + 0 = x exactly, in any order).
-        figures.obstructed.assign(scene.size(), 0.0);
-        const std::span<const double> mine = store ? store->obstructed() : rows.obstructed();
-        FFCUBE_CHECK(mine.size() == scene.size());
-        for (std::uint32_t i = first; i < last; ++i) figures.obstructed[i] = mine[i];
-        mpi::reduce_sum_to_root(figures.obstructed);
-    }
+// 0's providers, so its report and closure evidence count every row; returns that evidence (on
+// rank 0; a rank's own elsewhere). The rows' own figures (obstructed shares, estimates) came with
+// the rows. Collective.
+ClosureEvidence merge_ranks_figures(const RowSource& rows) {
     if (HemicubeRowProvider* h = rows.hemicube())
         merge_ranks_stats(h->stats(), [&](const HemicubeStats& other) { h->merge_stats(other); });
     if (CorrectedRowProvider* c = rows.corrected())
@@ -140,8 +116,7 @@ RanksFigures reduce_figures(const RowSource& rows, const Scene& scene, std::uint
         merge_ranks_stats(rc->stats(), [&](const RaycastStats& other) { rc->merge_stats(other); });
     // The analytic kernels' totals are the process's: every rank's added to rank 0's.
     merge_ranks_stats(analytic_stats(), [](const AnalyticStats& other) { merge_analytic_stats(other); });
-    figures.evidence = closure_evidence(rows);
-    return figures;
+    return closure_evidence(rows);
 }
 
 }  // namespace
@@ -182,8 +157,7 @@ public:
         : rows_(rows), scene_(scene), options_(options), checkpoint_(checkpoint), meta_(meta), output_(output),
           report_(report), progress_(progress) {}
     void rows(const RowViewFn& sink) override;
-    ClosureEvidence evidence() const override { return figures_.evidence; }
-    std::span<const double> obstructed() const override { return figures_.obstructed; }
+    ClosureEvidence evidence() const override { return evidence_; }
 
 private:
     RowSource& rows_;
@@ -194,7 +168,7 @@ private:
     std::string output_;
     Report& report_;
     bool progress_;
-    RanksFigures figures_;
+    ClosureEvidence evidence_;
 };
 
 void MpiRowFeed::rows(const RowViewFn& sink) {
@@ -223,15 +197,16 @@ void MpiRowFeed::rows(const RowViewFn& sink) {
         store = RowCheckpoint::create(spool_dir->path() / "rows", checkpoint_manifest(scene, meta_));
     }
     if (store) {
-        compute_into(provider, *store, first, last, progress, rows_.obstructed());
+        compute_into(provider, *store, first, last, progress);
         if (r == 0) {  // rank 0's block read back from its shard, bit-identical to the rows as computed
             mpi::RowBlock row;
             for (std::uint32_t i = first; i < last; ++i) {
                 row.nnz.clear();
                 row.col.clear();
                 row.val.clear();
-                store->read_rows(i, i + 1, row.nnz, row.col, row.val);
-                sink(i, RowView{row.col, row.val});
+                row.side.clear();
+                store->read_rows(i, i + 1, row.nnz, row.col, row.val, row.side);
+                sink(i, RowView{row.col, row.val, row.side.front()});
             }
         }
     } else {  // rank 0 without a checkpoint: its rows straight to the sink
@@ -242,14 +217,14 @@ void MpiRowFeed::rows(const RowViewFn& sink) {
         provider.compute_rows(list, [&](std::uint32_t i, const SparseRow& row) {
             val.resize(row.val.size());
             for (std::size_t q = 0; q < val.size(); ++q) val[q] = static_cast<float>(row.val[q]);  // as CsrMatrix
-            sink(i, RowView{row.col, val});
+            sink(i, RowView{row.col, val, row.side});
             bar.add();
         });
     }
-    figures_ = reduce_figures(rows_, scene, first, last, store ? &*store : nullptr);
+    evidence_ = merge_ranks_figures(rows_);
     if (r != 0) {
         mpi::serve_rows(first, last, [&](std::uint32_t i, mpi::RowBlock& chunk) {
-            store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val);
+            store->read_rows(i, i + 1, chunk.nnz, chunk.col, chunk.val, chunk.side);
         });
         return;
     }

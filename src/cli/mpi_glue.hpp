@@ -46,8 +46,9 @@ Scene mpi_load_and_mesh(const SceneOptions& options, Report& report);
 // `output` (a checkpoint of its own, removed at the end); on rank 0 rows() hands every row to the
 // sink in row order: its own block as computed (or read back from its shard), then each other
 // rank's block in chunks it asks for one at a time (mpi::serve_rows). On the other ranks rows()
-// returns once rank 0 has every row of theirs (the sink is never called there). Collective. The
-// closure evidence and the obstructed shares are every rank's, reduced onto rank 0.
+// returns once rank 0 has every row of theirs (the sink is never called there). Collective. Each
+// row comes with its side figures (from the rank that made it); the closure evidence is every
+// rank's, merged onto rank 0.
 std::unique_ptr<RowFeed> mpi_row_feed(RowSource& rows, const Scene& scene, const RowOptions& options,
                                       const CheckpointOptions& checkpoint, const FfmMetadata& meta,
                                       const std::string& output, Report& report, bool progress);

@@ -94,7 +94,7 @@ void ObservingRowProvider::compute_rows_staged(std::span<const std::uint32_t> ro
     inner_.compute_rows_staged(rows, stages, observing(sink));
 }
 
-LeadingRowProvider::LeadingRowProvider(RowProvider& inner, std::uint32_t n) : ObservingRowProvider(inner), n_(n), cut_(n, 0.0) {
+LeadingRowProvider::LeadingRowProvider(RowProvider& inner, std::uint32_t n) : ObservingRowProvider(inner), n_(n) {
     FFCUBE_CHECK_MSG(n <= inner.size(), "LeadingRowProvider: more rows than the inner provider has");
 }
 
@@ -104,21 +104,24 @@ const SparseRow& LeadingRowProvider::observe(std::uint32_t i, const SparseRow& f
     const auto keep = static_cast<std::size_t>(std::lower_bound(full.col.begin(), full.col.end(), n_) - full.col.begin());
     double cut = 0.0;
     for (std::size_t k = keep; k < full.col.size(); ++k) cut += full.val[k];
-    cut_[i] = cut;
-    if (keep == full.col.size()) return full;
+    if (keep == full.col.size() && full.side.obstructed == cut) return full;  // nothing cut (cut = +0.0)
     row_.col.assign(full.col.begin(), full.col.begin() + static_cast<std::ptrdiff_t>(keep));
     row_.val.assign(full.val.begin(), full.val.begin() + static_cast<std::ptrdiff_t>(keep));
+    row_.side = full.side;
+    row_.side.obstructed = cut;
     return row_;
 }
 
-CsrMatrix compute_all_rows(RowProvider& provider) {
+CsrMatrix compute_all_rows(RowProvider& provider, RowLedger* ledger) {
     const std::uint32_t n = provider.size();
     std::vector<std::uint32_t> all(n);
     std::iota(all.begin(), all.end(), 0u);
     CsrMatrix m(n);
+    if (ledger) ledger->resize(n);
     provider.compute_rows(all, [&](std::uint32_t i, const SparseRow& r) {
         FFCUBE_CHECK(i == m.rows_filled());
         m.append_row(r);
+        if (ledger) ledger->note(i, r.side);
     });
     return m;
 }

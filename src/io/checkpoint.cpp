@@ -27,16 +27,38 @@ constexpr std::size_t kHeader = 16, kTrailer = 8;
 constexpr float kMaxValue = 1.001f;  // as the .ffm reader: F entries are fractions, with rounding room
 constexpr const char* kManifestName = "manifest.txt";
 constexpr const char* kLogName = "rows.log";
-constexpr const char* kFormatLine = "ffcube-checkpoint 2";  // written; format 1 is still read
+constexpr const char* kFormatLine = "ffcube-checkpoint 3";  // written; formats 1 and 2 are still read
+constexpr const char* kFormatLine2 = "ffcube-checkpoint 2";  // before the rows' figures (flag 2 never set)
 constexpr const char* kFormatLine1 = "ffcube-checkpoint 1";  // before the obstructed shares (flags always 0)
 constexpr std::uint32_t kFlagObstructed = 1;                 // an f64 obstructed share after the values
+constexpr std::uint32_t kFlagFigures = 2;  // then f32 error, f32 tolerance_error, i32 measure, u32 0 (RowSide)
+constexpr std::int32_t kMeasureMin = -1, kMeasureMax = 7;    // RowSide::measure's range (RowMeasure)
 
 double now_seconds() {
     return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 std::uint64_t record_bytes(std::uint32_t nnz, std::uint32_t flags) {
-    return kHeader + 8 * std::uint64_t(nnz) + ((flags & kFlagObstructed) ? 8 : 0) + kTrailer;
+    return kHeader + 8 * std::uint64_t(nnz) + ((flags & kFlagObstructed) ? 8 : 0) + ((flags & kFlagFigures) ? 16 : 0) +
+           kTrailer;
+}
+
+// Where a record's figures start (after the values and the obstructed share).
+std::size_t figures_at(std::uint32_t nnz, std::uint32_t flags) {
+    return kHeader + 8 * std::size_t(nnz) + ((flags & kFlagObstructed) ? 8 : 0);
+}
+
+// The side figures of a checked record.
+RowSide record_side(const unsigned char* buf, std::uint32_t nnz, std::uint32_t flags) {
+    RowSide side;
+    if (flags & kFlagObstructed) side.obstructed = load_le<double>(buf + kHeader + 8 * std::size_t(nnz));
+    if (flags & kFlagFigures) {
+        const unsigned char* f = buf + figures_at(nnz, flags);
+        side.error = load_le<float>(f);
+        side.tolerance_error = load_le<float>(f + 4);
+        side.measure = static_cast<std::int8_t>(load_le<std::int32_t>(f + 8));
+    }
+    return side;
 }
 
 // The manifest as ordered key/value lines; a value never holds a newline.
@@ -89,6 +111,15 @@ std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint3
         const auto o = load_le<double>(buf + kHeader + 8 * std::size_t(nnz));
         if (!std::isfinite(o) || o < 0.0 || o > kMaxValue) return fmt::format("obstructed share {} out of range", o);
     }
+    if (flags & kFlagFigures) {
+        const unsigned char* f = buf + figures_at(nnz, flags);
+        for (int k = 0; k < 2; ++k)  // an estimate: NaN (none), or finite and not negative
+            if (const auto e = load_le<float>(f + 4 * k); !std::isnan(e) && !(std::isfinite(e) && e >= 0.0f))
+                return fmt::format("error estimate {} out of range", e);
+        const auto m = load_le<std::int32_t>(f + 8);
+        if (m < kMeasureMin || m > kMeasureMax || load_le<std::uint32_t>(f + 12) != 0)
+            return fmt::format("measure {} out of range", m);
+    }
     const unsigned char* cols = buf + kHeader;
     const unsigned char* vals = cols + 4 * std::size_t(nnz);
     for (std::uint32_t k = 0; k < nnz; ++k) {
@@ -102,15 +133,15 @@ std::string check_record(const unsigned char* buf, std::uint32_t nnz, std::uint3
 
 }  // namespace
 
-RowCheckpoint::RowCheckpoint(fs::path dir, std::uint32_t n, bool obstructions)
-    : dir_(std::move(dir)), offsets_(n, kMissing), flags_(obstructions ? kFlagObstructed : 0), obstructed_(n, 0.0) {}
+RowCheckpoint::RowCheckpoint(fs::path dir, std::uint32_t n, bool obstructions, bool figures)
+    : dir_(std::move(dir)), offsets_(n, kMissing),
+      flags_((obstructions ? kFlagObstructed : 0) | (figures ? kFlagFigures : 0)) {}
 
 std::uint64_t RowCheckpoint::record_size(std::uint32_t nnz) const { return record_bytes(nnz, flags_); }
 
 RowCheckpoint::RowCheckpoint(RowCheckpoint&& o) noexcept
     : dir_(std::move(o.dir_)), fd_(o.fd_), end_(o.end_), offsets_(std::move(o.offsets_)), stored_(o.stored_),
-      warnings_(std::move(o.warnings_)), last_sync_(o.last_sync_), buffer_(std::move(o.buffer_)), flags_(o.flags_),
-      obstructed_(std::move(o.obstructed_)) {
+      warnings_(std::move(o.warnings_)), last_sync_(o.last_sync_), buffer_(std::move(o.buffer_)), flags_(o.flags_) {
     o.fd_ = -1;
 }
 
@@ -127,7 +158,6 @@ RowCheckpoint& RowCheckpoint::operator=(RowCheckpoint&& o) noexcept {
         last_sync_ = o.last_sync_;
         buffer_ = std::move(o.buffer_);
         flags_ = o.flags_;
-        obstructed_ = std::move(o.obstructed_);
     }
     return *this;
 }
@@ -152,7 +182,7 @@ RowCheckpoint RowCheckpoint::create(const fs::path& dir, const CheckpointManifes
     if (!fs::create_directory(dir, ec) && ec)
         throw InputError(fmt::format("--checkpoint {}: cannot create the directory: {}", dir.string(), ec.message()));
 
-    RowCheckpoint c(dir, manifest.patches, manifest.obstructions);
+    RowCheckpoint c(dir, manifest.patches, manifest.obstructions, /*figures=*/true);
     // An empty log first, the manifest last: rows are appended only once the manifest exists, so
     // a log without a manifest (a kill between the two) holds no rows and is emptied here.
     c.fd_ = open_log(dir / kLogName, O_RDWR | O_CREAT | O_TRUNC);
@@ -177,10 +207,13 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
                                      dir.string(), kManifestName));
     std::ifstream in(mpath, std::ios::binary);
     std::string line;
-    if (!std::getline(in, line) || (line != kFormatLine && line != kFormatLine1))
-        throw InputError(fmt::format("{}: not an ffcube checkpoint manifest (expected '{}' or '{}' on line 1)",
-                                     mpath.string(), kFormatLine, kFormatLine1));
+    if (!std::getline(in, line) || (line != kFormatLine && line != kFormatLine2 && line != kFormatLine1))
+        throw InputError(fmt::format("{}: not an ffcube checkpoint manifest (expected '{}', '{}' or '{}' on line 1)",
+                                     mpath.string(), kFormatLine, kFormatLine2, kFormatLine1));
     const bool format1 = line == kFormatLine1;
+    // Formats 1 and 2 came before the rows' figures: their records (and the rows appended to
+    // them) keep none, and their rows come back without estimates (RowSide's NaN).
+    const bool figures = line == kFormatLine;
     std::map<std::string, std::string> found;
     while (std::getline(in, line)) {
         const auto space = line.find(' ');
@@ -199,7 +232,7 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
                                      "reused (remove it, or run the command that made it):{}",
                                      dir.string(), differences));
 
-    RowCheckpoint c(dir, manifest.patches, manifest.obstructions);
+    RowCheckpoint c(dir, manifest.patches, manifest.obstructions, figures);
     const fs::path lpath = dir / kLogName;
     c.fd_ = open_log(lpath, O_RDWR | O_CREAT);
     const off_t size = ::lseek(c.fd_, 0, SEEK_END);
@@ -239,7 +272,6 @@ RowCheckpoint RowCheckpoint::resume(const fs::path& dir, const CheckpointManifes
         }
         if (c.offsets_[row] == kMissing) {
             c.offsets_[row] = pos;
-            if (c.flags_ & kFlagObstructed) c.obstructed_[row] = load_le<double>(c.buffer_.data() + kHeader + 8 * std::size_t(nnz));
             ++c.stored_;
         }
         pos += rsize;
@@ -263,9 +295,9 @@ std::vector<std::uint32_t> RowCheckpoint::missing() const {
     return rows;
 }
 
-void RowCheckpoint::append(std::uint32_t i, const SparseRow& row, double obstructed) {
+void RowCheckpoint::append(std::uint32_t i, const SparseRow& row) {
     FFCUBE_CHECK(i < size() && !has(i) && row.col.size() == row.val.size());
-    FFCUBE_CHECK_MSG((flags_ & kFlagObstructed) || obstructed == 0.0,
+    FFCUBE_CHECK_MSG((flags_ & kFlagObstructed) || row.side.obstructed == 0.0,
                      "an obstructed share for a checkpoint made without obstructions");
     const auto nnz = static_cast<std::uint32_t>(row.col.size());
     const std::uint64_t rsize = record_size(nnz);
@@ -278,7 +310,14 @@ void RowCheckpoint::append(std::uint32_t i, const SparseRow& row, double obstruc
         const float v = static_cast<float>(row.val[k]);  // exactly what CsrMatrix::append_row stores
         store_le(p + kHeader + 4 * std::size_t(nnz) + 4 * k, v);
     }
-    if (flags_ & kFlagObstructed) store_le(p + kHeader + 8 * std::size_t(nnz), obstructed);
+    if (flags_ & kFlagObstructed) store_le(p + kHeader + 8 * std::size_t(nnz), row.side.obstructed);
+    if (flags_ & kFlagFigures) {
+        unsigned char* f = p + figures_at(nnz, flags_);
+        store_le(f, row.side.error);
+        store_le(f + 4, row.side.tolerance_error);
+        store_le(f + 8, static_cast<std::int32_t>(row.side.measure));
+        store_le(f + 12, std::uint32_t{0});
+    }
     const std::uint64_t sum = checksum64(p, rsize - kTrailer);
     store_le(p + rsize - kTrailer, sum);
     std::size_t done = 0;
@@ -289,7 +328,6 @@ void RowCheckpoint::append(std::uint32_t i, const SparseRow& row, double obstruc
         done += static_cast<std::size_t>(w);
     }
     offsets_[i] = end_;
-    obstructed_[i] = obstructed;
     end_ += rsize;
     ++stored_;
     maybe_sync();
@@ -358,12 +396,13 @@ void RowCheckpoint::for_each_row(const std::function<void(std::uint32_t, RowView
         val.resize(nnz);
         std::memcpy(col.data(), buf.data() + kHeader, 4 * std::size_t(nnz));
         std::memcpy(val.data(), buf.data() + kHeader + 4 * std::size_t(nnz), 4 * std::size_t(nnz));
-        f(i, RowView{col, val});
+        f(i, RowView{col, val, record_side(buf.data(), nnz, flags_)});
     }
 }
 
 void RowCheckpoint::read_rows(std::uint32_t first, std::uint32_t last, std::vector<std::uint32_t>& nnz,
-                              std::vector<std::uint32_t>& col, std::vector<float>& val) const {
+                              std::vector<std::uint32_t>& col, std::vector<float>& val,
+                              std::vector<RowSide>& side) const {
     FFCUBE_CHECK(first <= last && last <= size());
     const fs::path lpath = log_path();
     const std::uint32_t n = size();
@@ -387,6 +426,7 @@ void RowCheckpoint::read_rows(std::uint32_t first, std::uint32_t last, std::vect
         std::memcpy(col.data() + at, buf.data() + kHeader, 4 * std::size_t(count));
         std::memcpy(val.data() + at, buf.data() + kHeader + 4 * std::size_t(count), 4 * std::size_t(count));
         nnz.push_back(count);
+        side.push_back(record_side(buf.data(), count, flags_));
     }
 }
 

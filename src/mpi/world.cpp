@@ -129,12 +129,29 @@ std::vector<std::uint32_t> row_blocks(const Scene& scene, const RowOptions& opti
 }
 
 namespace {
-constexpr int kTagAsk = 21, kTagChunk = 22, kTagChunkNnz = 23, kTagChunkCol = 24, kTagChunkVal = 25;
+constexpr int kTagAsk = 21, kTagChunk = 22, kTagChunkNnz = 23, kTagChunkCol = 24, kTagChunkVal = 25, kTagChunkSide = 26;
+
+// A chunk's side figures on the wire: four doubles a row (obstructed share, error,
+// tolerance_error, measure), each exact in a double (a float and a small integer; NaN stays NaN).
+constexpr std::size_t kSideWords = 4;
+void pack_sides(std::span<const RowSide> side, std::vector<double>& out) {
+    out.clear();
+    for (const RowSide& s : side) out.insert(out.end(), {s.obstructed, s.error, s.tolerance_error, double(s.measure)});
+}
+RowSide unpack_side(const double* w) {
+    RowSide s;
+    s.obstructed = w[0];
+    s.error = static_cast<float>(w[1]);
+    s.tolerance_error = static_cast<float>(w[2]);
+    s.measure = static_cast<std::int8_t>(w[3]);
+    return s;
+}
 }  // namespace
 
 void serve_rows(std::uint32_t first, std::uint32_t last,
                 const std::function<void(std::uint32_t, RowBlock&)>& read_row) {
     RowBlock chunk;
+    std::vector<double> sides;
     for (std::uint32_t i = first; i < last;) {
         std::uint32_t ask = 0;
         check(MPI_Recv(&ask, 1, MPI_UINT32_T, 0, kTagAsk, MPI_COMM_WORLD, MPI_STATUS_IGNORE), "MPI_Recv");
@@ -142,14 +159,17 @@ void serve_rows(std::uint32_t first, std::uint32_t last,
         chunk.nnz.clear();
         chunk.col.clear();
         chunk.val.clear();
+        chunk.side.clear();
         // 8 bytes an entry (u32 column, float value).
         while (i < last && (chunk.nnz.empty() || chunk.col.size() * 8 < kRowChunkBytes)) read_row(i++, chunk);
-        FFCUBE_CHECK(chunk.col.size() == chunk.val.size());
+        FFCUBE_CHECK(chunk.col.size() == chunk.val.size() && chunk.side.size() == chunk.nnz.size());
+        pack_sides(chunk.side, sides);
         const std::uint64_t header[2] = {chunk.nnz.size(), chunk.col.size()};
         check(MPI_Send(header, 2, MPI_UINT64_T, 0, kTagChunk, MPI_COMM_WORLD), "MPI_Send");
         send_all<std::uint32_t>(chunk.nnz, 0, kTagChunkNnz);
         send_all<std::uint32_t>(chunk.col, 0, kTagChunkCol);
         send_all<float>(chunk.val, 0, kTagChunkVal);
+        send_all<double>(sides, 0, kTagChunkSide);
     }
 }
 
@@ -157,6 +177,7 @@ ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
                           const std::function<void(std::uint32_t, RowView)>& sink) {
     ReceivedRows figures;
     RowBlock chunk;
+    std::vector<double> sides;
     std::uint32_t i = first;
     if (i < last) check(MPI_Send(&i, 1, MPI_UINT32_T, from, kTagAsk, MPI_COMM_WORLD), "MPI_Send");
     while (i < last) {
@@ -166,11 +187,14 @@ ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
         chunk.nnz.resize(header[0]);
         chunk.col.resize(header[1]);
         chunk.val.resize(header[1]);
+        sides.resize(kSideWords * header[0]);
         recv_all<std::uint32_t>(chunk.nnz, from, kTagChunkNnz);
         recv_all<std::uint32_t>(chunk.col, from, kTagChunkCol);
         recv_all<float>(chunk.val, from, kTagChunkVal);
+        recv_all<double>(sides, from, kTagChunkSide);
         ++figures.chunks;
-        figures.largest_chunk_bytes = std::max<std::uint64_t>(figures.largest_chunk_bytes, 4 * header[0] + 8 * header[1]);
+        figures.largest_chunk_bytes =
+            std::max<std::uint64_t>(figures.largest_chunk_bytes, (4 + 8 * kSideWords) * header[0] + 8 * header[1]);
         const std::uint32_t end = i + static_cast<std::uint32_t>(header[0]);
         // Ask for the next chunk before using this one: the rank reads and sends it meanwhile.
         if (end < last) check(MPI_Send(&end, 1, MPI_UINT32_T, from, kTagAsk, MPI_COMM_WORLD), "MPI_Send");
@@ -178,7 +202,8 @@ ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
         for (std::uint32_t k = 0; k < header[0]; ++k) {
             FFCUBE_CHECK(at + chunk.nnz[k] <= chunk.col.size());
             sink(i + k, RowView{std::span<const std::uint32_t>(chunk.col).subspan(at, chunk.nnz[k]),
-                                std::span<const float>(chunk.val).subspan(at, chunk.nnz[k])});
+                                std::span<const float>(chunk.val).subspan(at, chunk.nnz[k]),
+                                unpack_side(sides.data() + kSideWords * k)});
             at += chunk.nnz[k];
         }
         FFCUBE_CHECK(at == chunk.col.size());

@@ -56,19 +56,18 @@ void LocalRowFeed::rows(const RowViewFn& sink) {
         provider.compute_rows(all, [&](std::uint32_t i, const SparseRow& row) {
             val.resize(row.val.size());
             for (std::size_t k = 0; k < val.size(); ++k) val[k] = static_cast<float>(row.val[k]);  // as CsrMatrix
-            sink(i, RowView{row.col, val});
+            sink(i, RowView{row.col, val, row.side});
             bar.add();
         });
         return;
     }
     // The rows missing from the checkpoint, each appended to its log as it comes, then every row
     // read back from it: a resumed run's rows are the uninterrupted run's bits.
-    const std::span<const double> cut = rows_.obstructed();
     const std::vector<std::uint32_t> missing = checkpoint_->missing();
     {
         Progress bar("rows", missing.size(), progress_);
         provider.compute_rows(missing, [&](std::uint32_t i, const SparseRow& row) {
-            checkpoint_->append(i, row, cut.empty() ? 0.0 : cut[i]);
+            checkpoint_->append(i, row);  // with its side figures
             bar.add();
         });
     }
@@ -82,20 +81,7 @@ void LocalRowFeed::rows(const RowViewFn& sink) {
 
 ClosureEvidence LocalRowFeed::evidence() const { return closure_evidence(rows_); }
 
-// With a checkpoint the shares stored with its rows (reused or computed: a resumed run's are the
-// uninterrupted run's bits); else the RowSource's, which saw every row.
-std::span<const double> LocalRowFeed::obstructed() const {
-    return checkpoint_ ? checkpoint_->obstructed() : rows_.obstructed();
-}
-
 namespace {
-
-// Each row's estimate as the tolerance holds it (largest entry, sum), for the patch table (none
-// without the correction).
-std::span<const float> row_errors(const RowSource& rows) {
-    return rows.corrected() ? std::span<const float>(rows.corrected()->row_tolerance_estimates())
-                            : std::span<const float>{};
-}
 
 // The rows as computed, kept for the passes after the last row (the reciprocity check when it was
 // not done while the rows came, --enforce): a .ffm (the output itself, or a scratch file), or,
@@ -120,7 +106,7 @@ struct ComputedRows {
 
 }  // namespace
 
-FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows, RowFeed& feed,
+FormFactorFigures compute_form_factors(const Scene& scene, RowSource& rows, RowFeed& feed,
                                        const FormFactorOptions& o, std::span<MatrixSink* const> caller_sinks,
                                        Report& report) {
     const bool progress = o.progress;
@@ -179,11 +165,17 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
     if (!enforce && o.reciprocity && !computed.memory)
         live.emplace(areas, std::min(budget_bytes, kLiveReciprocityBytes) / 16);
     View3dCutoff cutoff(scene, o.max_distance);
+    // Every row's side figures as it came (this process's, another rank's, a checkpoint's: a
+    // resumed run's are the uninterrupted run's bits): the report's per-row figures, the sky's
+    // obstructed shares, the patch table's estimates.
+    RowLedger& ledger = rows.ledger();
+    FFCUBE_CHECK(ledger.size() == n);
     {
         Stopwatch watch, piece;
         double writing = 0;  // coding, compressing and writing, between the rows
         std::uint64_t nnz = 0;
         feed.rows([&](std::uint32_t i, RowView as_computed) {
+            ledger.note(i, as_computed.side);
             const RowView row = cutoff(i, as_computed);
             piece.restart();
             if (MatrixSink* keep = computed.sink()) keep->append_row(row);
@@ -279,8 +271,11 @@ FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows
     f.reciprocity.object_max_rel = final_checks->object_max_rel();
     if (o.object_factors) f.object_factors = final_checks->object_factors();
     report.set("time.statistics", watch.seconds());
+    // The patch table's estimates: each row's as the tolerance holds it (largest entry, sum); none
+    // without the correction.
     write_surface_outputs(o.surface, sums, *final_checks, scene, report,
-                          scene.drawn ? feed.obstructed() : std::span<const double>{}, row_errors(rows));
+                          scene.drawn ? ledger.obstructed() : std::span<const double>{},
+                          rows.corrected() ? ledger.tolerance_errors() : std::span<const float>{});
     return f;
 }
 

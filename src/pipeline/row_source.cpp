@@ -19,7 +19,32 @@ namespace ffcube {
 
 RowSource::~RowSource() = default;
 
+namespace {
+// The outermost provider of a RowSource: each row's side figures noted in the source's ledger.
+class NotingRowProvider final : public ObservingRowProvider {
+public:
+    NotingRowProvider(RowProvider& inner, RowLedger& ledger) : ObservingRowProvider(inner), ledger_(ledger) {}
+
+private:
+    const SparseRow& observe(std::uint32_t i, const SparseRow& row) override {
+        ledger_.note(i, row.side);
+        return row;
+    }
+    RowLedger& ledger_;
+};
+}  // namespace
+
+const RowLedger& RowSource::ledger() const {
+    static const RowLedger none;
+    return ledger_ ? *ledger_ : none;
+}
+RowLedger& RowSource::ledger() {
+    FFCUBE_CHECK_MSG(ledger_ != nullptr, "RowSource::ledger() on a source that was never made");
+    return *ledger_;
+}
+
 RowProvider& RowSource::provider() {
+    if (noting_) return *noting_;
     if (leading_) return *leading_;
     if (corrected_) return *corrected_;
     if (driver_) return *driver_;
@@ -151,6 +176,12 @@ void RowSource::wrap(const Scene& radiating) {
                                          : *raycast_;
         leading_ = std::make_unique<LeadingRowProvider>(inner, static_cast<std::uint32_t>(radiating.size()));
     }
+    RowProvider& outer = leading_     ? static_cast<RowProvider&>(*leading_)
+                         : corrected_ ? static_cast<RowProvider&>(*corrected_)
+                         : driver_    ? static_cast<RowProvider&>(*driver_)
+                                      : *raycast_;
+    ledger_ = std::make_unique<RowLedger>(static_cast<std::uint32_t>(radiating.size()));
+    noting_ = std::make_unique<NotingRowProvider>(outer, *ledger_);
 }
 
 void rebind_row_source(RowSource& rows, const Scene& radiating) {
@@ -161,7 +192,8 @@ void rebind_row_source(RowSource& rows, const Scene& radiating) {
         return;
     }
     Stopwatch watch;
-    rows.leading_.reset();  // the wrappers refer to the provider and the old scene: they go first
+    rows.noting_.reset();  // the wrappers refer to the provider and the old scene: they go first
+    rows.leading_.reset();
     rows.corrected_.reset();
     rows.refiner_.reset();
     rows.redrawers_.clear();
@@ -321,7 +353,7 @@ void report_tolerance(Report& r, const CorrectedRowProvider& corrected, const Ro
         info("{}", line);
 }
 
-void report_correction(Report& r, const CorrectedRowProvider& corrected, std::size_t rows, const RowOptions& options) {
+void report_correction(Report& r, const CorrectedRowProvider& corrected, const RowLedger& ledger, const RowOptions& options) {
     const NearFieldStats& c = corrected.stats();
     r.set("corrections.kind", "near");
     stats::report(r, c);  // every counter of NearFieldStats, by its key
@@ -331,9 +363,10 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     if (const double ns = corrected.corrector().far_field_cost_ns(); std::isfinite(ns))
         r.set("corrections.far_field_estimated_ms_per_row", ns * 1e-6);
     // Per-row error estimate (Σ_j |F_ij − exact_ij|, docs/accuracy.md): every computed row
-    // (−1 where not computed), then the largest, the mean and the row that has the largest.
-    const std::span<const float> est =
-        std::span<const float>(corrected.row_error_estimates()).first(std::min(rows, corrected.row_error_estimates().size()));
+    // (−1 where not computed), then the largest, the mean and the row that has the largest. Every
+    // row's as it came (RowSide, noted in the ledger): this process's, another rank's, or a
+    // checkpoint's.
+    const std::span<const float> est = ledger.errors();
     std::vector<double> values;
     values.reserve(est.size());
     double mx = 0, sum = 0;
@@ -353,14 +386,13 @@ void report_correction(Report& r, const CorrectedRowProvider& corrected, std::si
     r.set("row_error_estimate.mean", counted ? sum / static_cast<double>(counted) : 0.0);
     r.set("row_error_estimate.worst_row", worst);
     r.set_array("row_error_estimate.rows", values);
-    report_tolerance(r, corrected, options,
-                     std::span<const float>(corrected.row_tolerance_estimates()).first(std::min(rows, corrected.row_tolerance_estimates().size())));
+    report_tolerance(r, corrected, options, ledger.tolerance_errors());
     // How each row was measured (CorrectedRowProvider::RowMeasure): −1 not computed, 0 analytic,
     // 1 centre, 2 sub-hemicubes for a near pair, 3 sub-hemicubes for an occluder beside the sender,
     // 4 sub-hemicubes at 4 × 4 points for an occluder touching it, 5 sub-hemicubes for far pairs
     // not proven unoccluded, 6 measured again by rays (above an asked-for tolerance), 7 drawn
     // again at a finer resolution and no more.
-    const std::vector<std::int8_t>& measures = corrected.row_measures();
+    const std::span<const std::int8_t> measures = ledger.measures();
     r.set_array("corrections.row_measure", std::vector<std::int64_t>(measures.begin(), measures.end()));
 }
 
@@ -430,8 +462,7 @@ void report_row_source(Report& r, const RowSource& rows) {
             r.set("cost_model.piece_ns", m.piece_ns);
             r.set("cost_model.ray_ns", m.ray_ns);
         }
-        report_correction(r, *c, rows.obstructed().empty() ? c->row_error_estimates().size() : rows.obstructed().size(),
-                          rows.options());
+        report_correction(r, *c, rows.ledger(), rows.options());
         const NearFieldStats& s = c->stats();
         if (c->corrector().exact_visibility_mode() == "auto" && (s.exact_visibility > 0 || s.exact_visibility_over_budget > 0))
             info("exact visibility (auto; off: --exact-visibility off): {} near pairs exact past their occluders in {} rows "

@@ -425,26 +425,29 @@ TEST(NearField, SeparatedNearPairsMatchTheContourIntegral) {
 }
 
 // Asking for no rows hands nothing to the sink and does not fail (a resumed checkpoint, or an MPI
-// rank's shard, that already holds every row asks for none). The corrected rows' estimates are
-// written per row without a lock, so a row listed twice in one call (two writers) is refused
-// before any work, and so is a row out of range; a call after a refusal, with each row listed
-// once, runs as usual (the marks were cleared).
-TEST(NearField, NoRowsAskedIsNothingToDoAndARowListedTwiceIsRefused) {
+// rank's shard, that already holds every row asks for none). A row out of range is refused before
+// any work; a row listed twice is measured twice, each time the same row with the same figures
+// (they go with the row, RowSide: no shared per-row array is written).
+TEST(NearField, NoRowsAskedIsNothingToDoAndARowListedTwiceIsMeasuredTwice) {
     const Scene s = test::make_scene(perpendicular_squares(), 0.25);
     const CsrMatrix plain = midpoint_matrix(s);
     MatrixRowProvider inner(plain);
     CorrectedRowProvider corrected(s, inner);
-    std::size_t delivered = 0;
-    const auto count = [&](std::uint32_t, const SparseRow&) { ++delivered; };
-    corrected.compute_rows({}, count);
-    EXPECT_EQ(delivered, 0u);
-    const std::vector<std::uint32_t> twice = {0, 1, 0}, out_of_range = {1, static_cast<std::uint32_t>(s.size())};
-    EXPECT_THROW(corrected.compute_rows(twice, count), InternalError);
-    EXPECT_THROW(corrected.compute_rows(out_of_range, count), InternalError);
-    EXPECT_EQ(delivered, 0u);
-    const std::vector<std::uint32_t> once = {0, 1};
-    corrected.compute_rows(once, count);
-    EXPECT_EQ(delivered, 2u);
+    std::vector<SparseRow> delivered;
+    const auto keep = [&](std::uint32_t, const SparseRow& r) { delivered.push_back(r); };
+    corrected.compute_rows({}, keep);
+    EXPECT_TRUE(delivered.empty());
+    const std::vector<std::uint32_t> out_of_range = {1, static_cast<std::uint32_t>(s.size())};
+    EXPECT_THROW(corrected.compute_rows(out_of_range, keep), InternalError);
+    EXPECT_TRUE(delivered.empty());
+    const std::vector<std::uint32_t> twice = {0, 1, 0};
+    corrected.compute_rows(twice, keep);
+    ASSERT_EQ(delivered.size(), 3u);
+    EXPECT_EQ(delivered[0].col, delivered[2].col);
+    EXPECT_EQ(delivered[0].val, delivered[2].val);
+    EXPECT_EQ(delivered[0].side, delivered[2].side);
+    EXPECT_FALSE(std::isnan(delivered[0].side.error)) << "a corrected row carries its estimate";
+    EXPECT_GE(delivered[0].side.measure, 0);
 }
 
 }  // namespace

@@ -367,8 +367,9 @@ TEST(ErrorEstimate, CoversTheTrueRowErrorWithoutBeingVacuous) {
         o.sender_quadrature = true;
         o.pixel_delta_ff = 4.0 / (std::numbers::pi * n * n);
         CorrectedRowProvider corrected(s, hemi, o);
-        const CsrMatrix F = compute_all_rows(corrected);
-        const std::vector<float>& est = corrected.row_error_estimates();
+        RowLedger figures;
+        const CsrMatrix F = compute_all_rows(corrected, &figures);
+        const std::span<const float> est = figures.errors();
         ASSERT_EQ(est.size(), s.size());
         std::vector<double> ratios;
         for (std::uint32_t i = 0; i < s.size(); ++i) {

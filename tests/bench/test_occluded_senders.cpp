@@ -106,7 +106,8 @@ TEST(OccludedSenders, GroundBesideAWallWithAWallBehindGetsItsSkyViewFactor) {
         nf.far_field = NearFieldOptions::FarField::off;
         nf.sample_beside_occluders = beside;
         CorrectedRowProvider corrected(s, hemi, nf);
-        const std::vector<double> sky = sky_view_factors(compute_all_rows(corrected));
+        RowLedger figures;
+        const std::vector<double> sky = sky_view_factors(compute_all_rows(corrected, &figures));
         for (std::size_t k = 0; k < ground.size(); ++k) mean_error[beside] += (sky[ground[k]] - exact[k]) / 16.0;
         occluder_rows[beside] = corrected.stats().rows_sampled_occluder;
         fine_rows[beside] = corrected.stats().rows_sampled_fine;
@@ -114,7 +115,7 @@ TEST(OccludedSenders, GroundBesideAWallWithAWallBehindGetsItsSkyViewFactor) {
             // The 4 cells touching W are measured at 4 × 4 points (W's box is within a cell size
             // of their centres), the 8 with W's cells within 3 sizes at 2 × 2, the last 4 at the
             // centre (W beyond the near range); per row in the report.
-            const auto& measure = corrected.row_measures();
+            const std::span<const std::int8_t> measure = figures.measures();
             for (std::size_t k = 0; k < ground.size(); ++k) {
                 const auto& c = s.patches[ground[k]].centroid;
                 EXPECT_EQ(measure[ground[k]], c.x < 1   ? CorrectedRowProvider::sampled_touching

@@ -1,6 +1,7 @@
 // Resumable precomputation end to end: `ffcube formfactors ... --checkpoint DIR` killed with
-// SIGKILL part-way, then the same command with --resume, writes a .ffm byte-identical to an
-// uninterrupted run; a resume with different settings is refused.
+// SIGKILL part-way, then the same command with --resume, writes a .ffm, a patch table (with each
+// row's estimate) and per-row report figures identical to an uninterrupted run's; a resume with
+// different settings is refused.
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
@@ -53,7 +54,11 @@ TEST(ResumeCli, KilledRunResumesToByteIdenticalMatrix) {
     EXPECT_EQ(again.code, 2) << again.output;
     EXPECT_NE(again.output.find("already holds a checkpoint"), std::string::npos) << again.output;
 
-    const auto resumed = run_ffcube(job(dir, "resumed.ffm", "--checkpoint " + ck + " --resume --report " + (dir / "r.json")));
+    // Each reused row's estimates come back from its record with it (format 3): the patch
+    // table's error column and the report's per-row figures are the uninterrupted run's.
+    const auto resumed = run_ffcube(job(dir, "resumed.ffm",
+                                        "--checkpoint " + ck + " --resume --report " + (dir / "r.json") +
+                                            " --patch-table " + (dir / "resumed.csv")));
     ASSERT_EQ(resumed.code, 0) << resumed.output;
     const std::string report = test::read_text(dir / "r.json");
     // At least the rows whose records were whole when killed were reused (a torn last record is not).
@@ -64,11 +69,23 @@ TEST(ResumeCli, KilledRunResumesToByteIdenticalMatrix) {
     EXPECT_LT(reused, 2000);
     EXPECT_GE(fs::file_size(rows), killed_size);
 
-    const auto plain = run_ffcube(job(dir, "plain.ffm"));
+    const auto plain = run_ffcube(job(dir, "plain.ffm", "--report " + (dir / "p.json") + " --patch-table " + (dir / "plain.csv")));
     ASSERT_EQ(plain.code, 0) << plain.output;
     const std::string a = test::read_text(dir / "resumed.ffm"), b = test::read_text(dir / "plain.ffm");
     EXPECT_GT(a.size(), 0u);
     EXPECT_TRUE(a == b) << "resumed " << a.size() << " bytes, uninterrupted " << b.size() << " bytes";
+    const std::string table = test::read_text(dir / "plain.csv");
+    EXPECT_NE(table.find(",error_estimate\n"), std::string::npos) << table.substr(0, 200);
+    EXPECT_TRUE(test::read_text(dir / "resumed.csv") == table) << "the patch tables differ";
+    // The per-row arrays of the report (row_error_estimate.rows, corrections.row_measure), from
+    // their key to the end of the array (no other key of these names holds an array).
+    const auto array = [](const std::string& json, const std::string& key) {
+        const auto at = json.find("\"" + key + "\": [");  // Report::dump indents by 2
+        return at == std::string::npos ? std::string("(missing)") : json.substr(at, json.find(']', at) - at);
+    };
+    const std::string plain_report = test::read_text(dir / "p.json");
+    for (const char* key : {"rows", "row_measure"})
+        EXPECT_EQ(array(report, key), array(plain_report, key)) << key;
 }
 
 TEST(ResumeCli, ResumeNeedsACheckpointDirectory) {

@@ -85,8 +85,11 @@ private:
 struct Received {
     std::vector<std::uint32_t> rows;
     std::vector<std::size_t> nnz;
+    std::vector<double> obstructed;  // each row's side.obstructed
     RowSink sink() {
-        return [this](std::uint32_t i, const SparseRow& r) { rows.push_back(i), nnz.push_back(r.nnz()); };
+        return [this](std::uint32_t i, const SparseRow& r) {
+            rows.push_back(i), nnz.push_back(r.nnz()), obstructed.push_back(r.side.obstructed);
+        };
     }
 };
 
@@ -132,18 +135,23 @@ TEST(LeadingRowProvider, CutsRowsOnEveryEntryPointAndFinishSeesTheCutRow) {
     lead.compute_rows(rows, a.sink());
     // Row 0: columns 1..4 → 1, 2 kept, 0.4 + 0.5 cut; row 2: columns 3, 4 all cut (0.4 + 0.5).
     EXPECT_EQ(a.nnz, (std::vector<std::size_t>{0, 2}));
-    EXPECT_DOUBLE_EQ(lead.cut()[0], 0.4 + 0.5);
-    EXPECT_DOUBLE_EQ(lead.cut()[2], 0.4 + 0.5);
-    EXPECT_EQ(lead.cut()[1], 0.0);
+    // Each row carries what was cut from it (rows 2, 0 in list order).
+    ASSERT_EQ(a.obstructed.size(), 2u);
+    EXPECT_DOUBLE_EQ(a.obstructed[0], 0.4 + 0.5);
+    EXPECT_DOUBLE_EQ(a.obstructed[1], 0.4 + 0.5);
+    lead.compute_rows(std::vector<std::uint32_t>{1}, a.sink());
+    EXPECT_EQ(a.nnz[2], 1u);
+    EXPECT_DOUBLE_EQ(a.obstructed[2], 0.4 + 0.5);  // row 1: column 2 kept, 3 and 4 cut
     // Staged: not forwarded (the inner finish would see uncut rows) but planned on this thread.
     std::vector<std::size_t> finished_nnz;
     RowProvider::RowStages stages{[](std::size_t, std::uint32_t, RowProvider::RowRequest& r) { r.plan = RowPlan::sampled; },
                                   [&](std::size_t, std::uint32_t, SparseRow& r) { finished_nnz.push_back(r.nnz()); }};
     Received s;
     lead.compute_rows_staged(rows, stages, s.sink());
-    EXPECT_EQ(inner.calls, (std::vector<std::string>{"rows", "planned"}));
+    EXPECT_EQ(inner.calls, (std::vector<std::string>{"rows", "rows", "planned"}));
     EXPECT_EQ(finished_nnz, (std::vector<std::size_t>{0, 2}));
     EXPECT_EQ(s.nnz, (std::vector<std::size_t>{0, 2}));
+    EXPECT_EQ(s.obstructed, std::vector<double>(a.obstructed.begin(), a.obstructed.begin() + 2)) << "staged rows carry their cut shares too";
 }
 
 }  // namespace

@@ -3,11 +3,13 @@
 // matrix is bit-identical to one built from the same rows directly.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 
 #include "ffcube/core/error.hpp"
 #include "ffcube/io/checkpoint.hpp"
+#include "ffcube/io/checksum.hpp"
 #include "io/io_test_util.hpp"
 
 namespace ffcube {
@@ -72,17 +74,18 @@ TEST_F(Checkpoint, TornLastRecordIsIgnored) {
         RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
         for (std::uint32_t i = 0; i < 3; ++i) c.append(i, row(i));
     }
-    // Each record of a row with 4 entries is 16 + 4·8 + 8 = 56 bytes. Cut the third anywhere:
-    // inside its header (5 bytes left) and inside its payload (30 bytes left).
+    // Each record of a row with 4 entries is 16 + 4·8 + 16 (figures) + 8 = 72 bytes. Cut the
+    // third anywhere: inside its header (5 bytes left), its payload (30 bytes left) and its
+    // figures (56 bytes left).
     const std::string bytes = read_all(log());
-    ASSERT_EQ(bytes.size(), 3u * 56u);
-    for (std::size_t keep : {112u + 5u, 112u + 30u}) {
+    ASSERT_EQ(bytes.size(), 3u * 72u);
+    for (std::size_t keep : {144u + 5u, 144u + 30u, 144u + 56u}) {
         write_all(log(), bytes.substr(0, keep));
         RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
         ASSERT_EQ(c.warnings().size(), 1u);
         EXPECT_NE(c.warnings()[0].find("torn"), std::string::npos) << c.warnings()[0];
         EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{2, 3, 4}));
-        EXPECT_EQ(std::filesystem::file_size(log()), 112u);  // the torn tail is cut before appending
+        EXPECT_EQ(std::filesystem::file_size(log()), 144u);  // the torn tail is cut before appending
         for (std::uint32_t i : c.missing()) c.append(i, row(i));
         expect_same(c.assemble(), direct());
     }
@@ -94,11 +97,11 @@ TEST_F(Checkpoint, CorruptedRecordIsDroppedWithEverythingAfterIt) {
         for (std::uint32_t i = 0; i < 5; ++i) c.append(i, row(i));
     }
     std::string bytes = read_all(log());
-    bytes[56 + 16 + 4 * 4 + 1] ^= 0x01;  // one bit of a value of the second record (row 1)
+    bytes[72 + 16 + 4 * 4 + 1] ^= 0x01;  // one bit of a value of the second record (row 1)
     write_all(log(), bytes);
     RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
     ASSERT_EQ(c.warnings().size(), 1u);
-    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 56 (row 1: checksum mismatch)"), std::string::npos)
+    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 72 (row 1: checksum mismatch)"), std::string::npos)
         << c.warnings()[0];
     EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{1, 2, 3, 4}));
     for (std::uint32_t i : c.missing()) c.append(i, row(i));
@@ -113,11 +116,11 @@ TEST_F(Checkpoint, GarbageHeaderIsDropped) {
     // A record claiming row 7 of 5, with a correct length: refused by its header, not trusted.
     std::string bytes = read_all(log());
     bytes += bytes;
-    bytes[56 + 4] = 7;
+    bytes[72 + 4] = 7;
     write_all(log(), bytes);
     RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
     ASSERT_EQ(c.warnings().size(), 1u);
-    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 56 (bad header)"), std::string::npos) << c.warnings()[0];
+    EXPECT_NE(c.warnings()[0].find("corrupted record at offset 72 (bad header)"), std::string::npos) << c.warnings()[0];
     EXPECT_EQ(c.rows_stored(), 1u);
 }
 
@@ -159,61 +162,136 @@ TEST_F(Checkpoint, NewCheckpointNeverOverwritesOneAndResumeNeedsOne) {
     EXPECT_THROW(RowCheckpoint::create(path("file"), manifest()), InputError);
 }
 
-// With obstruction-only surfaces each record carries its row's obstructed share (format 2): a
-// resume gives back the very bits appended, for the rows of the log, and a torn last record's
-// share is gone with its row.
-TEST_F(Checkpoint, ObstructedSharesComeBackBitForBit) {
+// Each record carries its row's side figures (format 3): with obstruction-only surfaces its
+// obstructed share, and always its estimates and measure. A resume gives back the very bits
+// appended for the rows of the log (NaN estimates too: a row without a correction), and a torn
+// last record's figures are gone with its row.
+TEST_F(Checkpoint, SideFiguresComeBackBitForBit) {
     CheckpointManifest m = manifest();
     m.obstructions = true;
-    // Shares not exactly representable as float: a float on the way would change them.
-    const auto share = [](std::uint32_t i) { return 0.2 / (i + 3.0); };
+    // Shares and estimates not exactly representable as float: a float on the way would change
+    // the shares; row 1 has no estimates and no measure.
+    const auto with_side = [](std::uint32_t i) {
+        SparseRow r = row(i);
+        r.side.obstructed = 0.2 / (i + 3.0);
+        if (i != 1) {
+            r.side.error = static_cast<float>(1e-3 / (i + 1.0));
+            r.side.tolerance_error = static_cast<float>(2e-4 / (i + 7.0));
+            r.side.measure = static_cast<std::int8_t>(i + 2);
+        }
+        return r;
+    };
+    const auto read_back = [](const RowCheckpoint& c) {
+        std::vector<RowSide> sides;
+        c.for_each_row([&](std::uint32_t, RowView v) { sides.push_back(v.side); });
+        return sides;
+    };
     {
         RowCheckpoint c = RowCheckpoint::create(dir(), m);
-        for (std::uint32_t i : {3u, 0u, 4u}) c.append(i, row(i), share(i));
-        EXPECT_EQ(c.obstructed()[3], share(3));
+        for (std::uint32_t i : {3u, 0u, 4u}) c.append(i, with_side(i));
     }
     EXPECT_NE(read_all(dir() / "manifest.txt").find("obstructions 1\n"), std::string::npos);
     // The last record (row 4) torn. Each record: a 16-byte header, 4 columns and 4 values, the
-    // 8-byte share, the 8-byte checksum.
+    // 8-byte share, 16 bytes of estimates and measure, the 8-byte checksum.
     std::string bytes = read_all(log());
-    EXPECT_EQ(bytes.size(), 3u * (16 + 8 * 4 + 8 + 8));
+    EXPECT_EQ(bytes.size(), 3u * (16 + 8 * 4 + 8 + 16 + 8));
     write_all(log(), bytes.substr(0, bytes.size() - 3));
     RowCheckpoint c = RowCheckpoint::resume(dir(), m);
     EXPECT_EQ(c.rows_stored(), 2u);
-    EXPECT_EQ(c.obstructed()[3], share(3));
-    EXPECT_EQ(c.obstructed()[0], share(0));
-    EXPECT_EQ(c.obstructed()[4], 0.0);  // torn: not stored
-    for (std::uint32_t i : c.missing()) c.append(i, row(i), share(i));
-    for (std::uint32_t i = 0; i < 5; ++i) EXPECT_EQ(c.obstructed()[i], share(i)) << i;
+    EXPECT_EQ(c.missing(), (std::vector<std::uint32_t>{1, 2, 4}));  // 4: torn, not stored
+    for (std::uint32_t i : c.missing()) c.append(i, with_side(i));
+    const std::vector<RowSide> sides = read_back(c);
+    ASSERT_EQ(sides.size(), 5u);
+    for (std::uint32_t i = 0; i < 5; ++i) {
+        const RowSide want = with_side(i).side;
+        EXPECT_EQ(sides[i], want) << i;
+        EXPECT_EQ(std::memcmp(&sides[i].obstructed, &want.obstructed, 8), 0) << i;
+    }
+    EXPECT_TRUE(std::isnan(sides[1].error) && sides[1].measure == -1);
     expect_same(c.assemble(), direct());
 }
 
-// A format 1 checkpoint (before the shares; its records' flags word is 0, its manifest has no
-// "obstructions" line) is still resumed and continued, as a checkpoint without obstructions; a
-// run with obstructions refuses it, naming the setting.
-TEST_F(Checkpoint, FormatOneCheckpointsAreStillRead) {
-    {
-        RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
-        for (std::uint32_t i : {1u, 2u}) c.append(i, row(i));
-    }
-    std::string text = read_all(dir() / "manifest.txt");
-    ASSERT_EQ(text.rfind("ffcube-checkpoint 2\n", 0), 0u);
-    text.replace(0, 19, "ffcube-checkpoint 1");
-    const auto at = text.find("obstructions 0\n");
-    ASSERT_NE(at, std::string::npos);
-    text.erase(at, 15);
-    write_all(dir() / "manifest.txt", text);
-    {
+// A record whose figures are out of range (a negative estimate, a measure past the last kind)
+// is corrupted: dropped with what follows, with a warning, even under a good checksum.
+TEST_F(Checkpoint, FiguresOutOfRangeAreDamage) {
+    for (const int what : {0, 1}) {
+        std::filesystem::remove_all(dir());
+        {
+            RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+            SparseRow r = row(0);
+            r.side.error = what == 0 ? -1.0f : 0.5f;
+            r.side.measure = what == 1 ? 8 : 1;
+            c.append(0, r);
+            c.append(1, row(1));
+        }
         RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
-        EXPECT_EQ(c.rows_stored(), 2u);
-        for (std::uint32_t i : c.missing()) c.append(i, row(i));
-        expect_same(c.assemble(), direct());
+        EXPECT_EQ(c.rows_stored(), 0u) << what;
+        ASSERT_EQ(c.warnings().size(), 1u) << what;
+        EXPECT_NE(c.warnings()[0].find(what == 0 ? "error estimate -1 out of range" : "measure 8 out of range"),
+                  std::string::npos)
+            << c.warnings()[0];
+    }
+}
+
+// A checkpoint of an earlier format, made here by rewriting a format 3 one: each record's flags
+// word set to `flags`, its 16 bytes of figures cut and its checksum made again; the manifest's
+// first line set to `line`, and for format 1 without its "obstructions" line.
+void downgrade(const std::filesystem::path& dir, const char* line, std::uint32_t flags, std::uint32_t nnz_each,
+               std::size_t obstructed_bytes) {
+    const std::string bytes = read_all(dir / "rows.log");
+    const std::size_t old_size = 16 + 8 * nnz_each + obstructed_bytes + 16 + 8;
+    ASSERT_EQ(bytes.size() % old_size, 0u);
+    std::string out;
+    for (std::size_t at = 0; at < bytes.size(); at += old_size) {
+        std::string rec = bytes.substr(at, 16 + 8 * nnz_each + obstructed_bytes);
+        std::memcpy(rec.data() + 12, &flags, 4);
+        const std::uint64_t sum = checksum64(rec.data(), rec.size());
+        rec.append(reinterpret_cast<const char*>(&sum), 8);
+        out += rec;
+    }
+    write_all(dir / "rows.log", out);
+    std::string text = read_all(dir / "manifest.txt");
+    ASSERT_EQ(text.rfind("ffcube-checkpoint 3\n", 0), 0u);
+    text.replace(0, 19, line);
+    if (std::string(line) == "ffcube-checkpoint 1") {
+        const auto at = text.find("obstructions 0\n");
+        ASSERT_NE(at, std::string::npos);
+        text.erase(at, 15);
+    }
+    write_all(dir / "manifest.txt", text);
+}
+
+// Format 1 and 2 checkpoints (before the shares, resp. the figures) are still resumed and
+// continued in their own format, their rows without estimates; a run with obstructions refuses a
+// format 1 checkpoint, naming the setting.
+TEST_F(Checkpoint, FormatOneAndTwoCheckpointsAreStillRead) {
+    for (const char* line : {"ffcube-checkpoint 1", "ffcube-checkpoint 2"}) {
+        std::filesystem::remove_all(dir());
+        {
+            RowCheckpoint c = RowCheckpoint::create(dir(), manifest());
+            for (std::uint32_t i : {1u, 2u}) {
+                SparseRow r = row(i);
+                r.side.error = 0.25f;  // cut by the downgrade: an old record has none
+                c.append(i, r);
+            }
+        }
+        downgrade(dir(), line, 0, 4, 0);
+        {
+            RowCheckpoint c = RowCheckpoint::resume(dir(), manifest());
+            EXPECT_EQ(c.rows_stored(), 2u) << line;
+            EXPECT_TRUE(c.warnings().empty()) << line;
+            for (std::uint32_t i : c.missing()) c.append(i, row(i));
+            expect_same(c.assemble(), direct());
+            c.for_each_row([&](std::uint32_t i, RowView v) { EXPECT_TRUE(std::isnan(v.side.error)) << line << " " << i; });
+        }
+        // Continued in its own format: every record, old and new, is an old record.
+        EXPECT_EQ(read_all(log()).size(), 5u * (16 + 8 * 4 + 8)) << line;
     }
     CheckpointManifest with = manifest();
     with.obstructions = true;
     try {
         RowCheckpoint::resume(dir(), with);
-        FAIL() << "a format 1 checkpoint was resumed for a scene with obstructions";
+        FAIL() << "a format 2 checkpoint without obstructions was resumed for a scene with them";
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("obstructions: checkpoint '0', this run '1'"), std::string::npos) << e.what();
     }
@@ -254,8 +332,10 @@ TEST_F(CheckpointBlock, ReadRowsGivesTheBlockBitIdentical) {
     c.append(3, row(3));
     std::vector<std::uint32_t> nnz, col;
     std::vector<float> val;
-    c.read_rows(2, 5, nnz, col, val);
+    std::vector<RowSide> side;
+    c.read_rows(2, 5, nnz, col, val, side);
     ASSERT_EQ(nnz.size(), 3u);
+    ASSERT_EQ(side.size(), 3u);
     std::size_t at = 0;
     for (std::uint32_t i = 2; i < 5; ++i) {
         const RowView v = direct.row(i);

@@ -26,11 +26,27 @@ cmp one.ffm two.ffm || fail ".ffm differs"
 cmp one.mtx two.mtx || fail ".mtx differs"
 echo "ok: .ffm and .mtx byte-identical at -np 2"
 # Without a matrix file rank 0 holds the rows in memory for the statistics: the same feed.
-"$ffcube" formfactors $rows --groups one-g.csv --sky one-sky.csv || fail "one-process formfactors without -o"
-mpi formfactors $rows --groups two-g.csv --sky two-sky.csv || fail "mpirun formfactors without -o"
+# Each row's estimates travel with it in rank 1's chunks (RowSide): the patch table's error column
+# is every row's, as one process's.
+"$ffcube" formfactors $rows --groups one-g.csv --sky one-sky.csv --patch-table one-t.csv || fail "one-process formfactors without -o"
+mpi formfactors $rows --groups two-g.csv --sky two-sky.csv --patch-table two-t.csv || fail "mpirun formfactors without -o"
 cmp one-g.csv two-g.csv || fail "--groups differs without -o"
 cmp one-sky.csv two-sky.csv || fail "--sky differs without -o"
-echo "ok: --groups and --sky byte-identical at -np 2 without a matrix file"
+head -1 one-t.csv | grep -q ',error_estimate$' || fail "no error column in the patch table"
+cmp one-t.csv two-t.csv || fail "--patch-table differs (the estimates of rank 1's rows?)"
+echo "ok: --groups, --sky and --patch-table byte-identical at -np 2 without a matrix file"
+# The report's per-row figures (estimates, tolerance distribution, how each row was measured) are
+# every row's too: equal to one process's, none missing.
+python3 - one.json two.json <<'PY' || fail "the report's per-row figures under mpirun differ from one process's"
+import json, sys
+one, two = (json.load(open(f)) for f in sys.argv[1:])
+a, b = one["row_error_estimate"]["rows"], two["row_error_estimate"]["rows"]
+assert len(a) == 600 and min(a) >= 0 and a == b, "row_error_estimate.rows"
+assert one["corrections"]["row_measure"] == two["corrections"]["row_measure"] and min(one["corrections"]["row_measure"]) >= 0
+for k in ("max", "mean", "worst_row"):
+    assert one["row_error_estimate"][k] == two["row_error_estimate"][k], k
+PY
+echo "ok: the report's per-row estimates and measures under mpirun are every row's, equal to one process's"
 # The .ffm goes through the streamed writer under mpirun too: rank 0 takes rank 1's rows in chunks,
 # and no scratch or spool directory is left beside the output.
 python3 -c "import json,sys; r=json.load(open(sys.argv[1])); assert r['streamed'] and r['mpi']['streamed'], r" \

@@ -204,9 +204,10 @@ TEST(FineRowsByRays, ACastRowsErrorEstimateDoesNotFollowThePixels) {
         NearFieldOptions nf = near_field_options_for_hemicube(o.resolution);
         nf.far_field = NearFieldOptions::FarField::off;
         CorrectedRowProvider corrected(s, driver, nf);
-        compute_all_rows(corrected);
-        estimate[k] = corrected.row_error_estimates();
-        measure = corrected.row_measures();
+        RowLedger figures;
+        compute_all_rows(corrected, &figures);
+        estimate[k].assign(figures.errors().begin(), figures.errors().end());
+        measure.assign(figures.measures().begin(), figures.measures().end());
     }
     std::size_t cast = 0, drawn = 0;
     for (std::size_t i = 0; i < measure.size(); ++i) {

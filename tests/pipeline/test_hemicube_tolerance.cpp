@@ -1,4 +1,4 @@
-// The tolerance's estimate of hemicube rows (CorrectedRowProvider::row_tolerance_estimates,
+// The tolerance's estimate of hemicube rows (RowSide::tolerance_error of each corrected row,
 // docs/accuracy.md "Accuracy by target"), checked against exact rows.
 //
 // The reference: the scenes have no occluders (a closed box seen from inside, and pairs of
@@ -42,7 +42,8 @@ Checked check_rows(const Scene& scene, int resolution, std::uint32_t stride) {
     for (std::uint32_t i = 0; i < n; i += stride) rows.push_back(i);
     std::vector<SparseRow> got(n);
     source.provider().compute_rows(rows, [&](std::uint32_t i, const SparseRow& r) { got[i] = r; });
-    const std::vector<float>& estimate = source.corrected()->row_tolerance_estimates();
+    std::vector<float> estimate(n, NAN);  // each row's, as it came (RowSide)
+    for (const std::uint32_t i : rows) estimate[i] = got[i].side.tolerance_error;
     Checked c;
     for (const std::uint32_t i : rows) {
         const double truth = test::unoccluded_row_error(scene, i, got[i]);
@@ -125,8 +126,9 @@ TEST(HemicubeTolerance, RowsAboveAnAskedForTargetAreMeasuredAgainByRays) {
         Run r;
         r.got.assign(n, SparseRow{});
         source.provider().compute_rows(rows, [&](std::uint32_t i, const SparseRow& row) { r.got[i] = row; });
-        r.estimate = source.corrected()->row_tolerance_estimates();
-        r.measure = source.corrected()->row_measures();
+        // Each row's figures as it came (RowSide), noted by the source.
+        r.estimate.assign(source.ledger().tolerance_errors().begin(), source.ledger().tolerance_errors().end());
+        r.measure.assign(source.ledger().measures().begin(), source.ledger().measures().end());
         r.refined = source.corrected()->rows_refined();
         r.redrawn = source.corrected()->rows_redrawn();
         return r;

@@ -244,7 +244,7 @@ struct NearFieldStats {
 // estimate counts) and their largest; the noise of the row's sky share (1 − its measured sum),
 // modelled as that of a receiver of that value; and the sum of the squares of the noise of the
 // entries replaced by exact values. The tolerance's estimate (largest entry, row sum) is made from
-// these (CorrectedRowProvider::row_tolerance_estimates).
+// these (RowSide::tolerance_error).
 struct RowNoise {
     double l1 = 0, max = 0, sky = 0, replaced_sum_sq = 0;
     void add(double sigma) {
@@ -376,18 +376,15 @@ public:
     const NearFieldStats& stats() const { return stats_; }
     // Adds another process's statistics to these (an MPI rank's, merged onto rank 0's).
     void merge_stats(const NearFieldStats& other) { stats::merge(stats_, other); }
-    // Per row, the estimated Σ_j |F_ij − exact_ij| of the rows handed on so far (NaN for rows not
-    // computed; empty before the first row).
-    const std::vector<float>& row_error_estimates() const { return row_error_; }
-    // Per row, the estimate the tolerance is held to (docs/accuracy.md, "Accuracy by target"): of
-    // the larger of the row's largest entry error and its sum error. A row whose inner provider
-    // measured its own error (rays refined to a tolerance) has that plus the correction's terms;
-    // any other has the correction's terms plus kNoiseDeviations × the larger of its largest
-    // entry's modelled noise and the root sum of squares of all of them (NaN for rows not
-    // computed; empty before the first row).
-    const std::vector<float>& row_tolerance_estimates() const { return row_tolerance_; }
+    // Each row handed on carries its figures (SparseRow::side): error, the estimated
+    // Σ_j |F_ij − exact_ij|; tolerance_error, the estimate the tolerance is held to
+    // (docs/accuracy.md, "Accuracy by target"): of the larger of the row's largest entry error and
+    // its sum error. A row whose inner provider measured its own error (rays refined to a
+    // tolerance) has that plus the correction's terms; any other has the correction's terms plus
+    // kNoiseDeviations × the larger of its largest entry's modelled noise and the root sum of
+    // squares of all of them; measure, how it was measured (RowMeasure).
     static constexpr double kNoiseDeviations = 3.0;
-    // Per row, how it was measured (RowMeasure; empty before the first row).
+    // How a row was measured (RowSide::measure).
     enum RowMeasure : std::int8_t {
         not_computed = -1,
         analytic = 0,           // every pair known: not measured (NearAnalysis::skipped)
@@ -399,7 +396,6 @@ public:
         refined = 6,            // measured again by rays (refine_with): its estimate was above the target
         redrawn = 7,            // drawn again at a finer resolution (refine_with), and no more
     };
-    const std::vector<std::int8_t>& row_measures() const { return row_measure_; }
     const NearFieldCorrector& corrector() const { return corrector_; }
     // Accuracy by target for an inner provider that does not refine its rows (the hemicube): a
     // row measured by it whose tolerance estimate is above `tolerance` is measured again by each
@@ -446,16 +442,12 @@ private:
     const Scene& scene_;
     NearFieldCorrector corrector_;
     NearFieldStats stats_;
-    std::vector<float> row_error_;
-    std::vector<float> row_tolerance_;
     std::vector<Refiner> refiners_;
     double refine_tolerance_ = 0;
     std::atomic<std::uint64_t> rows_refined_{0};
     std::atomic<std::uint64_t> rows_redrawn_{0};
-    std::vector<std::int8_t> row_measure_;
     NearFieldOptions options_;
     std::vector<NearAnalysis> analyses_;  // of the rows of the current compute_rows call
-    std::vector<std::uint8_t> listed_;    // all 0 between calls: marks a call's rows, to refuse a repeat
     // Scratch spaces and analysis buffers reused across rows, one per row being planned or
     // corrected at once on the inner provider's threads (corrected_row_provider.cpp).
     struct Pools;

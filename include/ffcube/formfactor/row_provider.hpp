@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "ffcube/formfactor/row_ledger.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/geometry/polygon.hpp"
 
@@ -148,7 +149,8 @@ private:
 // Rows 0 .. n−1 of an inner provider that measures a larger scene, each cut to its columns below
 // n: the radiating part of a scene with obstruction-only surfaces (Scene::drawn: their patches
 // come last and get no row or column). What a row's cut entries sum to is kept: the share of the
-// energy leaving that patch that the left-out patches intercept (not sky, not in F).
+// energy leaving that patch that the left-out patches intercept (not sky, not in F), goes with the
+// row as its side.obstructed.
 class LeadingRowProvider final : public ObservingRowProvider {
 public:
     LeadingRowProvider(RowProvider& inner, std::uint32_t n);
@@ -158,17 +160,14 @@ public:
     void compute_rows_staged(std::span<const std::uint32_t> rows, const RowStages& stages, const RowSink& sink) override {
         RowProvider::compute_rows_staged(rows, stages, sink);
     }
-    // Per row: Σ of the entries cut from it (0 for rows not computed through this provider).
-    std::span<const double> cut() const { return cut_; }
-
 private:
     const SparseRow& observe(std::uint32_t i, const SparseRow& full) override;
     std::uint32_t n_;
     SparseRow row_;
-    std::vector<double> cut_;
 };
 
-// Computes every row 0..n-1 through the provider into a CSR matrix.
-CsrMatrix compute_all_rows(RowProvider& provider);
+// Computes every row 0..n-1 through the provider into a CSR matrix; each row's side figures into
+// *ledger when given (resized to n).
+CsrMatrix compute_all_rows(RowProvider& provider, RowLedger* ledger = nullptr);
 
 }  // namespace ffcube

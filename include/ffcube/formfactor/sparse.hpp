@@ -4,20 +4,45 @@
 // lands on any front face (1 in a closed enclosure). F[i][i] = 0 for planar patches.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <span>
 #include <vector>
 
 namespace ffcube {
 
-// One row: column indices strictly increasing, values > 0.
+// What a row carries besides its entries, from the provider that made it to every sink (a
+// checkpoint's record, an MPI rank's chunk, the report's per-row figures, the sky and the patch
+// table): nothing travels beside the rows in arrays of their own.
+struct RowSide {
+    // The share of the energy leaving the patch that obstruction-only surfaces intercept
+    // (Scene::drawn: left out of F, and not sky); 0 without them.
+    double obstructed = 0.0;
+    // The near-field correction's estimates (docs/accuracy.md): Σ_j |F_ij − exact_ij|, and the
+    // estimate the tolerance is held to (of the larger of the largest entry's and the sum's
+    // error). NaN: the row has none (no correction, or a row read from a file that keeps none).
+    float error = NAN;
+    float tolerance_error = NAN;
+    // How the row was measured (CorrectedRowProvider::RowMeasure); −1: not recorded.
+    std::int8_t measure = -1;
+
+    bool operator==(const RowSide& o) const {
+        const auto same = [](float a, float b) { return (std::isnan(a) && std::isnan(b)) || a == b; };
+        return obstructed == o.obstructed && same(error, o.error) && same(tolerance_error, o.tolerance_error) &&
+               measure == o.measure;
+    }
+};
+
+// One row: column indices strictly increasing, values > 0, and its side figures.
 struct SparseRow {
     std::vector<std::uint32_t> col;
     std::vector<double> val;
+    RowSide side;
 
     void clear() {
         col.clear();
         val.clear();
+        side = RowSide{};
     }
     std::size_t nnz() const { return col.size(); }
     double sum() const;
@@ -26,10 +51,12 @@ struct SparseRow {
     double stored_sum() const;
 };
 
-// Read-only view of one row of a CsrMatrix.
+// Read-only view of one row of a CsrMatrix (whose rows keep no side figures), or of a row as it
+// comes from a feed (a checkpoint's record, an MPI chunk: pipeline/form_factors.hpp), with them.
 struct RowView {
     std::span<const std::uint32_t> col;
     std::span<const float> val;
+    RowSide side{};
     double sum() const;
 };
 

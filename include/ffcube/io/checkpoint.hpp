@@ -6,17 +6,21 @@
 //                   resolution and settings (written atomically when the checkpoint is created).
 // DIR/rows.log      an append-only log of records, one per row, each with its own checksum:
 //                     u32 magic "FFCR", u32 row, u32 nnz, u32 flags,
-//                     u32 col[nnz], f32 val[nnz], [f64 obstructed], u64 checksum64 of everything
-//                     before it
+//                     u32 col[nnz], f32 val[nnz], [f64 obstructed],
+//                     [f32 error, f32 tolerance_error, i32 measure, u32 0], u64 checksum64 of
+//                     everything before it
 //                   (little-endian; every record is a multiple of 8 bytes). Values are stored as
 //                   the float the CsrMatrix keeps, so a matrix assembled from the log is
 //                   bit-identical to one built from the rows directly. flags is 1 in every record
 //                   of a checkpoint whose manifest says "obstructions 1" (a scene with
 //                   obstruction-only surfaces, Scene::drawn): the record then holds the row's
-//                   obstructed share (RowSource::obstructed(), the double's bits), 0 otherwise.
+//                   obstructed share (RowSide::obstructed, the double's bits); flag 2 is set in
+//                   every record of a format 3 checkpoint: the record then holds the row's
+//                   estimates and measure (RowSide: error, tolerance_error, measure), so a
+//                   resumed run's rows come back with their figures.
 // Format 2 (the manifest's first line "ffcube-checkpoint 2") added the flags and the
-// "obstructions" line; format 1 checkpoints (flags always 0, no obstructions) are still read and
-// continued.
+// "obstructions" line, format 3 the figures (flag 2); format 1 and 2 checkpoints (without
+// obstructions, resp. figures) are still read and continued in their own format.
 #pragma once
 
 #include <cstdint>
@@ -71,39 +75,36 @@ public:
     std::uint32_t rows_stored() const { return stored_; }
     std::vector<std::uint32_t> missing() const;  // rows not in the log, ascending
     const std::vector<std::string>& warnings() const { return warnings_; }
-    // Per row, the obstructed share stored with it (the same bits as appended; 0 for rows not
-    // stored, and for every row of a checkpoint without obstructions).
-    std::span<const double> obstructed() const { return obstructed_; }
-
     // Appends row i (i < size(), not yet stored; columns strictly increasing) with one write(2):
     // once it returns the row survives the process being killed. The log is fsync'ed at most
     // once a second here (an fsync per row would dominate small rows) and by sync(), so a power
     // loss costs at most the last second of rows. Throws IoError when the write fails.
-    // obstructed: the row's obstructed share (stored when the manifest has obstructions, else
-    // required to be 0).
-    void append(std::uint32_t i, const SparseRow& row, double obstructed = 0.0);
+    // The row's side figures go with it: its obstructed share (stored when the manifest has
+    // obstructions, else required to be 0) and, in format 3, its estimates and measure.
+    void append(std::uint32_t i, const SparseRow& row);
     // fsync's the log. Throws IoError on failure.
     void sync();
 
-    // The whole matrix, rows in order, read back from the log (each record's checksum checked
+    // The whole matrix, rows in order (entries only), read back from the log (each record's checksum checked
     // again). Requires missing().empty(). Throws InputError when a record changed on disk since
     // it was read, IoError when reading fails.
     CsrMatrix assemble() const;
     // Rows [first, last) (each stored), read back like assemble() and appended to the arrays:
-    // nnz[k] entries of row first + k, their columns and values. How one MPI rank's shard gives
-    // back its block of rows (src/mpi).
+    // nnz[k] entries of row first + k, their columns and values, and its side figures. How one
+    // MPI rank's shard gives back its block of rows (src/mpi).
     void read_rows(std::uint32_t first, std::uint32_t last, std::vector<std::uint32_t>& nnz,
-                   std::vector<std::uint32_t>& col, std::vector<float>& val) const;
+                   std::vector<std::uint32_t>& col, std::vector<float>& val, std::vector<RowSide>& side) const;
 
-    // Every row in order, read back from the log one record at a time (memory: one row), each
-    // record's checksum checked again; what assemble() is made of. Same requirements and errors.
+    // Every row in order with its side figures, read back from the log one record at a time
+    // (memory: one row), each record's checksum checked again; what assemble() is made of. Same
+    // requirements and errors.
     void for_each_row(const std::function<void(std::uint32_t, RowView)>& f) const;
 
     std::string log_path() const;
 
 private:
     static constexpr std::uint64_t kMissing = ~std::uint64_t{0};
-    RowCheckpoint(std::filesystem::path dir, std::uint32_t n, bool obstructions);
+    RowCheckpoint(std::filesystem::path dir, std::uint32_t n, bool obstructions, bool figures);
     std::uint64_t record_size(std::uint32_t nnz) const;
     void maybe_sync();
 
@@ -115,8 +116,7 @@ private:
     std::vector<std::string> warnings_;
     double last_sync_ = 0.0;              // steady-clock seconds
     std::vector<unsigned char> buffer_;   // one record, reused
-    std::uint32_t flags_ = 0;             // every record's flags: 1 with obstructions
-    std::vector<double> obstructed_;      // per row, its stored obstructed share
+    std::uint32_t flags_ = 0;             // every record's flags: 1 with obstructions, 2 with figures
 };
 
 }  // namespace ffcube

@@ -38,10 +38,12 @@ Scene broadcast_scene(std::optional<Scene> scene);
 // rows [bounds[r], bounds[r+1]).
 std::vector<std::uint32_t> row_blocks(const Scene& scene, const RowOptions& options);
 
-// One rank's block of rows: nnz per row, then columns and values, rows in order.
+// One rank's block of rows: nnz per row, then columns and values, rows in order, and each row's
+// side figures.
 struct RowBlock {
     std::vector<std::uint32_t> nnz, col;
     std::vector<float> val;
+    std::vector<RowSide> side;
 };
 // The streamed gather (docs/scaling.md, "Output"): rank 0 takes the blocks in rank order, one
 // chunk of rows at a time, and asks for each chunk before the rank sends it, so rank 0 holds at
@@ -50,14 +52,14 @@ struct RowBlock {
 // asked. A chunk is whole rows, about kRowChunkBytes of columns and values (at least one row).
 inline constexpr std::size_t kRowChunkBytes = std::size_t{8} << 20;
 // On rank r > 0: sends rows [first, last) of its block, read_row(i, chunk) appending row i to a
-// chunk (nnz, columns, values), as rank 0 asks for them; returns when every row was sent.
+// chunk (nnz, columns, values, side), as rank 0 asks for them; returns when every row was sent.
 void serve_rows(std::uint32_t first, std::uint32_t last,
                 const std::function<void(std::uint32_t, RowBlock&)>& read_row);
 // On rank 0: the rows [first, last) that rank `from` serves, each handed to sink in order (the
 // float values as sent: what the rank's checkpoint or CsrMatrix holds).
 struct ReceivedRows {
     std::uint64_t chunks = 0;
-    std::uint64_t largest_chunk_bytes = 0;  // u32 nnz per row, u32 column and float value per entry
+    std::uint64_t largest_chunk_bytes = 0;  // u32 nnz and 4 f64 side figures per row, u32 column and float value per entry
 };
 ReceivedRows receive_rows(int from, std::uint32_t first, std::uint32_t last,
                           const std::function<void(std::uint32_t, RowView)>& sink);

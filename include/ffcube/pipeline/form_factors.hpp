@@ -51,12 +51,10 @@ using RowViewFn = std::function<void(std::uint32_t, RowView)>;
 class RowFeed {
 public:
     virtual ~RowFeed() = default;
-    // Hands every row 0..n-1 to sink, in order.
+    // Hands every row 0..n-1 to sink, in order, each with its side figures (RowView::side).
     virtual void rows(const RowViewFn& sink) = 0;
     // After rows(): what the providers saw of whether the scene is closed, for all rows.
     virtual ClosureEvidence evidence() const = 0;
-    // After rows(): per row, the share obstruction-only surfaces intercepted (empty without them).
-    virtual std::span<const double> obstructed() const = 0;
 };
 
 // This process's rows: straight from the RowSource, or with a checkpoint the rows missing from it
@@ -68,7 +66,6 @@ public:
         : rows_(rows), checkpoint_(checkpoint), progress_(progress) {}
     void rows(const RowViewFn& sink) override;
     ClosureEvidence evidence() const override;
-    std::span<const double> obstructed() const override;
 
 private:
     RowSource& rows_;
@@ -102,14 +99,14 @@ struct FormFactorFigures {
     std::vector<std::vector<double>> object_factors;  // as object_form_factors, when asked for
 };
 
-// Every row of F from `feed` (rows: the RowSource the feed's rows come from, for its options and
-// its per-row estimates) into the output file named in `options`, Elmer's file and `sinks` (each
+// Every row of F from `feed` (rows: the RowSource the feed's rows come from, for its options; each
+// row's side figures are noted in its ledger as the row comes) into the output file named in `options`, Elmer's file and `sinks` (each
 // fed the finished rows, enforced when rows.options().enforce asks, and finished), then the
 // surface outputs. Report keys: "time.writing", "time.statistics", "ffm.bytes",
 // "ffm.bytes_per_nnz", "reciprocity.*" (passes, bands, scratch_bytes), "enforce.*", "sky.*",
 // "view3d.*". Not "seconds", "nnz", "row_sums.*": report_matrix_stats with the figures.
 // Closure on an open scene: InputError (after the rows, nothing written).
-FormFactorFigures compute_form_factors(const Scene& scene, const RowSource& rows, RowFeed& feed,
+FormFactorFigures compute_form_factors(const Scene& scene, RowSource& rows, RowFeed& feed,
                                        const FormFactorOptions& options, std::span<MatrixSink* const> sinks,
                                        Report& report);
 

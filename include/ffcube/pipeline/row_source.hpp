@@ -16,6 +16,7 @@
 #include "ffcube/accuracy/enforce.hpp"
 #include "ffcube/accuracy/near_field.hpp"
 #include "ffcube/formfactor/checks.hpp"
+#include "ffcube/formfactor/row_ledger.hpp"
 #include "ffcube/formfactor/sparse.hpp"
 #include "ffcube/gl/hemicube_provider.hpp"
 #include "ffcube/io/ffm.hpp"
@@ -49,12 +50,11 @@ public:
     RowDriver* driver() const { return driver_.get(); }
     RaycastRowProvider* raycast() const { return raycast_.get(); }
     CorrectedRowProvider* corrected() const { return corrected_.get(); }
-    // Per row, the share of its energy that obstruction-only surfaces intercept (Scene::drawn;
-    // left out of F, and not sky); empty when the scene has none. Filled as rows pass through
-    // provider().
-    std::span<const double> obstructed() const {
-        return leading_ ? leading_->cut() : std::span<const double>{};
-    }
+    // The side figures (RowSide: obstructed share, estimates, measure) of every row provider()
+    // handed out, and of every row compute_form_factors was fed (another rank's, a checkpoint's):
+    // for the report's per-row figures. Sized to the radiating scene.
+    const RowLedger& ledger() const;
+    RowLedger& ledger();
     // Wall seconds spent starting it (GL contexts, worker processes, Embree, near-field setup).
     double setup_seconds() const { return setup_seconds_; }
 
@@ -77,6 +77,9 @@ private:
     // With obstruction-only surfaces: the radiating rows, cut to the radiating columns; holds a
     // reference to the providers above, so it is declared after them.
     std::unique_ptr<LeadingRowProvider> leading_;
+    // Outermost: notes each row's side figures in ledger_ on its way out.
+    std::unique_ptr<RowLedger> ledger_;
+    std::unique_ptr<RowProvider> noting_;
     double setup_seconds_ = 0;
 };
 
