@@ -30,7 +30,7 @@ void add_surface_output_options(CLI::App& app, SurfaceOutputOptions& o) {
         ->check(CLI::IsMember({"auto", "text", "binary"}))
         ->default_str("auto"));
     app.add_option("--patch-table", o.patch_table,
-                   "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz; element_id for a mesh read through Gmsh)");
+                   "write the patch table as CSV (patch,object,area,cx,cy,cz,nx,ny,nz; element_id for a mesh read through Gmsh; error_estimate, each row's, with the near-field correction)");
     expert(app.add_option("--fields", o.fields,
                           "write the meshed scene with per-patch fields (sky view factor, row sum, element id): OUT.vtu "
                           "for ParaView, or OUT.msh, a Gmsh model with views (docs/fe-meshes.md)"));
