@@ -164,11 +164,12 @@ mpi formfactors $big -o big.ffm --checkpoint kill --resume --report big.json || 
 cmp big-one.ffm big.ffm || fail "resumed .ffm differs"
 # Rank 1's 2,000 rows came in several chunks (about 48 MB in all), none above rank 0's bound: the
 # entries of kRowChunkBytes (8 MiB) plus one row (at most 3N² entries of 8 bytes: 393,216 at
-# N = 128), and 4 bytes of count per row (at most the block's 2,000).
+# N = 128), and per row 4 bytes of count and 32 of side figures (four doubles; at most the
+# block's 2,000 rows).
 python3 -c "
 import json, sys
 m = json.load(open(sys.argv[1]))['mpi']
-assert m['chunks_received'] > 1 and m['largest_chunk_bytes'] <= (8 << 20) + 3 * 128 * 128 * 8 + 4 * 2000, m
+assert m['chunks_received'] > 1 and m['largest_chunk_bytes'] <= (8 << 20) + 3 * 128 * 128 * 8 + (4 + 32) * 2000, m
 print('rank 1 sent', m['chunks_received'], 'chunks, the largest', m['largest_chunk_bytes'], 'bytes')" big.json ||
     fail "rank 1's rows not received in bounded chunks"
 echo "ok: resumed run byte-identical"
