@@ -44,12 +44,9 @@ RowLedger& RowSource::ledger() {
 }
 
 RowProvider& RowSource::provider() {
-    if (noting_) return *noting_;
-    if (leading_) return *leading_;
-    if (corrected_) return *corrected_;
-    if (driver_) return *driver_;
-    FFCUBE_CHECK_MSG(raycast_ != nullptr, "RowSource::provider() on a source that was never made");
-    return *raycast_;
+    // wrap() makes it on every source made, around the outermost of the others.
+    FFCUBE_CHECK_MSG(noting_ != nullptr, "RowSource::provider() on a source that was never made");
+    return *noting_;
 }
 
 RowSource make_row_source(const Scene& radiating, const RowOptions& options) {
